@@ -1,0 +1,83 @@
+//! A frame's buffers as host slices, and the input policy applied to them.
+//!
+//! # Input policy
+//! The renderer's buffers are tightly packed f32, row-major, top row first: RGB for color,
+//! albedo and normal, one value per pixel for depth and roughness. Before anything else every
+//! value is made finite and bounded, on the GPU, in `shaders/prep.wgsl` (and identically in the
+//! PyTorch model of weights-tool):
+//!
+//! | buffer | NaN | +Inf | -Inf | clamped to |
+//! |---|---|---|---|---|
+//! | color | 0 | 1e8 | 0 | [0, 1e8] |
+//! | albedo | 0 | 0 | 0 | [0, 1e3] |
+//! | normal | 0 | 0 | -1 | [-1, 1] |
+//! | depth | 0 | 1e6 (a miss) | 0 | [0, 1e6], then log1p |
+//! | roughness | 0 | 0 | 0 | [0, 1] |
+//!
+//! Demodulation divides by `albedo + albedo_eps` (never by zero); the output is
+//! `(exp(clamp(y, 0, 80)) - 1) * (albedo + albedo_eps)`: finite and non-negative.
+
+use crate::error::{Error, Result};
+use crate::model::InputBuffer;
+
+/// One frame's buffers on the host. `color` is required; the others are used when the model
+/// declares them (see [`crate::Arch::required_buffers`]).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct FrameInputs<'a> {
+    /// Noisy radiance, RGB.
+    pub color: &'a [f32],
+    /// First-hit albedo, RGB.
+    pub albedo: Option<&'a [f32]>,
+    /// First-hit shading normal, RGB = xyz.
+    pub normal: Option<&'a [f32]>,
+    /// Distance along the primary ray, one value per pixel.
+    pub depth: Option<&'a [f32]>,
+    /// First-hit roughness, one value per pixel.
+    pub roughness: Option<&'a [f32]>,
+}
+
+impl<'a> FrameInputs<'a> {
+    /// The slice of a buffer, if present.
+    pub fn get(&self, buffer: InputBuffer) -> Option<&'a [f32]> {
+        match buffer {
+            InputBuffer::Color => Some(self.color),
+            InputBuffer::Albedo => self.albedo,
+            InputBuffer::Normal => self.normal,
+            InputBuffer::Depth => self.depth,
+            InputBuffer::Roughness => self.roughness,
+        }
+    }
+
+    /// Check that every buffer in `needed` is present with `width * height * channels` values.
+    pub fn validate(&self, needed: &[InputBuffer], width: u32, height: u32) -> Result<()> {
+        for &b in needed {
+            let data = self.get(b).ok_or_else(|| Error::MissingInput {
+                buffer: b.name(),
+                needed: needed.iter().map(|b| b.name()).collect(),
+            })?;
+            let expected = width as usize * height as usize * b.channels();
+            if data.len() != expected {
+                return Err(Error::InputSize {
+                    buffer: b.name(),
+                    found: data.len(),
+                    expected,
+                    width,
+                    height,
+                    channels: b.channels(),
+                });
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Host-side wall time of one frame, split by phase.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct FrameTimings {
+    /// Copying the input buffers to the GPU.
+    pub upload: std::time::Duration,
+    /// From submit until the GPU finished the frame.
+    pub gpu: std::time::Duration,
+    /// Mapping and copying the output back.
+    pub download: std::time::Duration,
+}

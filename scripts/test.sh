@@ -1,0 +1,22 @@
+#!/usr/bin/env bash
+# All of rae's tests, on a fresh machine: installs what is missing (lavapipe, the Python
+# packages with PyTorch), then runs the Rust tests on lavapipe and the weights-tool tests.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+source scripts/env.sh
+
+# weights-tool and its packages (PyTorch's wheel is large: ~2 minutes on a fresh machine).
+if ! python3 -c "import torch, numpy, safetensors, pytest" >/dev/null 2>&1; then
+  echo "== installing Python packages (torch, numpy, safetensors, pytest)"
+  python3 -m pip install -q --disable-pip-version-check torch numpy safetensors pytest
+fi
+
+# On lavapipe unless the caller chose an adapter.
+export WGPU_ADAPTER_NAME="${WGPU_ADAPTER_NAME:-llvmpipe}"
+
+echo "== Rust tests (workspace)"
+cargo test --workspace --locked
+
+echo "== weights-tool tests (PyTorch)"
+(cd weights-tool && python3 -m pytest -q)

@@ -1,0 +1,44 @@
+//! wgpu against PyTorch, frame by frame, hidden state carried: every value of every frame
+//! within |wgpu - torch| <= 1e-4 * max(1, |torch|).
+//!
+//! Regenerate the fixtures: cd weights-tool && python -m rae_weights golden --out ../tests/fixtures
+
+use rae_core::{Denoiser, Weights};
+
+use crate::{Tolerance, fixture, gpu};
+
+fn check(case: &str) {
+    let golden = crate::golden(case);
+    let weights = Weights::load(fixture(&golden.weights)).unwrap();
+    let g = gpu();
+    let mut d = Denoiser::new(&g.device, &g.queue, &weights, golden.width, golden.height).unwrap();
+    assert!(golden.frames.len() >= 4, "{case}: at least 4 consecutive frames");
+    for i in 0..golden.frames.len() {
+        let out = d.denoise(&golden.inputs(i)).unwrap();
+        let want = &golden.frames[i]["output"];
+        let (ratio, _, max_abs) = Tolerance::GOLDEN.worst(&out, want);
+        eprintln!("{case} frame {i}: max abs error {max_abs:.3e}, worst {ratio:.3} of the tolerance");
+        crate::assert_close(Tolerance::GOLDEN, &format!("{case} frame {i}"), &out, want);
+    }
+}
+
+#[test]
+fn full_network_64x64_matches_pytorch() {
+    check("golden_full_64x64.safetensors");
+}
+
+#[test]
+fn full_network_96x64_matches_pytorch() {
+    check("golden_full_96x64.safetensors");
+}
+
+#[test]
+fn paper_variant_matches_pytorch() {
+    // Skips before pooling, linear output, color+albedo+normal inputs, 3 levels.
+    check("golden_paper_tiny_40x24.safetensors");
+}
+
+#[test]
+fn color_only_variant_matches_pytorch() {
+    check("golden_color_tiny_64x32.safetensors");
+}

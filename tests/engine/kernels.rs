@@ -1,0 +1,233 @@
+//! Each kernel against the plain CPU implementation, on odd sizes spanning several workgroups.
+
+use rae_core::cpu::{self, Chw};
+use rae_core::denoiser::read_texture;
+use rae_core::graph::Read;
+use rae_core::kernels::{self, ConvParams, ConvVariant, Kernels, blocks};
+use rae_core::{Denoiser, FrameInputs, Weights};
+use wgpu::util::DeviceExt;
+
+use crate::{Tolerance, fixture, gpu};
+
+/// Deterministic pseudo-random values in [-1, 1) (xorshift), so the test needs no RNG crate.
+fn noise(n: usize, seed: u64) -> Vec<f32> {
+    let mut s = seed.wrapping_mul(0x9E3779B97F4A7C15) | 1;
+    (0..n)
+        .map(|_| {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            (s >> 40) as f32 / (1u64 << 23) as f32 - 1.0
+        })
+        .collect()
+}
+
+fn upload(t: &Chw) -> wgpu::Texture {
+    let g = gpu();
+    let layers = blocks(t.c);
+    let mut data = vec![0f32; layers as usize * t.h * t.w * 4];
+    for c in 0..t.c {
+        for p in 0..t.h * t.w {
+            data[((c / 4) * t.h * t.w + p) * 4 + c % 4] = t.data[c * t.h * t.w + p];
+        }
+    }
+    g.device.create_texture_with_data(
+        &g.queue,
+        &wgpu::TextureDescriptor {
+            label: None,
+            size: wgpu::Extent3d { width: t.w as u32, height: t.h as u32, depth_or_array_layers: layers },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: kernels::ACTIVATION_FORMAT,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        },
+        wgpu::util::TextureDataOrder::LayerMajor,
+        bytemuck::cast_slice(&data),
+    )
+}
+
+fn array_view(t: &wgpu::Texture) -> wgpu::TextureView {
+    t.create_view(&wgpu::TextureViewDescriptor { dimension: Some(wgpu::TextureViewDimension::D2Array), ..Default::default() })
+}
+
+/// One conv3x3.wgsl dispatch over cat(read(a), read(b)) at `w x h`.
+fn gpu_conv(a: (&Chw, Read), b: Option<(&Chw, Read)>, weight: &[f32], bias: &[f32], leaky: bool, w: usize, h: usize) -> Chw {
+    let g = gpu();
+    let dev = &g.device;
+    let cout = bias.len();
+    let mut kernels = Kernels::new(dev);
+    let variant = ConvVariant { read_a: a.1, read_b: b.map_or(Read::Direct, |b| b.1), leaky };
+    let pipeline = kernels.conv(dev, variant);
+    let cb = b.map_or(0, |b| b.0.c);
+    let mut packed = Vec::new();
+    let (b_offset, t_offset) = kernels::pack_conv(weight, bias, cout, a.0.c, cb, &mut packed);
+    let weights = dev.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: None,
+        contents: bytemuck::cast_slice(&packed),
+        usage: wgpu::BufferUsages::STORAGE,
+    });
+    let params = ConvParams {
+        width: w as u32,
+        height: h as u32,
+        cin4_a: blocks(a.0.c),
+        cin4_b: blocks(cb),
+        cin4_total: blocks(a.0.c) + blocks(cb),
+        cout4: blocks(cout),
+        b_offset,
+        t_offset,
+        slope: 0.1,
+        _pad: [0; 3],
+    };
+    let uniform = dev.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: None,
+        contents: bytemuck::bytes_of(&params),
+        usage: wgpu::BufferUsages::UNIFORM,
+    });
+    let ta = upload(a.0);
+    let tb = upload(b.map_or(&Chw::zeros(1, 1, 1), |b| b.0));
+    let out = dev.create_texture(&wgpu::TextureDescriptor {
+        label: None,
+        size: wgpu::Extent3d { width: w as u32, height: h as u32, depth_or_array_layers: blocks(cout) },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: kernels::ACTIVATION_FORMAT,
+        usage: wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC,
+        view_formats: &[],
+    });
+    let group = dev.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: None,
+        layout: &kernels.conv_layout,
+        entries: &[
+            wgpu::BindGroupEntry { binding: 0, resource: uniform.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&array_view(&ta)) },
+            wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::TextureView(&array_view(&tb)) },
+            wgpu::BindGroupEntry { binding: 3, resource: weights.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 4, resource: wgpu::BindingResource::TextureView(&array_view(&out)) },
+        ],
+    });
+    let mut enc = dev.create_command_encoder(&Default::default());
+    {
+        let mut pass = enc.begin_compute_pass(&Default::default());
+        pass.set_pipeline(&pipeline);
+        pass.set_bind_group(0, &group, &[]);
+        let (x, y, z) = kernels::conv_workgroups(w as u32, h as u32, cout);
+        assert!(x > 1 && y > 1, "the test must span several workgroups");
+        pass.dispatch_workgroups(x, y, z);
+    }
+    g.queue.submit(Some(enc.finish()));
+    let raw = read_texture(dev, &g.queue, &out).unwrap();
+    let mut o = Chw::zeros(cout, h, w);
+    for c in 0..cout {
+        for p in 0..h * w {
+            o.data[c * h * w + p] = raw[((c / 4) * h * w + p) * 4 + c % 4];
+        }
+    }
+    o
+}
+
+fn check_conv(a: (Chw, Read), b: Option<(Chw, Read)>, cout: usize, leaky: bool, w: usize, h: usize, seed: u64) {
+    let cin = a.0.c + b.as_ref().map_or(0, |b| b.0.c);
+    let weight: Vec<f32> = noise(cout * cin * 9, seed).iter().map(|v| v * 0.3).collect();
+    let bias = noise(cout, seed + 1);
+    let got = gpu_conv((&a.0, a.1), b.as_ref().map(|b| (&b.0, b.1)), &weight, &bias, leaky, w, h);
+    let ra = cpu::read(&a.0, a.1, h, w);
+    let x = match &b {
+        Some((t, m)) => cpu::concat(&ra, &cpu::read(t, *m, h, w)),
+        None => ra,
+    };
+    let want = cpu::conv3x3(&x, &weight, &bias, leaky.then_some(0.1));
+    crate::assert_close(Tolerance { rel: 1e-5 }, &format!("conv {:?}/{:?} {w}x{h}", a.1, b.as_ref().map(|b| b.1)), &got.data, &want.data);
+}
+
+fn tensor(c: usize, h: usize, w: usize, seed: u64) -> Chw {
+    Chw { c, h, w, data: noise(c * h * w, seed) }
+}
+
+#[test]
+fn conv_direct_single_source_matches_cpu() {
+    check_conv((tensor(5, 45, 37, 1), Read::Direct), None, 9, true, 37, 45, 10);
+}
+
+#[test]
+fn conv_pool_and_direct_concat_matches_cpu() {
+    // cat(maxpool(a), b): a at twice the resolution, b as-is; 21 outputs = 2 tiles of blocks.
+    check_conv((tensor(5, 90, 74, 2), Read::Pool), Some((tensor(7, 45, 37, 3), Read::Direct)), 21, false, 37, 45, 20);
+}
+
+#[test]
+fn conv_upsample_and_pooled_skip_matches_cpu() {
+    // The reference decoder: upsample(cat(prev, pool(skip))) = cat(up(prev), up(pool(skip))).
+    check_conv((tensor(6, 23, 19, 4), Read::Upsample), Some((tensor(3, 46, 38, 5), Read::PoolUpsample)), 11, true, 38, 46, 30);
+}
+
+#[test]
+fn conv_upsample_and_prepool_skip_matches_cpu() {
+    // The paper's decoder: cat(up(prev), skip before pooling).
+    check_conv((tensor(4, 23, 19, 6), Read::Upsample), Some((tensor(9, 45, 37, 7), Read::Direct)), 3, false, 37, 45, 40);
+}
+
+/// A frame of `w x h` with every buffer, smooth values plus the extremes the input policy
+/// handles (NaN, +-Inf, negative, huge, albedo 0).
+fn wild_frame(w: usize, h: usize) -> [Vec<f32>; 5] {
+    let n = w * h;
+    let mut color: Vec<f32> = noise(3 * n, 50).iter().map(|v| (v * 3.0).exp()).collect();
+    let mut albedo: Vec<f32> = noise(3 * n, 51).iter().map(|v| 0.5 + 0.5 * v).collect();
+    let mut normal = noise(3 * n, 52);
+    let mut depth: Vec<f32> = noise(n, 53).iter().map(|v| 5.0 + 4.0 * v).collect();
+    let mut rough: Vec<f32> = noise(n, 54).iter().map(|v| 0.5 + 0.6 * v).collect();
+    let specials = [f32::NAN, f32::INFINITY, f32::NEG_INFINITY, -3.0, 1e9, 0.0];
+    for (k, &s) in specials.iter().enumerate() {
+        let i = 7 + 13 * k;
+        color[i] = s;
+        albedo[i + 1] = s;
+        normal[i + 2] = s;
+        depth[k * 5] = s;
+        rough[k * 5 + 1] = s;
+    }
+    [color, albedo, normal, depth, rough]
+}
+
+fn frame_of(b: &[Vec<f32>; 5]) -> FrameInputs<'_> {
+    FrameInputs { color: &b[0], albedo: Some(&b[1]), normal: Some(&b[2]), depth: Some(&b[3]), roughness: Some(&b[4]) }
+}
+
+#[test]
+fn prep_matches_cpu_with_padding_and_extreme_values() {
+    let g = gpu();
+    for (name, w, h) in [("weights_full.safetensors", 45, 27), ("weights_paper_tiny.safetensors", 37, 21)] {
+        let weights = Weights::load(fixture(name)).unwrap();
+        let mut d = Denoiser::new(&g.device, &g.queue, &weights, w as u32, h as u32).unwrap();
+        let buffers = wild_frame(w, h);
+        let out = d.denoise(&frame_of(&buffers)).unwrap();
+        assert!(out.iter().all(|v| v.is_finite() && *v >= 0.0), "{name}: output finite and non-negative");
+        let (pw, ph) = d.padded_size();
+        let want = cpu::prepare(&weights.arch, &frame_of(&buffers), w, h, pw as usize, ph as usize);
+        crate::assert_close(Tolerance { rel: 1e-6 }, &format!("prep {name}"), &d.read_input().unwrap(), &want.data);
+    }
+}
+
+#[test]
+fn whole_pipeline_matches_cpu_on_odd_sizes() {
+    // Prep, every conv, output and cropping, over three frames (hidden state carried), at
+    // sizes that need padding: 37x21 (to 40x24) and 50x35 (to 64x64).
+    let g = gpu();
+    for (name, w, h) in [("weights_paper_tiny.safetensors", 37, 21), ("weights_color_tiny.safetensors", 50, 35)] {
+        let weights = Weights::load(fixture(name)).unwrap();
+        let mut d = Denoiser::new(&g.device, &g.queue, &weights, w as u32, h as u32).unwrap();
+        let (pw, ph) = d.padded_size();
+        let mut cpu_net = cpu::CpuNetwork::new(&weights);
+        for t in 0..3u64 {
+            let mut b = wild_frame(w, h);
+            b[0] = noise(3 * w * h, 60 + t).iter().map(|v| (v * 2.0).exp()).collect();
+            let got = d.denoise(&frame_of(&b)).unwrap();
+            assert_eq!(got.len(), w * h * 3, "output is cropped to the frame");
+            let x = cpu::prepare(&weights.arch, &frame_of(&b), w, h, pw as usize, ph as usize);
+            let y = cpu_net.forward(&x);
+            let want = cpu::finish(&weights.arch, &y, Some(&b[1]), w, h);
+            crate::assert_close(Tolerance { rel: 1e-4 }, &format!("{name} frame {t}"), &got, &want);
+        }
+    }
+}

@@ -1,0 +1,146 @@
+//! Recurrence, reset, determinism, odd sizes, the caller-buffer path and input errors.
+
+use rae_core::{Denoiser, Error, FrameInputs, GpuFrameIo, Weights};
+use wgpu::util::DeviceExt;
+
+use crate::{Golden, fixture, gpu};
+
+fn setup() -> (Golden, Weights) {
+    let golden = crate::golden("golden_full_64x64.safetensors");
+    let weights = Weights::load(fixture(&golden.weights)).unwrap();
+    (golden, weights)
+}
+
+fn denoiser(w: &Weights, golden: &Golden) -> Denoiser {
+    let g = gpu();
+    Denoiser::new(&g.device, &g.queue, w, golden.width, golden.height).unwrap()
+}
+
+fn bits(v: &[f32]) -> Vec<u32> {
+    v.iter().map(|x| x.to_bits()).collect()
+}
+
+#[test]
+fn hidden_state_carries_over_and_reset_restores_frame_zero() {
+    let (golden, weights) = setup();
+    let mut d = denoiser(&weights, &golden);
+    let first = d.denoise(&golden.inputs(0)).unwrap();
+    for i in 1..3 {
+        d.denoise(&golden.inputs(i)).unwrap();
+    }
+    let third_in_sequence = d.denoise(&golden.inputs(3)).unwrap();
+    let mut alone = denoiser(&weights, &golden);
+    let third_alone = alone.denoise(&golden.inputs(3)).unwrap();
+    let diff = third_in_sequence.iter().zip(&third_alone).map(|(a, b)| (a - b).abs()).fold(0.0f32, f32::max);
+    assert!(diff > 1e-2, "frame 3 after frames 0-2 must differ from frame 3 alone (max diff {diff})");
+
+    d.reset();
+    let again = d.denoise(&golden.inputs(0)).unwrap();
+    assert_eq!(bits(&again), bits(&first), "after reset() frame 0 is bit-identical");
+}
+
+#[test]
+fn two_runs_are_bit_identical() {
+    let (golden, weights) = setup();
+    let run = || {
+        let mut d = denoiser(&weights, &golden);
+        (0..golden.frames.len()).flat_map(|i| bits(&d.denoise(&golden.inputs(i)).unwrap())).collect::<Vec<_>>()
+    };
+    assert_eq!(run(), run());
+}
+
+#[test]
+fn size_not_multiple_of_32_runs_and_is_cropped() {
+    let (golden, weights) = setup();
+    let (w, h) = (50usize, 35usize);
+    let crop = |name: &str, ch: usize| -> Vec<f32> {
+        let src = &golden.frames[0][name];
+        (0..h).flat_map(|y| src[(y * 64) * ch..(y * 64 + w) * ch].to_vec()).collect()
+    };
+    let (c, a, n, dp, r) = (crop("color", 3), crop("albedo", 3), crop("normal", 3), crop("depth", 1), crop("roughness", 1));
+    let g = gpu();
+    let mut d = Denoiser::new(&g.device, &g.queue, &weights, w as u32, h as u32).unwrap();
+    assert_eq!(d.padded_size(), (64, 64));
+    let frame = FrameInputs { color: &c, albedo: Some(&a), normal: Some(&n), depth: Some(&dp), roughness: Some(&r) };
+    let out = d.denoise(&frame).unwrap();
+    assert_eq!(out.len(), w * h * 3);
+    assert!(out.iter().all(|v| v.is_finite() && *v >= 0.0));
+    // Far from the padded border the result matches the uncropped 64x64 run closely.
+    let full = denoiser(&weights, &golden).denoise(&golden.inputs(0)).unwrap();
+    let (x, y) = (10, 10);
+    for k in 0..3 {
+        let (got, want) = (out[(y * w + x) * 3 + k], full[(y * 64 + x) * 3 + k]);
+        assert!((got - want).abs() < 0.05 * want.abs().max(1.0), "pixel ({x},{y}) channel {k}: {got} vs {want}");
+    }
+}
+
+#[test]
+fn caller_buffers_in_caller_encoder_match_host_path() {
+    let (golden, weights) = setup();
+    let g = gpu();
+    let mut host = denoiser(&weights, &golden);
+    let mut embedded = denoiser(&weights, &golden);
+    let storage = |data: &[f32]| {
+        g.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: None,
+            contents: bytemuck::cast_slice(data),
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+        })
+    };
+    let f = &golden.frames[0];
+    let (c, a, n, dp, r) = (storage(&f["color"]), storage(&f["albedo"]), storage(&f["normal"]), storage(&f["depth"]), storage(&f["roughness"]));
+    let bytes = (golden.width * golden.height * 12) as u64;
+    let out = g.device.create_buffer(&wgpu::BufferDescriptor {
+        label: None,
+        size: bytes,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    });
+    let read = g.device.create_buffer(&wgpu::BufferDescriptor {
+        label: None,
+        size: bytes,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let io = embedded
+        .bind_io(&GpuFrameIo { color: &c, albedo: Some(&a), normal: Some(&n), depth: Some(&dp), roughness: Some(&r), output: &out })
+        .unwrap();
+    for i in 0..2 {
+        // The renderer updates its buffers, then records the denoiser into its own encoder.
+        for (buf, name) in [(&c, "color"), (&a, "albedo"), (&n, "normal"), (&dp, "depth"), (&r, "roughness")] {
+            g.queue.write_buffer(buf, 0, bytemuck::cast_slice(&golden.frames[i][name]));
+        }
+        let mut enc = g.device.create_command_encoder(&Default::default());
+        embedded.record(&mut enc, &io).unwrap();
+        enc.copy_buffer_to_buffer(&out, 0, &read, 0, bytes);
+        g.queue.submit(Some(enc.finish()));
+        let (tx, rx) = std::sync::mpsc::channel();
+        read.map_async(wgpu::MapMode::Read, .., move |r| tx.send(r).unwrap());
+        g.device.poll(wgpu::PollType::wait_indefinitely()).unwrap();
+        rx.recv().unwrap().unwrap();
+        let got: Vec<f32> = bytemuck::cast_slice(&read.get_mapped_range(..).unwrap()).to_vec();
+        read.unmap();
+        let want = host.denoise(&golden.inputs(i)).unwrap();
+        assert_eq!(bits(&got), bits(&want), "frame {i}: embedded path equals host path");
+    }
+    // A binding belongs to the denoiser that made it.
+    let mut enc = g.device.create_command_encoder(&Default::default());
+    assert!(host.record(&mut enc, &io).is_err());
+}
+
+#[test]
+fn missing_or_wrong_sized_buffers_are_named() {
+    let (golden, weights) = setup();
+    let mut d = denoiser(&weights, &golden);
+    let mut frame = golden.inputs(0);
+    frame.roughness = None;
+    let err = d.denoise(&frame).unwrap_err();
+    assert!(matches!(err, Error::MissingInput { buffer: "roughness", .. }), "{err}");
+    let mut frame = golden.inputs(0);
+    let short = &golden.frames[0]["normal"][..100];
+    frame.normal = Some(short);
+    let err = d.denoise(&frame).unwrap_err();
+    assert!(matches!(err, Error::InputSize { buffer: "normal", found: 100, .. }), "{err}");
+    let g = gpu();
+    assert!(matches!(Denoiser::new(&g.device, &g.queue, &weights, 0, 10), Err(Error::FrameSize { .. })));
+}

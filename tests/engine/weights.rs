@@ -1,0 +1,153 @@
+//! Weights files: the fixtures load; every kind of broken file is a clear error naming the
+//! tensor or the problem, never a panic.
+
+use std::collections::HashMap;
+
+use rae_core::graph::Graph;
+use rae_core::{Arch, Error, Weights};
+use safetensors::tensor::TensorView;
+use safetensors::Dtype;
+
+use crate::fixture;
+
+/// Tensors of a fixture as (name, dtype, shape, bytes), and its metadata.
+fn parts(name: &str) -> (Vec<(String, Dtype, Vec<usize>, Vec<u8>)>, HashMap<String, String>) {
+    let bytes = std::fs::read(fixture(name)).unwrap();
+    let (_, meta) = safetensors::SafeTensors::read_metadata(&bytes).unwrap();
+    let st = safetensors::SafeTensors::deserialize(&bytes).unwrap();
+    let tensors = st.tensors().into_iter().map(|(n, t)| (n, t.dtype(), t.shape().to_vec(), t.data().to_vec())).collect();
+    (tensors, meta.metadata().clone().unwrap())
+}
+
+fn build(tensors: &[(String, Dtype, Vec<usize>, Vec<u8>)], meta: Option<HashMap<String, String>>) -> Vec<u8> {
+    let views: Vec<(String, TensorView)> =
+        tensors.iter().map(|(n, d, s, b)| (n.clone(), TensorView::new(*d, s.clone(), b).unwrap())).collect();
+    safetensors::serialize(views, meta).unwrap()
+}
+
+const TINY: &str = "weights_color_tiny.safetensors";
+
+#[test]
+fn fixtures_load_with_their_architecture() {
+    let w = Weights::load(fixture("weights_full.safetensors")).unwrap();
+    assert_eq!(w.arch, Arch::reference());
+    assert_eq!(w.arch.parameter_count(), 1_504_301, "PAPER.md's parameter count");
+    let macs = Graph::new(&w.arch).macs_per_pixel();
+    assert!((macs - 73_661.0).abs() < 1.0, "PAPER.md's 73,661 multiply-adds per pixel, got {macs}");
+    let t = w.get("u5.l1.1.weight").unwrap();
+    assert_eq!(t.shape, vec![76, 202, 3, 3]);
+    for name in ["weights_paper_tiny.safetensors", TINY] {
+        Weights::load(fixture(name)).unwrap();
+    }
+}
+
+#[test]
+fn graph_names_match_pytorch_and_temps_share_buffers() {
+    let arch = Arch::reference();
+    let g = Graph::new(&arch);
+    let names: Vec<&str> = g.nodes.iter().map(|n| n.name.as_str()).collect();
+    assert_eq!(names.first(), Some(&"d1.l1.0"));
+    assert_eq!(names.last(), Some(&"u1.l1.3"));
+    assert_eq!(names.len(), 3 * 6 + 2 * 5);
+    let (assign, slots) = g.allocate_temps();
+    assert!(slots.len() < g.temps.len(), "liveness lets temporaries share: {} slots for {} temps", slots.len(), g.temps.len());
+    // No two temporaries that are live at once share a slot.
+    for (i, a) in g.temps.iter().enumerate() {
+        for (j, b) in g.temps.iter().enumerate().skip(i + 1) {
+            if assign[i] == assign[j] {
+                assert!(a.last_use < b.def || b.last_use < a.def, "temps {i} and {j} overlap in slot {}", assign[i]);
+            }
+        }
+    }
+}
+
+#[test]
+fn truncated_file_is_an_error() {
+    let bytes = std::fs::read(fixture(TINY)).unwrap();
+    for cut in [0, 7, 100, bytes.len() / 2, bytes.len() - 1] {
+        let err = Weights::from_bytes(&bytes[..cut], "cut.safetensors").unwrap_err();
+        assert!(matches!(err, Error::WeightsFormat { .. }), "cut at {cut}: {err}");
+        assert!(err.to_string().contains("cut.safetensors"), "{err}");
+    }
+}
+
+#[test]
+fn missing_tensor_is_named() {
+    let (mut t, meta) = parts(TINY);
+    t.retain(|(n, ..)| n != "d3.l2.0.bias");
+    let err = Weights::from_bytes(&build(&t, Some(meta)), "m.safetensors").unwrap_err();
+    assert!(matches!(&err, Error::MissingTensor { name, .. } if name == "d3.l2.0.bias"), "{err}");
+}
+
+#[test]
+fn wrong_shape_is_named() {
+    let (mut t, meta) = parts(TINY);
+    let e = t.iter_mut().find(|(n, ..)| n == "u2.l1.1.weight").unwrap();
+    let (o, i) = (e.2[0], e.2[1]);
+    e.2 = vec![i, o, 3, 3];
+    let err = Weights::from_bytes(&build(&t, Some(meta)), "s.safetensors").unwrap_err();
+    assert!(matches!(&err, Error::TensorShape { name, .. } if name == "u2.l1.1.weight"), "{err}");
+    assert!(err.to_string().contains("u2.l1.1.weight"));
+}
+
+#[test]
+fn mislabelled_file_is_refused() {
+    // A tensor under a name the architecture does not have.
+    let (mut t, meta) = parts(TINY);
+    t.push(("d9.l1.0.bias".into(), Dtype::F32, vec![1], vec![0; 4]));
+    let err = Weights::from_bytes(&build(&t, Some(meta.clone())), "x.safetensors").unwrap_err();
+    assert!(matches!(&err, Error::UnexpectedTensor { name, .. } if name == "d9.l1.0.bias"), "{err}");
+    // Weights of one network declared as another.
+    let (t, _) = parts(TINY);
+    let full = parts("weights_full.safetensors").1;
+    let err = Weights::from_bytes(&build(&t, Some(full)), "y.safetensors").unwrap_err();
+    assert!(matches!(err, Error::TensorShape { .. } | Error::MissingTensor { .. }), "{err}");
+}
+
+#[test]
+fn unusable_dtype_and_non_finite_values_are_named() {
+    let (mut t, meta) = parts(TINY);
+    let e = t.iter_mut().find(|(n, ..)| n == "d1.l1.0.bias").unwrap();
+    e.1 = Dtype::I32;
+    let err = Weights::from_bytes(&build(&t, Some(meta.clone())), "d.safetensors").unwrap_err();
+    assert!(matches!(&err, Error::TensorDtype { name, .. } if name == "d1.l1.0.bias"), "{err}");
+
+    let (mut t, _) = parts(TINY);
+    let e = t.iter_mut().find(|(n, ..)| n == "d1.l1.0.bias").unwrap();
+    e.3[..4].copy_from_slice(&f32::NAN.to_le_bytes());
+    let err = Weights::from_bytes(&build(&t, Some(meta)), "n.safetensors").unwrap_err();
+    assert!(matches!(&err, Error::NonFiniteTensor { name, .. } if name == "d1.l1.0.bias"), "{err}");
+}
+
+#[test]
+fn f16_weights_are_widened() {
+    let (t, meta) = parts(TINY);
+    let halves: Vec<_> = t
+        .iter()
+        .map(|(n, _, s, b)| {
+            let h: Vec<u8> = b.chunks_exact(4).flat_map(|c| half::f16::from_f32(f32::from_le_bytes(c.try_into().unwrap())).to_le_bytes()).collect();
+            (n.clone(), Dtype::F16, s.clone(), h)
+        })
+        .collect();
+    let w16 = Weights::from_bytes(&build(&halves, Some(meta)), "h.safetensors").unwrap();
+    let w32 = Weights::load(fixture(TINY)).unwrap();
+    let (a, b) = (&w16.get("d2.l2.2.weight").unwrap().data, &w32.get("d2.l2.2.weight").unwrap().data);
+    assert!(a.iter().zip(b).all(|(x, y)| (x - y).abs() <= 1e-3 * y.abs().max(1e-2)));
+}
+
+#[test]
+fn missing_or_bad_architecture_is_an_error() {
+    let (t, meta) = parts(TINY);
+    let err = Weights::from_bytes(&build(&t, None), "a.safetensors").unwrap_err();
+    assert!(matches!(err, Error::Arch { .. }), "{err}");
+    let mut bad = meta.clone();
+    let json = bad["rae.arch"].replace("\"color\"]", "\"color\", \"sparkle\"]");
+    bad.insert("rae.arch".into(), json);
+    let err = Weights::from_bytes(&build(&t, Some(bad)), "b.safetensors").unwrap_err();
+    assert!(matches!(err, Error::Arch { .. }) && err.to_string().contains("sparkle"), "{err}");
+    let mut bad = meta;
+    let json = bad["rae.arch"].replace("\"version\": 1", "\"version\": 7");
+    bad.insert("rae.arch".into(), json);
+    let err = Weights::from_bytes(&build(&t, Some(bad)), "c.safetensors").unwrap_err();
+    assert!(err.to_string().contains("version 7"), "{err}");
+}

@@ -1,0 +1,71 @@
+"""Command line: ``rae-weights export`` and ``rae-weights golden`` (also ``python -m rae_weights``)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import tempfile
+from pathlib import Path
+
+from . import golden
+from .export import infer_arch, load_checkpoint, write_weights
+
+
+def _export(args: argparse.Namespace) -> int:
+    state, arch = load_checkpoint(args.checkpoint)
+    overrides = {}
+    if args.inputs:
+        overrides["inputs"] = args.inputs.split(",")
+    for key in ("skip", "output_activation", "transfer"):
+        if getattr(args, key) is not None:
+            overrides[key] = getattr(args, key)
+    if args.no_demodulate:
+        overrides["demodulate"] = False
+    if arch is None or overrides:
+        arch = infer_arch(state, **overrides)
+    write_weights(args.output, arch, state)
+    n = sum(t.numel() for t in state.values())
+    print(f"wrote {args.output}: {arch.to_json()} ({n} parameters)")
+    return 0
+
+
+def _golden(args: argparse.Namespace) -> int:
+    if args.check:
+        with tempfile.TemporaryDirectory() as tmp:
+            golden.generate(Path(tmp))
+            problems = golden.compare(Path(args.check), Path(tmp))
+        for p in problems:
+            print(p, file=sys.stderr)
+        print("golden fixtures reproduce" if not problems else f"{len(problems)} differences")
+        return 1 if problems else 0
+    for path in golden.generate(Path(args.out)):
+        print(f"wrote {path}")
+    return 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(prog="rae-weights", description=__doc__)
+    sub = p.add_subparsers(dest="cmd", required=True)
+    e = sub.add_parser("export", help="PyTorch checkpoint -> rae weights file (.safetensors)")
+    e.add_argument("checkpoint")
+    e.add_argument("output")
+    e.add_argument("--inputs", help="comma-separated network inputs, e.g. color,normal,depth,roughness")
+    e.add_argument("--skip", choices=["pooled", "prepool"])
+    e.add_argument("--output-activation", choices=["lrelu", "linear"])
+    e.add_argument("--transfer", choices=["log1p", "none"])
+    e.add_argument("--no-demodulate", action="store_true")
+    e.set_defaults(func=_export)
+    g = sub.add_parser("golden", help="write (or --check) the golden fixtures of the Rust tests")
+    g.add_argument("--out", default="tests/fixtures")
+    g.add_argument("--check", metavar="DIR", help="regenerate into a temporary folder and compare with DIR")
+    g.set_defaults(func=_golden)
+    args = p.parse_args(argv)
+    try:
+        return args.func(args)
+    except (ValueError, OSError) as err:
+        print(f"rae-weights: {err}", file=sys.stderr)
+        return 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

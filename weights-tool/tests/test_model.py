@@ -1,0 +1,56 @@
+"""The PyTorch network: shapes and names of the reference code, recurrence, the input policy."""
+
+import math
+
+import torch
+
+from rae_weights import Arch, RecurrentAE, finish_output, prepare_input
+
+
+def test_reference_network_has_papers_parameter_count_and_names() -> None:
+    model = RecurrentAE(Arch())
+    assert sum(p.numel() for p in model.parameters()) == 1_504_301
+    names = {n for n, _ in model.named_parameters()}
+    assert names == set(Arch().tensor_shapes())
+    for n in ["d1.l1.0.weight", "d5.l2.2.bias", "bottleneck.l2.0.weight", "u5.l1.1.weight", "u1.l1.3.bias"]:
+        assert n in names
+    assert tuple(model.state_dict()["u5.l1.1.weight"].shape) == (76, 202, 3, 3)
+
+
+def test_forward_shape_and_hidden_state_carries() -> None:
+    torch.manual_seed(0)
+    model = RecurrentAE(Arch(encoder=[4, 5, 6], bottleneck=7)).eval()
+    x = torch.rand(1, 8, 16, 24)
+    with torch.no_grad():
+        y0 = model(x)
+        y1 = model(x)
+        model.reset()
+        y0_again = model(x)
+    assert y0.shape == (1, 3, 16, 24)
+    assert not torch.allclose(y0, y1), "the second frame sees the first frame's hidden state"
+    assert torch.equal(y0, y0_again), "reset() restores the first frame exactly"
+
+
+def test_paper_variant_runs_and_is_linear_at_the_output() -> None:
+    arch = Arch(inputs=["color", "albedo", "normal"], encoder=[4, 6], bottleneck=8, skip="prepool", output_activation="linear")
+    model = RecurrentAE(arch)
+    assert isinstance(model.u1.l1[4], torch.nn.Identity)
+    y = model(torch.rand(1, 9, 8, 12))
+    assert y.shape == (1, 3, 8, 12)
+
+
+def test_input_policy_makes_everything_finite() -> None:
+    arch = Arch(inputs=["color", "albedo", "normal", "depth", "roughness"])
+    bad = torch.tensor([math.nan, math.inf, -math.inf, -5.0, 1e30])
+    frame = {
+        "color": bad.view(1, 1, 1, 5).expand(1, 3, 1, 5),
+        "albedo": bad.view(1, 1, 1, 5).expand(1, 3, 1, 5),
+        "normal": bad.view(1, 1, 1, 5).expand(1, 3, 1, 5),
+        "depth": bad.view(1, 1, 1, 5),
+        "roughness": bad.view(1, 1, 1, 5),
+    }
+    x = prepare_input(arch, frame)
+    assert x.shape == (1, 11, 1, 5)
+    assert torch.isfinite(x).all()
+    out = finish_output(arch, torch.full((1, 3, 1, 5), 1e6), frame)
+    assert torch.isfinite(out).all() and (out >= 0).all()
