@@ -4,8 +4,8 @@
 // upsampling never run as passes of their own.
 //
 // Activations are rgba32float texture arrays: layer l holds channels 4l..4l+3 (texture loads are
-// vectorised on lavapipe, storage-buffer loads are not). Weights are vec4s of 4 output channels;
-// every invocation of a workgroup reads the same weight address, so the load is a broadcast.
+// vectorised on lavapipe, storage-buffer loads run lane by lane). Weights are vec4s of 4 output
+// channels in a 2D texture; every invocation of a workgroup reads the same weight texel.
 //
 // Specialised per layer kind by override constants (read modes, activation); sizes come in the
 // uniform, so one pipeline serves every resolution and width.
@@ -20,9 +20,10 @@ override MODE_A: u32 = 0u;
 override MODE_B: u32 = 0u;
 override LEAKY: bool = true;
 
-// Register tile: each invocation computes ROWS output rows x BLOCKS*4 output channels at one x.
+// Register tile: each invocation computes 4 output rows x 4 output channels (one block) at one
+// x, in four named accumulators: no indexable local arrays, which lavapipe would keep in
+// per-lane scratch memory.
 const ROWS: u32 = 4u;
-const BLOCKS: u32 = 4u;
 
 struct Params {
     width: u32,       // output (= convolution) resolution
@@ -42,8 +43,15 @@ struct Params {
 @group(0) @binding(0) var<uniform> params: Params;
 @group(0) @binding(1) var src_a: texture_2d_array<f32>;
 @group(0) @binding(2) var src_b: texture_2d_array<f32>;
-@group(0) @binding(3) var<storage, read> weights: array<vec4<f32>>;
+@group(0) @binding(3) var weights: texture_2d<f32>;
 @group(0) @binding(4) var dst: texture_storage_2d_array<rgba32float, write>;
+
+// Weights are WEIGHT_ROW vec4s per texture row (kernels::WEIGHT_ROW on the host).
+const WEIGHT_ROW: u32 = 4096u;
+
+fn weight(i: u32) -> vec4<f32> {
+    return textureLoad(weights, vec2<u32>(i % WEIGHT_ROW, i / WEIGHT_ROW), 0);
+}
 
 fn max4(t: texture_2d_array<f32>, p: vec2<i32>, layer: u32) -> vec4<f32> {
     let a = textureLoad(t, p, layer, 0);
@@ -59,88 +67,80 @@ fn fetch(t: texture_2d_array<f32>, mode: u32, x: i32, y: i32, layer: u32) -> vec
         return vec4<f32>(0.0);
     }
     switch mode {
-        case 1u: { return max4(t, vec2<i32>(2 * x, 2 * y), layer); }
-        case 2u: { return textureLoad(t, vec2<i32>(x >> 1u, y >> 1u), layer, 0); }
-        case 3u: { return max4(t, vec2<i32>(x & ~1, y & ~1), layer); }
+        case READ_POOL: { return max4(t, vec2<i32>(2 * x, 2 * y), layer); }
+        case READ_UPSAMPLE: { return textureLoad(t, vec2<i32>(x >> 1u, y >> 1u), layer, 0); }
+        case READ_POOL_UPSAMPLE: { return max4(t, vec2<i32>(x & ~1, y & ~1), layer); }
         default: { return textureLoad(t, vec2<i32>(x, y), layer, 0); }
     }
 }
 
-// acc[r][k] += sum over the 3x3 taps and 4 input lanes of block `cb`, for the window of inputs.
-fn accumulate(
-    acc: ptr<function, array<vec4<f32>, ROWS * BLOCKS>>,
-    window: ptr<function, array<vec4<f32>, (ROWS + 2u) * 3u>>,
-    ob0: u32,
-    cb: u32,
-) {
-    for (var k = 0u; k < BLOCKS; k++) {
-        let base = params.t_offset + ((ob0 + k) * params.cin4_total + cb) * 36u;
-        for (var tap = 0u; tap < 9u; tap++) {
-            let w0 = weights[base + tap * 4u];
-            let w1 = weights[base + tap * 4u + 1u];
-            let w2 = weights[base + tap * 4u + 2u];
-            let w3 = weights[base + tap * 4u + 3u];
-            let ky = tap / 3u;
-            let kx = tap % 3u;
-            for (var r = 0u; r < ROWS; r++) {
-                let v = (*window)[(r + ky) * 3u + kx];
-                (*acc)[r * BLOCKS + k] += v.x * w0 + v.y * w1 + v.z * w2 + v.w * w3;
-            }
-        }
+// The four accumulated rows of a tile.
+struct Tile {
+    r0: vec4<f32>,
+    r1: vec4<f32>,
+    r2: vec4<f32>,
+    r3: vec4<f32>,
+}
+
+// The 4x4 block of weights of one tap: column l maps input lane l to the 4 output channels.
+fn tap(i: u32) -> mat4x4<f32> {
+    return mat4x4<f32>(weight(i), weight(i + 1u), weight(i + 2u), weight(i + 3u));
+}
+
+// Add input block `layer` of `t` (read with `mode`) at weight block `cb` to the tile whose
+// top-left output is (x, y0).
+fn accumulate(acc: ptr<function, Tile>, t: texture_2d_array<f32>, mode: u32, layer: u32, cb: u32, ob: u32, x: i32, y0: i32) {
+    let base = params.t_offset + (ob * params.cin4_total + cb) * 36u;
+    for (var kx = 0u; kx < 3u; kx++) {
+        let sx = x + i32(kx) - 1;
+        // Column kx of the 6-row input window.
+        let v0 = fetch(t, mode, sx, y0 - 1, layer);
+        let v1 = fetch(t, mode, sx, y0, layer);
+        let v2 = fetch(t, mode, sx, y0 + 1, layer);
+        let v3 = fetch(t, mode, sx, y0 + 2, layer);
+        let v4 = fetch(t, mode, sx, y0 + 3, layer);
+        let v5 = fetch(t, mode, sx, y0 + 4, layer);
+        // Taps (ky, kx) for ky = 0, 1, 2; tap index ky * 3 + kx, 4 vec4s each.
+        let m0 = tap(base + kx * 4u);
+        let m1 = tap(base + 12u + kx * 4u);
+        let m2 = tap(base + 24u + kx * 4u);
+        (*acc).r0 += m0 * v0 + m1 * v1 + m2 * v2;
+        (*acc).r1 += m0 * v1 + m1 * v2 + m2 * v3;
+        (*acc).r2 += m0 * v2 + m1 * v3 + m2 * v4;
+        (*acc).r3 += m0 * v3 + m1 * v4 + m2 * v5;
     }
+}
+
+fn activate(v: vec4<f32>) -> vec4<f32> {
+    if LEAKY {
+        return select(v * params.slope, v, v >= vec4<f32>(0.0));
+    }
+    return v;
 }
 
 @compute @workgroup_size(8, 8, 1)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let x = gid.x;
     let y0 = gid.y * ROWS;
-    let ob0 = gid.z * BLOCKS;
-    if x >= params.width || y0 >= params.height {
+    let ob = gid.z;
+    if x >= params.width || y0 >= params.height || ob >= params.cout4 {
         return;
     }
-    // Start from the bias (padded to whole tiles with zeros on the host).
-    var acc: array<vec4<f32>, ROWS * BLOCKS>;
-    for (var k = 0u; k < BLOCKS; k++) {
-        let bias = weights[params.b_offset + ob0 + k];
-        for (var r = 0u; r < ROWS; r++) {
-            acc[r * BLOCKS + k] = bias;
-        }
-    }
-    var window: array<vec4<f32>, (ROWS + 2u) * 3u>;
-    let xi = i32(x) - 1;
-    let yi = i32(y0) - 1;
-    // Source a: input blocks 0 .. cin4_a.
+    let bias = weight(params.b_offset + ob);
+    var acc = Tile(bias, bias, bias, bias);
+    let xi = i32(x);
+    let yi = i32(y0);
+    // Source a: input blocks 0 .. cin4_a; then source b: blocks cin4_a .. cin4_a + cin4_b.
     for (var c = 0u; c < params.cin4_a; c++) {
-        for (var i = 0u; i < ROWS + 2u; i++) {
-            for (var j = 0u; j < 3u; j++) {
-                window[i * 3u + j] = fetch(src_a, MODE_A, xi + i32(j), yi + i32(i), c);
-            }
-        }
-        accumulate(&acc, &window, ob0, c);
+        accumulate(&acc, src_a, MODE_A, c, c, ob, xi, yi);
     }
-    // Source b: input blocks cin4_a .. cin4_a + cin4_b.
     for (var c = 0u; c < params.cin4_b; c++) {
-        for (var i = 0u; i < ROWS + 2u; i++) {
-            for (var j = 0u; j < 3u; j++) {
-                window[i * 3u + j] = fetch(src_b, MODE_B, xi + i32(j), yi + i32(i), c);
-            }
-        }
-        accumulate(&acc, &window, ob0, params.cin4_a + c);
+        accumulate(&acc, src_b, MODE_B, c, params.cin4_a + c, ob, xi, yi);
     }
-    // Store with the activation fused.
-    for (var r = 0u; r < ROWS; r++) {
-        let y = y0 + r;
-        if y >= params.height {
-            break;
-        }
-        for (var k = 0u; k < BLOCKS; k++) {
-            if ob0 + k < params.cout4 {
-                var v = acc[r * BLOCKS + k];
-                if LEAKY {
-                    v = select(v * params.slope, v, v >= vec4<f32>(0.0));
-                }
-                textureStore(dst, vec2<u32>(x, y), ob0 + k, v);
-            }
-        }
-    }
+    // Store with the activation fused (rows past the bottom edge are dropped).
+    let h = params.height;
+    textureStore(dst, vec2<u32>(x, y0), ob, activate(acc.r0));
+    if y0 + 1u < h { textureStore(dst, vec2<u32>(x, y0 + 1u), ob, activate(acc.r1)); }
+    if y0 + 2u < h { textureStore(dst, vec2<u32>(x, y0 + 2u), ob, activate(acc.r2)); }
+    if y0 + 3u < h { textureStore(dst, vec2<u32>(x, y0 + 3u), ob, activate(acc.r3)); }
 }

@@ -63,11 +63,7 @@ fn gpu_conv(a: (&Chw, Read), b: Option<(&Chw, Read)>, weight: &[f32], bias: &[f3
     let cb = b.map_or(0, |b| b.0.c);
     let mut packed = Vec::new();
     let (b_offset, t_offset) = kernels::pack_conv(weight, bias, cout, a.0.c, cb, &mut packed);
-    let weights = dev.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: None,
-        contents: bytemuck::cast_slice(&packed),
-        usage: wgpu::BufferUsages::STORAGE,
-    });
+    let weights = kernels::weight_texture(dev, &g.queue, &packed).create_view(&Default::default());
     let params = ConvParams {
         width: w as u32,
         height: h as u32,
@@ -104,7 +100,7 @@ fn gpu_conv(a: (&Chw, Read), b: Option<(&Chw, Read)>, weight: &[f32], bias: &[f3
             wgpu::BindGroupEntry { binding: 0, resource: uniform.as_entire_binding() },
             wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&array_view(&ta)) },
             wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::TextureView(&array_view(&tb)) },
-            wgpu::BindGroupEntry { binding: 3, resource: weights.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: 3, resource: wgpu::BindingResource::TextureView(&weights) },
             wgpu::BindGroupEntry { binding: 4, resource: wgpu::BindingResource::TextureView(&array_view(&out)) },
         ],
     });

@@ -32,6 +32,64 @@ enum Command {
         #[arg(required = true)]
         golden: Vec<PathBuf>,
     },
+    /// Time frames of a weights file on the chosen adapter: median ms per frame (after
+    /// warm-up) split into upload, GPU and download, and achieved GFLOP/s.
+    Bench {
+        /// A .safetensors weights file.
+        weights: PathBuf,
+        /// Frame sizes, WxH.
+        #[arg(long, value_delimiter = ',', default_value = "256x256")]
+        sizes: Vec<String>,
+        /// Timed frames per size (after 2 warm-up frames).
+        #[arg(long, default_value_t = 10)]
+        frames: usize,
+    },
+}
+
+fn parse_size(s: &str) -> Result<(u32, u32)> {
+    let (w, h) = s.split_once('x').with_context(|| format!("size `{s}` is not WxH"))?;
+    Ok((w.parse().with_context(|| format!("width in `{s}`"))?, h.parse().with_context(|| format!("height in `{s}`"))?))
+}
+
+fn median(v: &mut [f64]) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+fn bench(path: &Path, sizes: &[String], frames: usize) -> Result<()> {
+    let weights = Weights::load(path)?;
+    let gpu = Gpu::new()?;
+    let flop_px = 2.0 * Graph::new(&weights.arch).macs_per_pixel();
+    println!("adapter: {}; weights: {}; {frames} timed frames after 2 warm-up", gpu.describe(), path.display());
+    println!("{:>10} {:>10} {:>10} {:>10} {:>10} {:>10} {:>10}", "size", "total ms", "upload", "gpu", "download", "GFLOP/s", "GPU MiB");
+    for s in sizes {
+        let (w, h) = parse_size(s)?;
+        let mut d = Denoiser::new(&gpu.device, &gpu.queue, &weights, w, h)?;
+        let n = (w * h) as usize;
+        // Smooth, noisy, deterministic buffers: the timing does not depend on values.
+        let wave: Vec<f32> = (0..3 * n).map(|i| 0.5 + 0.5 * ((i as f32) * 0.37).sin()).collect();
+        let one: Vec<f32> = wave[..n].to_vec();
+        let frame = rae_core::FrameInputs { color: &wave, albedo: Some(&wave), normal: Some(&wave), depth: Some(&one), roughness: Some(&one) };
+        let mut out = vec![0.0; 3 * n];
+        for _ in 0..2 {
+            d.denoise_into(&frame, &mut out)?;
+        }
+        let (mut total, mut up, mut gpu_t, mut down) = (vec![], vec![], vec![], vec![]);
+        for _ in 0..frames.max(1) {
+            let t = Instant::now();
+            let f = d.denoise_into(&frame, &mut out)?;
+            total.push(t.elapsed().as_secs_f64() * 1e3);
+            up.push(f.upload.as_secs_f64() * 1e3);
+            gpu_t.push(f.gpu.as_secs_f64() * 1e3);
+            down.push(f.download.as_secs_f64() * 1e3);
+        }
+        let (pw, ph) = d.padded_size();
+        let g = median(&mut gpu_t);
+        let gflops = flop_px * (pw * ph) as f64 / (g * 1e-3) / 1e9;
+        let mib = d.gpu_bytes() as f64 / (1 << 20) as f64;
+        println!("{s:>10} {:>10.1} {:>10.2} {g:>10.1} {:>10.2} {gflops:>10.2} {mib:>10.1}", median(&mut total), median(&mut up), median(&mut down));
+    }
+    Ok(())
 }
 
 fn info(path: &Path) -> Result<()> {
@@ -100,5 +158,6 @@ fn main() -> Result<()> {
         Command::Info { file } => info(&file),
         Command::Devices => devices(),
         Command::Verify { golden } => verify(&golden),
+        Command::Bench { weights, sizes, frames } => bench(&weights, &sizes, frames),
     }
 }

@@ -14,7 +14,8 @@
 //!   convs run with a uniform block that reads zero channels from the hidden state, which is
 //!   exactly a zero hidden state (the skipped terms are the last summed), so frame 0 after
 //!   `reset()` is bit-identical to frame 0 of a fresh denoiser.
-//! - **Weights** sit in one read-only storage buffer, bias and taps per conv at fixed offsets.
+//! - **Weights** sit in one rgba32float texture (texture loads are vectorised on lavapipe,
+//!   storage-buffer loads are not), bias and taps of every conv at fixed offsets.
 //!
 //! Frames are `width x height`; the network runs at the size padded to a multiple of
 //! `2^levels` (the prep kernel replicates edge pixels into the padding) and the output kernel
@@ -172,10 +173,11 @@ impl Denoiser {
         let Value::Temp(out_temp) = graph.output else { unreachable!("the output is a temporary") };
         let output_view = slot_views[assign[out_temp]].clone();
 
-        // Weights: one storage buffer, every conv at its offsets.
+        // Weights: one texture, every conv at its offsets.
         let (packed, offsets) = kernels::pack_all(&graph.nodes, weights);
-        let weight_buffer = create_init(device, "weights", bytemuck::cast_slice(&packed), wgpu::BufferUsages::STORAGE);
-        bytes += weight_buffer.size();
+        let weight_texture = kernels::weight_texture(device, queue, &packed);
+        let weight_view = weight_texture.create_view(&Default::default());
+        bytes += weight_texture.size().width as u64 * weight_texture.size().height as u64 * 16;
 
         // Conv uniforms: two slots per node (normal, reset), at the device's offset alignment.
         let stride = (std::mem::size_of::<ConvParams>() as u64).next_multiple_of(limits.min_uniform_buffer_offset_alignment as u64);
@@ -231,7 +233,7 @@ impl Denoiser {
                                     resource: wgpu::BindingResource::TextureView(view(node.a.value, parity)),
                                 },
                                 wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::TextureView(src_b) },
-                                wgpu::BindGroupEntry { binding: 3, resource: weight_buffer.as_entire_binding() },
+                                wgpu::BindGroupEntry { binding: 3, resource: wgpu::BindingResource::TextureView(&weight_view) },
                                 wgpu::BindGroupEntry {
                                     binding: 4,
                                     resource: wgpu::BindingResource::TextureView(view(node.out, parity)),

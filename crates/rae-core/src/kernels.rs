@@ -17,8 +17,8 @@ pub const SHADERS: &[(&str, &str)] = &[
 
 /// Output rows per conv invocation (`ROWS` in conv3x3.wgsl).
 pub const CONV_ROWS: u32 = 4;
-/// Output channel blocks (of 4) per conv invocation (`BLOCKS` in conv3x3.wgsl).
-pub const CONV_BLOCKS: u32 = 4;
+/// Width of the weight texture in vec4s (`WEIGHT_ROW` in conv3x3.wgsl).
+pub const WEIGHT_ROW: u32 = 4096;
 /// Workgroup size in x and y of every kernel.
 pub const WORKGROUP: u32 = 8;
 /// Texture format of activations: a layer holds 4 channels.
@@ -143,6 +143,19 @@ fn texture_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
     }
 }
 
+fn weight_texture_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Texture {
+            sample_type: wgpu::TextureSampleType::Float { filterable: false },
+            view_dimension: wgpu::TextureViewDimension::D2,
+            multisampled: false,
+        },
+        count: None,
+    }
+}
+
 fn storage_texture_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
@@ -205,7 +218,7 @@ impl Kernels {
         };
         let conv_layout = layout(
             "conv3x3",
-            &[uniform_entry(0), texture_entry(1), texture_entry(2), storage_entry(3, true), storage_texture_entry(4)],
+            &[uniform_entry(0), texture_entry(1), texture_entry(2), weight_texture_entry(3), storage_texture_entry(4)],
         );
         let prep_layout = layout(
             "prep",
@@ -287,14 +300,14 @@ pub fn conv_workgroups(width: u32, height: u32, cout: usize) -> (u32, u32, u32) 
     (
         width.div_ceil(WORKGROUP),
         height.div_ceil(CONV_ROWS).div_ceil(WORKGROUP),
-        blocks(cout).div_ceil(CONV_BLOCKS),
+        blocks(cout),
     )
 }
 
 /// A conv's bias and taps in the kernel's layout, appended to `out`; returns (bias, taps)
 /// offsets in vec4s.
 ///
-/// Bias: one vec4 per output block, padded with zeros to whole tiles of [`CONV_BLOCKS`]. Taps:
+/// Bias: one vec4 per output block. Taps:
 /// `[out block][in block][ky*3+kx][in lane]` -> vec4 over the block's 4 output channels. Input
 /// blocks follow the sources: source a's channels padded to a multiple of 4, then source b's, so
 /// the kernel reads each source's texture layers without a concat. Padding weights are zero, so
@@ -303,7 +316,7 @@ pub fn pack_conv(weight: &[f32], bias: &[f32], cout: usize, ca: usize, cb: usize
     let cin = ca + cb;
     debug_assert_eq!(weight.len(), cout * cin * 9);
     let (ba, bb) = (blocks(ca) as usize, blocks(cb) as usize);
-    let cout4 = (blocks(cout)).div_ceil(CONV_BLOCKS) as usize * CONV_BLOCKS as usize;
+    let cout4 = blocks(cout) as usize;
     let b_offset = out.len() as u32;
     for ob in 0..cout4 {
         out.push(std::array::from_fn(|l| bias.get(4 * ob + l).copied().unwrap_or(0.0)));
@@ -350,4 +363,27 @@ pub fn pack_all(nodes: &[ConvNode], weights: &Weights) -> (Vec<[f32; 4]>, Vec<(u
         })
         .collect();
     (data, offsets)
+}
+
+/// Upload packed weights as the rgba32float texture conv3x3.wgsl reads, [`WEIGHT_ROW`] wide.
+pub fn weight_texture(device: &wgpu::Device, queue: &wgpu::Queue, packed: &[[f32; 4]]) -> wgpu::Texture {
+    use wgpu::util::DeviceExt;
+    let rows = (packed.len() as u32).div_ceil(WEIGHT_ROW).max(1);
+    let mut data = packed.to_vec();
+    data.resize((rows * WEIGHT_ROW) as usize, [0.0; 4]);
+    device.create_texture_with_data(
+        queue,
+        &wgpu::TextureDescriptor {
+            label: Some("weights"),
+            size: wgpu::Extent3d { width: WEIGHT_ROW, height: rows, depth_or_array_layers: 1 },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: ACTIVATION_FORMAT,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        },
+        wgpu::util::TextureDataOrder::LayerMajor,
+        bytemuck::cast_slice(&data),
+    )
 }
