@@ -1,0 +1,188 @@
+//! The integrator (unidirectional path tracing with next-event estimation, multiple importance
+//! sampling and Russian roulette) and the per-frame buffers it fills.
+
+use glam::{Vec2, Vec3A};
+use obvhs::ray::Ray;
+use rayon::prelude::*;
+
+use crate::material::Material;
+use crate::sampling::{Frame, Sampler, power_heuristic};
+use crate::scene::Scene;
+
+/// How to render a sequence.
+#[derive(Debug, Clone, Copy)]
+pub struct Settings {
+    /// Image width.
+    pub width: u32,
+    /// Image height.
+    pub height: u32,
+    /// Samples per pixel of the noisy image.
+    pub spp: u32,
+    /// Samples per pixel of the reference (0: none).
+    pub ref_spp: u32,
+    /// Seed of every random number.
+    pub seed: u64,
+    /// Longest path, in bounces.
+    pub max_depth: u32,
+}
+
+/// One frame's buffers, row-major, top row first (the layout rae-core reads).
+#[derive(Debug, Clone, PartialEq)]
+pub struct FrameBuffers {
+    /// Noisy radiance, RGB.
+    pub color: Vec<f32>,
+    /// Reference radiance, RGB (empty when not rendered).
+    pub reference: Vec<f32>,
+    /// First-hit albedo, RGB.
+    pub albedo: Vec<f32>,
+    /// First-hit shading normal, world space, facing the camera.
+    pub normal: Vec<f32>,
+    /// Distance along the primary ray; +inf where it misses.
+    pub depth: Vec<f32>,
+    /// First-hit roughness (0 where the ray misses).
+    pub roughness: Vec<f32>,
+    /// Screen-space motion to the previous frame, pixels (x right, y down): where this pixel's
+    /// surface point was in the previous frame, minus where it is now.
+    pub motion: Vec<f32>,
+}
+
+const RAY_EPS: f32 = 1e-4;
+
+fn offset(p: Vec3A, n: Vec3A, toward: Vec3A) -> Vec3A {
+    let s = if n.dot(toward) >= 0.0 { 1.0 } else { -1.0 };
+    p + n * (s * RAY_EPS * p.abs().max_element().max(1.0))
+}
+
+/// Radiance along a camera ray.
+pub fn radiance(scene: &Scene, origin: Vec3A, dir: Vec3A, max_depth: u32, s: &mut Sampler) -> Vec3A {
+    let mut l = Vec3A::ZERO;
+    let mut beta = Vec3A::ONE;
+    let (mut o, mut d) = (origin, dir);
+    // MIS state of the previous bounce: its BSDF pdf, whether it was specular, where it was.
+    let (mut prev_pdf, mut prev_specular, mut prev_p) = (0.0f32, true, origin);
+    for depth in 0..max_depth {
+        let Some((prim, t)) = scene.intersect(Ray::new(o, d, 0.0, f32::INFINITY)) else {
+            l += beta * scene.environment.radiance(d);
+            break;
+        };
+        let surf = scene.prims[prim].surface(o + d * t);
+        let mat = scene.material(prim);
+        let wo_world = -d;
+        if let Material::Emitter { radiance } = mat {
+            // One-sided emitters light their front.
+            if surf.ng.dot(wo_world) > 0.0 {
+                let w = if prev_specular || depth == 0 { 1.0 } else { power_heuristic(prev_pdf, scene.light_pdf(prev_p, prim, &surf)) };
+                l += beta * *radiance * w;
+            }
+            break;
+        }
+        // Shade with normals facing the viewer, except for dielectrics (inside/outside matters).
+        let dielectric = matches!(mat, Material::Dielectric { .. });
+        let (ng, ns) = if !dielectric && surf.ng.dot(wo_world) < 0.0 { (-surf.ng, -surf.ns) } else { (surf.ng, surf.ns) };
+        let frame = Frame::new(ns);
+        let wo = frame.to_local(wo_world);
+        if !dielectric && wo.z <= 0.0 {
+            break;
+        }
+
+        // Next-event estimation.
+        if mat.is_smooth_free() && scene.has_lights() {
+            let p = offset(surf.p, ng, ng);
+            if let Some(ls) = scene.sample_light(p, s) {
+                let wi = frame.to_local(ls.wi);
+                let (f_cos, bsdf_pdf) = mat.eval(wo, wi, surf.uv);
+                if f_cos != Vec3A::ZERO && ls.wi.dot(ng) > 0.0 && !scene.occluded(p, ls.wi, ls.dist) {
+                    l += beta * f_cos * ls.radiance * (power_heuristic(ls.pdf, bsdf_pdf) / ls.pdf);
+                }
+            }
+        }
+
+        // Continue the path by sampling the BSDF.
+        let Some(bs) = mat.sample(wo, surf.uv, s) else { break };
+        beta *= bs.weight;
+        let wi_world = frame.to_world(bs.wi);
+        o = offset(surf.p, ng, wi_world);
+        d = wi_world.normalize();
+        (prev_pdf, prev_specular, prev_p) = (bs.pdf, bs.specular, o);
+
+        // Russian roulette after a few bounces.
+        if depth >= 3 {
+            let q = beta.max_element().clamp(0.05, 0.95);
+            if s.next() >= q {
+                break;
+            }
+            beta /= q;
+        }
+        if !beta.is_finite() {
+            break;
+        }
+    }
+    l
+}
+
+/// Render frame `frame` of `frames`: noisy radiance, reference and auxiliary buffers.
+pub fn render_frame(scene: &Scene, frame: u32, frames: u32, st: &Settings) -> FrameBuffers {
+    let (w, h) = (st.width, st.height);
+    let cam = scene.camera.frame(frame as i64, frames);
+    let prev = scene.camera.frame(frame as i64 - 1, frames);
+    let pixels: Vec<_> = (0..w * h)
+        .into_par_iter()
+        .map(|i| {
+            let (x, y) = (i % w, i / w);
+            let (px, py) = (x as f32 + 0.5, y as f32 + 0.5);
+            // Auxiliary buffers from the ray through the pixel centre.
+            let dir = cam.direction(px, py, w, h);
+            let mut aux = ([0.0f32; 3], [0.0f32; 3], f32::INFINITY, 0.0f32, [0.0f32; 2]);
+            let far = cam.position + dir * 1e6;
+            let mut seen = far;
+            if let Some((prim, t)) = scene.intersect(Ray::new(cam.position, dir, 0.0, f32::INFINITY)) {
+                let surf = scene.prims[prim].surface(cam.position + dir * t);
+                let mat = scene.material(prim);
+                let n = if surf.ns.dot(dir) > 0.0 && !matches!(mat, Material::Dielectric { .. }) { -surf.ns } else { surf.ns };
+                aux.0 = mat.albedo(surf.uv).to_array();
+                aux.1 = n.to_array();
+                aux.2 = t;
+                aux.3 = mat.roughness();
+                seen = surf.p;
+            }
+            if let Some(q) = prev.project(seen, w, h) {
+                aux.4 = [q.x - px, q.y - py];
+            }
+            let sample = |pass: u32, n: u32| -> [f32; 3] {
+                if n == 0 {
+                    return [0.0; 3];
+                }
+                let mut s = Sampler::new(st.seed, frame, i, pass);
+                let mut acc = Vec3A::ZERO;
+                for _ in 0..n {
+                    let j: Vec2 = s.next2();
+                    let d = cam.direction(x as f32 + j.x, y as f32 + j.y, w, h);
+                    acc += radiance(scene, cam.position, d, st.max_depth, &mut s);
+                }
+                (acc / n as f32).to_array()
+            };
+            (sample(0, st.spp), sample(1, st.ref_spp), aux)
+        })
+        .collect();
+    let mut fb = FrameBuffers {
+        color: Vec::with_capacity(pixels.len() * 3),
+        reference: Vec::new(),
+        albedo: Vec::with_capacity(pixels.len() * 3),
+        normal: Vec::with_capacity(pixels.len() * 3),
+        depth: Vec::with_capacity(pixels.len()),
+        roughness: Vec::with_capacity(pixels.len()),
+        motion: Vec::with_capacity(pixels.len() * 2),
+    };
+    for (c, r, aux) in pixels {
+        fb.color.extend(c);
+        if st.ref_spp > 0 {
+            fb.reference.extend(r);
+        }
+        fb.albedo.extend(aux.0);
+        fb.normal.extend(aux.1);
+        fb.depth.push(aux.2);
+        fb.roughness.push(aux.3);
+        fb.motion.extend(aux.4);
+    }
+    fb
+}

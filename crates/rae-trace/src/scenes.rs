@@ -1,0 +1,211 @@
+//! The fixed scenes and the seeded procedural generator.
+
+use glam::Vec3A;
+use rand::{RngExt, SeedableRng};
+use rand_pcg::Pcg32;
+
+use crate::geometry::{Prim, Shape, cuboid, quad};
+use crate::material::Material;
+use crate::scene::{Camera, CameraPath, Environment, Scene, v};
+use crate::texture::Texture;
+
+/// Names accepted by [`by_name`].
+pub const NAMES: &[&str] = &["cornell", "glossy", "firefly"];
+
+/// A fixed scene by name.
+pub fn by_name(name: &str) -> Option<Scene> {
+    match name {
+        "cornell" => Some(cornell()),
+        "glossy" => Some(glossy()),
+        "firefly" => Some(firefly()),
+        _ => None,
+    }
+}
+
+struct Builder {
+    prims: Vec<Prim>,
+    materials: Vec<Material>,
+}
+
+impl Builder {
+    fn new() -> Self {
+        Self { prims: Vec::new(), materials: Vec::new() }
+    }
+
+    fn material(&mut self, m: Material) -> u32 {
+        self.materials.push(m);
+        self.materials.len() as u32 - 1
+    }
+
+    fn sphere(&mut self, center: Vec3A, radius: f32, m: u32) {
+        self.prims.push(Prim { shape: Shape::Sphere { center, radius }, material: m });
+    }
+
+    fn finish(self, env: Environment, keys: Vec<Camera>) -> Scene {
+        Scene::new(self.prims, self.materials, env, CameraPath { keys })
+    }
+}
+
+fn diffuse(c: Vec3A) -> Material {
+    Material::Diffuse { albedo: Texture::Constant(c) }
+}
+
+/// The Cornell box: red and green walls, a ceiling light, a tall box and a glass sphere; the
+/// camera dollies in slowly.
+pub fn cornell() -> Scene {
+    let mut b = Builder::new();
+    let white = b.material(diffuse(v(0.73, 0.73, 0.73)));
+    let red = b.material(diffuse(v(0.65, 0.05, 0.05)));
+    let green = b.material(diffuse(v(0.12, 0.45, 0.15)));
+    let light = b.material(Material::Emitter { radiance: v(17.0, 12.0, 4.0) });
+    let glass = b.material(Material::Dielectric { ior: 1.5, roughness: 0.0 });
+    // Room [-1,1] x [0,2] x [-1,1], open toward +z (the camera).
+    b.prims.extend(quad(v(-1.0, 0.0, 1.0), v(2.0, 0.0, 0.0), v(0.0, 0.0, -2.0), 1.0, white)); // floor, up
+    b.prims.extend(quad(v(-1.0, 2.0, -1.0), v(2.0, 0.0, 0.0), v(0.0, 0.0, 2.0), 1.0, white)); // ceiling, down
+    b.prims.extend(quad(v(-1.0, 0.0, -1.0), v(2.0, 0.0, 0.0), v(0.0, 2.0, 0.0), 1.0, white)); // back, +z
+    b.prims.extend(quad(v(-1.0, 0.0, 1.0), v(0.0, 0.0, -2.0), v(0.0, 2.0, 0.0), 1.0, red)); // left, +x
+    b.prims.extend(quad(v(1.0, 0.0, -1.0), v(0.0, 0.0, 2.0), v(0.0, 2.0, 0.0), 1.0, green)); // right, -x
+    b.prims.extend(quad(v(-0.25, 1.999, -0.25), v(0.5, 0.0, 0.0), v(0.0, 0.0, 0.5), 1.0, light)); // light, down
+    b.prims.extend(cuboid(v(-0.35, 0.6, -0.35), v(0.28, 0.6, 0.28), 0.3, white));
+    b.sphere(v(0.4, 0.35, 0.3), 0.35, glass);
+    let cam = |z: f32, x: f32| Camera { position: v(x, 1.0, z), target: v(0.0, 0.9, 0.0), vfov: 40.0 };
+    b.finish(Environment::Black, vec![cam(3.9, -0.15), cam(3.6, 0.0), cam(3.4, 0.15)])
+}
+
+/// Glossy spheres of increasing roughness, metal and plastic, on a textured floor under a sky
+/// and an area light; the camera orbits.
+pub fn glossy() -> Scene {
+    let mut b = Builder::new();
+    let floor = b.material(Material::Plastic {
+        albedo: Texture::Checker { a: v(0.8, 0.8, 0.8), b: v(0.15, 0.15, 0.2), scale: 4.0 },
+        roughness: 0.4,
+    });
+    let wall = b.material(Material::Diffuse { albedo: Texture::bricks(v(0.6, 0.25, 0.15), v(0.75, 0.75, 0.7)) });
+    b.prims.extend(quad(v(-6.0, 0.0, 6.0), v(12.0, 0.0, 0.0), v(0.0, 0.0, -12.0), 3.0, floor));
+    b.prims.extend(quad(v(-6.0, 0.0, -3.0), v(12.0, 0.0, 0.0), v(0.0, 4.0, 0.0), 3.0, wall));
+    for i in 0..5 {
+        let r = [0.03, 0.15, 0.3, 0.5, 0.8][i];
+        let x = -2.0 + i as f32;
+        let metal = b.material(Material::Conductor { f0: v(0.95, 0.64, 0.54), roughness: r });
+        let plastic = b.material(Material::Plastic { albedo: Texture::Constant(v(0.1, 0.3, 0.8)), roughness: r });
+        b.sphere(v(x, 0.4, 0.0), 0.4, metal);
+        b.sphere(v(x, 0.3, 1.2), 0.3, plastic);
+    }
+    let glass = b.material(Material::Dielectric { ior: 1.5, roughness: 0.1 });
+    b.sphere(v(0.5, 0.5, -1.6), 0.5, glass);
+    let light = b.material(Material::Emitter { radiance: v(12.0, 12.0, 11.0) });
+    b.prims.extend(quad(v(-1.0, 4.0, -1.0), v(2.0, 0.0, 0.0), v(0.0, 0.0, 2.0), 1.0, light)); // facing down
+    let sky = Environment::Sky { zenith: v(0.3, 0.45, 0.9), horizon: v(0.9, 0.9, 1.0), ground: v(0.1, 0.1, 0.1) };
+    let keys = (0..4)
+        .map(|k| {
+            let a = -0.5 + 0.33 * k as f32;
+            Camera { position: v(5.5 * a.sin(), 2.0, 5.5 * a.cos()), target: v(0.0, 0.4, 0.0), vfov: 38.0 }
+        })
+        .collect();
+    b.finish(sky, keys)
+}
+
+/// A closed room lit by a tiny, very bright light behind a glass sphere: caustics, a dark
+/// corner behind a wall, and the fireflies 1 spp renders of such a light produce.
+pub fn firefly() -> Scene {
+    let mut b = Builder::new();
+    let white = b.material(diffuse(v(0.7, 0.7, 0.7)));
+    let blue = b.material(diffuse(v(0.2, 0.3, 0.7)));
+    let floor = b.material(Material::Diffuse {
+        albedo: Texture::Noise { a: v(0.3, 0.25, 0.2), b: v(0.7, 0.6, 0.5), scale: 6.0, seed: 3 },
+    });
+    let light = b.material(Material::Emitter { radiance: v(40000.0, 36000.0, 30000.0) });
+    let glass = b.material(Material::Dielectric { ior: 1.5, roughness: 0.0 });
+    let metal = b.material(Material::Conductor { f0: v(0.9, 0.9, 0.9), roughness: 0.05 });
+    // Room [-3,3] x [0,3] x [-3,3], inward-facing walls.
+    b.prims.extend(quad(v(-3.0, 0.0, 3.0), v(6.0, 0.0, 0.0), v(0.0, 0.0, -6.0), 2.0, floor));
+    b.prims.extend(quad(v(-3.0, 3.0, -3.0), v(6.0, 0.0, 0.0), v(0.0, 0.0, 6.0), 1.0, white));
+    b.prims.extend(quad(v(-3.0, 0.0, -3.0), v(6.0, 0.0, 0.0), v(0.0, 3.0, 0.0), 1.0, white));
+    b.prims.extend(quad(v(3.0, 0.0, 3.0), v(-6.0, 0.0, 0.0), v(0.0, 3.0, 0.0), 1.0, white));
+    b.prims.extend(quad(v(-3.0, 0.0, 3.0), v(0.0, 0.0, -6.0), v(0.0, 3.0, 0.0), 1.0, blue));
+    b.prims.extend(quad(v(3.0, 0.0, -3.0), v(0.0, 0.0, 6.0), v(0.0, 3.0, 0.0), 1.0, white));
+    // A free-standing wall that leaves the right-hand corner in shadow.
+    b.prims.extend(cuboid(v(1.6, 1.2, -1.2), v(0.05, 1.2, 1.0), 0.0, white));
+    b.sphere(v(-1.0, 2.2, -1.0), 0.02, light);
+    b.sphere(v(-0.8, 0.6, -0.6), 0.6, glass);
+    b.sphere(v(0.6, 0.35, 0.4), 0.35, metal);
+    let keys = vec![
+        Camera { position: v(-2.2, 1.5, 2.7), target: v(0.5, 0.8, -1.5), vfov: 60.0 },
+        Camera { position: v(-1.5, 1.4, 2.8), target: v(0.8, 0.8, -1.6), vfov: 60.0 },
+        Camera { position: v(-0.6, 1.3, 2.7), target: v(1.2, 0.7, -1.6), vfov: 60.0 },
+    ];
+    b.finish(Environment::Black, keys)
+}
+
+fn color(r: &mut Pcg32) -> Vec3A {
+    v(r.random_range(0.05..0.9), r.random_range(0.05..0.9), r.random_range(0.05..0.9))
+}
+
+fn texture(r: &mut Pcg32) -> Texture {
+    match r.random_range(0..4) {
+        0 => Texture::Constant(color(r)),
+        1 => Texture::Checker { a: color(r), b: color(r), scale: r.random_range(1.0..8.0) },
+        2 => Texture::Noise { a: color(r), b: color(r), scale: r.random_range(2.0..16.0), seed: r.random() },
+        _ => Texture::bricks(color(r), color(r)),
+    }
+}
+
+/// A seeded random scene for training variety: a textured floor and back wall, 4-12 spheres
+/// and boxes of random materials, one or two area lights, sometimes a tiny bright light and a
+/// sky, and a smooth camera path through 4 random keys.
+pub fn random(seed: u64) -> Scene {
+    let mut r = Pcg32::seed_from_u64(seed);
+    let mut b = Builder::new();
+    let floor_tex = texture(&mut r);
+    let floor = b.material(Material::Plastic { albedo: floor_tex, roughness: r.random_range(0.2..1.0) });
+    let wall_tex = texture(&mut r);
+    let wall = b.material(Material::Diffuse { albedo: wall_tex });
+    b.prims.extend(quad(v(-8.0, 0.0, 8.0), v(16.0, 0.0, 0.0), v(0.0, 0.0, -16.0), 4.0, floor));
+    b.prims.extend(quad(v(-8.0, 0.0, -4.0), v(16.0, 0.0, 0.0), v(0.0, 6.0, 0.0), 3.0, wall));
+    for _ in 0..r.random_range(4..13) {
+        let m = match r.random_range(0..5) {
+            0 | 1 => { let t = texture(&mut r); Material::Diffuse { albedo: t } }
+            2 => Material::Conductor { f0: color(&mut r) + v(0.1, 0.1, 0.1), roughness: r.random_range(0.0..0.7) },
+            3 => Material::Dielectric { ior: r.random_range(1.3..1.8), roughness: r.random_range(0.0..0.3) },
+            _ => { let t = texture(&mut r); Material::Plastic { albedo: t, roughness: r.random_range(0.05..0.8) } }
+        };
+        let m = b.material(m);
+        let (x, z) = (r.random_range(-3.0..3.0), r.random_range(-3.0..2.5));
+        if r.random_bool(0.6) {
+            let rad = r.random_range(0.2..0.8);
+            b.sphere(v(x, rad, z), rad, m);
+        } else {
+            let half = v(r.random_range(0.15..0.7), r.random_range(0.15..1.0), r.random_range(0.15..0.7));
+            b.prims.extend(cuboid(v(x, half.y, z), half, r.random_range(0.0..3.14), m));
+        }
+    }
+    for _ in 0..r.random_range(1..3) {
+        let e = r.random_range(4.0..30.0);
+        let tint = v(r.random_range(0.7..1.0), r.random_range(0.7..1.0), r.random_range(0.7..1.0));
+        let light = b.material(Material::Emitter { radiance: tint * e });
+        let (x, z, s) = (r.random_range(-3.0..3.0), r.random_range(-3.0..3.0), r.random_range(0.3..1.5));
+        b.prims.extend(quad(v(x, 4.5, z), v(s, 0.0, 0.0), v(0.0, 0.0, s), 1.0, light)); // facing down
+    }
+    if r.random_bool(0.4) {
+        let light = b.material(Material::Emitter { radiance: v(1.0, 0.9, 0.8) * r.random_range(5e3..5e4) });
+        b.sphere(v(r.random_range(-3.0..3.0), r.random_range(1.0..3.5), r.random_range(-3.0..2.0)), 0.03, light);
+    }
+    let env = if r.random_bool(0.5) {
+        let s = r.random_range(0.2..1.5);
+        Environment::Sky { zenith: v(0.3, 0.45, 0.9) * s, horizon: v(0.9, 0.85, 0.8) * s, ground: v(0.1, 0.1, 0.1) * s }
+    } else {
+        Environment::Black
+    };
+    let center = v(r.random_range(-1.0..1.0), 0.5, r.random_range(-1.0..1.0));
+    let (a0, da) = (r.random_range(-0.8..0.8), r.random_range(-0.5..0.5));
+    let (dist, height) = (r.random_range(4.5..8.0), r.random_range(1.0..3.5));
+    let vfov = r.random_range(35.0..60.0);
+    let keys = (0..4)
+        .map(|k| {
+            let a = a0 + da * k as f32 / 3.0;
+            let jitter = v(r.random_range(-0.3..0.3), r.random_range(-0.2..0.2), r.random_range(-0.3..0.3));
+            Camera { position: v(dist * a.sin(), height, dist * a.cos()) + jitter, target: center, vfov }
+        })
+        .collect();
+    b.finish(env, keys)
+}

@@ -1,0 +1,114 @@
+//! rae-trace: determinism, convergence, auxiliary buffers on known geometry, motion vectors.
+
+use glam::Vec3A;
+use rae_trace::geometry::quad;
+use rae_trace::material::Material;
+use rae_trace::scene::{Camera, CameraPath, Environment, v};
+use rae_trace::texture::Texture;
+use rae_trace::{Scene, Settings, render_frame, scenes};
+
+fn settings(w: u32, h: u32, spp: u32, ref_spp: u32, seed: u64) -> Settings {
+    Settings { width: w, height: h, spp, ref_spp, seed, max_depth: 8 }
+}
+
+#[test]
+fn a_seed_reproduces_a_frame_bit_for_bit() {
+    let scene = scenes::random(5);
+    let a = render_frame(&scene, 1, 3, &settings(24, 16, 2, 0, 9));
+    let b = render_frame(&scene, 1, 3, &settings(24, 16, 2, 0, 9));
+    assert_eq!(a, b, "same seed, same frame: identical buffers");
+    let other_seed = render_frame(&scene, 1, 3, &settings(24, 16, 2, 0, 10));
+    assert_ne!(a.color, other_seed.color, "another seed draws other noise");
+    let scene2 = scenes::random(5);
+    let next_frame = render_frame(&scene2, 2, 3, &settings(24, 16, 2, 0, 9));
+    assert_ne!(a.color, next_frame.color, "every frame draws new random numbers");
+}
+
+fn mse(a: &[f32], b: &[f32]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| ((x - y) as f64).powi(2)).sum::<f64>() / a.len() as f64
+}
+
+#[test]
+fn error_against_the_reference_falls_like_one_over_spp() {
+    // A diffuse room lit by an area light and the sky: every estimator term is bounded.
+    let scene = scenes::by_name("glossy").unwrap();
+    let reference = render_frame(&scene, 0, 1, &settings(32, 24, 1, 2048, 1)).reference;
+    let err: Vec<f64> = [4u32, 16, 64].iter().map(|&spp| mse(&render_frame(&scene, 0, 1, &settings(32, 24, spp, 0, 2)).color, &reference)).collect();
+    eprintln!("MSE against a 2048 spp reference at 4, 16, 64 spp: {err:?}");
+    for k in 0..2 {
+        let ratio = err[k] / err[k + 1];
+        // Expected (1/n + 1/2048) / (1/4n + 1/2048): about 3.9 and 3.6 for 4x the samples.
+        assert!((2.5..6.0).contains(&ratio), "MSE at {:?} spp: {err:?}; ratio {ratio} is not ~4", [4, 16, 64]);
+    }
+}
+
+/// A large textured floor (y = 0) seen from above at an angle.
+fn floor_scene(cameras: Vec<Camera>) -> Scene {
+    let tex = Texture::Checker { a: v(0.9, 0.1, 0.1), b: v(0.1, 0.2, 0.9), scale: 4.0 };
+    let mut materials = vec![Material::Diffuse { albedo: tex.clone() }];
+    materials.push(Material::Emitter { radiance: Vec3A::ONE });
+    let prims = quad(v(-50.0, 0.0, 50.0), v(100.0, 0.0, 0.0), v(0.0, 0.0, -100.0), 25.0, 0).to_vec();
+    Scene::new(prims, materials, Environment::Sky { zenith: Vec3A::ONE, horizon: Vec3A::ONE, ground: Vec3A::ZERO }, CameraPath { keys: cameras })
+}
+
+#[test]
+fn auxiliary_buffers_are_right_on_a_textured_plane() {
+    let cam = Camera { position: v(0.3, 2.0, 3.0), target: v(0.0, 0.0, 0.0), vfov: 50.0 };
+    let scene = floor_scene(vec![cam]);
+    let (w, h) = (31u32, 23u32);
+    let fb = render_frame(&scene, 0, 1, &settings(w, h, 1, 0, 0));
+    let tex = Texture::Checker { a: v(0.9, 0.1, 0.1), b: v(0.1, 0.2, 0.9), scale: 4.0 };
+    let mut hits = 0;
+    for y in 0..h {
+        for x in 0..w {
+            let i = (y * w + x) as usize;
+            let dir = cam.direction(x as f32 + 0.5, y as f32 + 0.5, w, h);
+            if dir.y >= -1e-3 {
+                assert!(fb.depth[i].is_infinite(), "pixel ({x},{y}) misses: depth marked +inf");
+                continue;
+            }
+            // Analytic intersection with y = 0 and the quad's uv (corner (-50, 0, 50), 25 repeats).
+            let t = -cam.position.y / dir.y;
+            let p = cam.position + dir * t;
+            let uv = glam::Vec2::new((p.x + 50.0) / 100.0 * 25.0, (50.0 - p.z) / 100.0 * 25.0);
+            let want = tex.eval(uv);
+            hits += 1;
+            assert!((fb.depth[i] - t).abs() < 1e-3 * t, "pixel ({x},{y}): depth {} vs {t}", fb.depth[i]);
+            assert_eq!(&fb.normal[3 * i..3 * i + 3], &[0.0, 1.0, 0.0], "pixel ({x},{y}): plane normal");
+            assert_eq!(fb.roughness[i], 1.0);
+            // Skip texels on a checker edge, where rounding may pick either colour.
+            let f = (uv * 4.0).fract();
+            if f.min_element() > 0.02 && f.max_element() < 0.98 {
+                assert_eq!(&fb.albedo[3 * i..3 * i + 3], &want.to_array(), "pixel ({x},{y}): albedo at uv {uv}");
+            }
+        }
+    }
+    assert!(hits > 300, "most pixels see the floor");
+}
+
+#[test]
+fn motion_vectors_point_to_where_a_static_point_was() {
+    // The camera slides sideways (position and target alike) over a wall at z = 0.
+    let key = |x: f32| Camera { position: v(x, 1.0, 4.0), target: v(x, 1.0, 0.0), vfov: 45.0 };
+    let tex = Texture::Constant(v(0.5, 0.5, 0.5));
+    let materials = vec![Material::Diffuse { albedo: tex }];
+    let wall = quad(v(-50.0, -50.0, 0.0), v(100.0, 0.0, 0.0), v(0.0, 100.0, 0.0), 1.0, 0).to_vec();
+    let scene = Scene::new(wall, materials, Environment::Black, CameraPath { keys: vec![key(0.0), key(1.0)] });
+    let (w, h, frames) = (40u32, 30u32, 5u32);
+    for f in [0u32, 2, 4] {
+        let fb = render_frame(&scene, f, frames, &settings(w, h, 1, 0, 0));
+        let now = scene.camera.frame(f as i64, frames);
+        let before = scene.camera.frame(f as i64 - 1, frames);
+        let shift = (now.position.x - before.position.x) * now.focal_pixels(h) / 4.0;
+        for i in [0usize, 17 * 40 + 9, (w * h - 1) as usize] {
+            let (mx, my) = (fb.motion[2 * i], fb.motion[2 * i + 1]);
+            // Moving right, a static point was further right in the previous frame.
+            assert!((mx - shift).abs() < 1e-2 && my.abs() < 1e-2, "frame {f} pixel {i}: motion ({mx}, {my}), expected ({shift}, 0)");
+        }
+        if f == 0 {
+            assert!(fb.motion.iter().all(|m| m.abs() < 1e-4), "no motion before the first frame");
+        } else {
+            assert!(shift > 0.5, "the test moves the camera by a visible amount");
+        }
+    }
+}
