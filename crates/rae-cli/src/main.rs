@@ -1,5 +1,7 @@
 //! rae-cli: the command-line face of rae-core.
 
+mod denoise;
+
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -18,6 +20,37 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Denoise a folder of frames (per-buffer EXR/PNG, multi-layer EXR or mosaic PNG) into EXR,
+    /// reporting time per frame and, where a reference exists, relMSE, PSNR, SSIM and temporal
+    /// error of the input and of the result.
+    Denoise {
+        /// Folder holding one frame sequence.
+        input: PathBuf,
+        /// Output folder (default: a new folder beside the input).
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+        /// Weights file (default: the shipped model that fits the buffers present).
+        #[arg(long)]
+        weights: Option<PathBuf>,
+        /// Folder of shipped models.
+        #[arg(long, default_value = concat!(env!("CARGO_MANIFEST_DIR"), "/../../models"))]
+        models: PathBuf,
+        /// Frame numbers to denoise: A..B, A.., ..B or A (inclusive).
+        #[arg(long)]
+        frames: Option<String>,
+        /// Frame numbers at which the hidden state is reset (scene cuts), e.g. 12,40.
+        #[arg(long, value_delimiter = ',')]
+        reset_at: Vec<u32>,
+        /// Also write tonemapped sRGB PNG previews.
+        #[arg(long)]
+        png: bool,
+        /// Write half-float EXR instead of float.
+        #[arg(long)]
+        half: bool,
+        /// Replace NaN/Inf input values (input policy) instead of refusing the frame.
+        #[arg(long)]
+        allow_nonfinite: bool,
+    },
     /// Print a weights file's architecture, inputs, parameter count and cost per pixel.
     Info {
         /// A .safetensors weights file written by weights-tool.
@@ -155,6 +188,10 @@ fn verify(files: &[PathBuf]) -> Result<()> {
 
 fn main() -> Result<()> {
     match Cli::parse().command {
+        Command::Denoise { input, output, weights, models, frames, reset_at, png, half, allow_nonfinite } => {
+            let frames = frames.as_deref().map(denoise::parse_range).transpose()?;
+            denoise::run(&denoise::Options { input, output, weights, models, frames, reset_at, png, half, allow_nonfinite })
+        }
         Command::Info { file } => info(&file),
         Command::Devices => devices(),
         Command::Verify { golden } => verify(&golden),

@@ -40,3 +40,261 @@ fn no_matching_adapter_says_how_to_install_lavapipe() {
     let err = String::from_utf8(out.stderr).unwrap();
     assert!(err.contains("mesa-vulkan-drivers") && err.contains("no-such-adapter-anywhere"), "{err}");
 }
+
+// ---- denoise: layouts, options, and every kind of bad input ------------------------------
+
+use std::path::{Path, PathBuf};
+
+use exr::prelude::*;
+
+const W: usize = 32;
+const H: usize = 32;
+
+fn wave(n: usize, k: f32) -> Vec<f32> {
+    (0..n).map(|i| 0.5 + 0.4 * (i as f32 * k).sin()).collect()
+}
+
+fn write_rgb(path: &Path, w: usize, h: usize, data: &[f32]) {
+    write_rgb_file(path, w, h, |x, y| {
+        let i = 3 * (y * w + x);
+        (data[i], data[i + 1], data[i + 2])
+    })
+    .unwrap();
+}
+
+fn write_y(path: &Path, w: usize, h: usize, data: &[f32]) {
+    let ch = SpecificChannels::build().with_channel("Y").with_pixel_fn(|p: Vec2<usize>| (data[p.y() * w + p.x()],));
+    Image::from_channels((w, h), ch).write().to_file(path).unwrap();
+}
+
+/// A per-buffer sequence of `frames` frames with every buffer and a reference.
+fn per_buffer_sequence(dir: &Path, frames: u32) {
+    for f in 0..frames {
+        let k = 0.01 * (f + 1) as f32;
+        let color = wave(W * H * 3, k);
+        write_rgb(&dir.join(format!("color_{f:04}.exr")), W, H, &color);
+        write_rgb(&dir.join(format!("reference_{f:04}.exr")), W, H, &wave(W * H * 3, 0.01));
+        write_rgb(&dir.join(format!("albedo_{f:04}.exr")), W, H, &vec![0.5; W * H * 3]);
+        write_rgb(&dir.join(format!("normal_{f:04}.exr")), W, H, &[0.0, 1.0, 0.0].repeat(W * H));
+        write_y(&dir.join(format!("depth_{f:04}.exr")), W, H, &vec![3.0; W * H]);
+        write_y(&dir.join(format!("roughness_{f:04}.exr")), W, H, &vec![0.5; W * H]);
+    }
+}
+
+fn denoise(input: &Path, extra: &[&str]) -> (bool, String, String) {
+    let mut cmd = rae();
+    cmd.arg("denoise").arg(input).args(["--weights", &fixture("weights_full.safetensors")]).args(extra);
+    let out = cmd.output().unwrap();
+    (out.status.success(), String::from_utf8_lossy(&out.stdout).into(), String::from_utf8_lossy(&out.stderr).into())
+}
+
+fn listing(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(dir).map(|r| r.map(|e| e.unwrap().file_name().to_string_lossy().into()).collect()).unwrap_or_default();
+    v.sort();
+    v
+}
+
+fn seq_dir(tmp: &tempfile::TempDir) -> PathBuf {
+    let d = tmp.path().join("seq");
+    std::fs::create_dir(&d).unwrap();
+    d
+}
+
+#[test]
+fn per_buffer_sequence_is_denoised_with_error_report() {
+    let tmp = tempfile::tempdir().unwrap();
+    let seq = seq_dir(&tmp);
+    per_buffer_sequence(&seq, 3);
+    let before = listing(&seq);
+    let (ok, out, err) = denoise(&seq, &["--png"]);
+    assert!(ok, "{out}{err}");
+    assert!(out.contains("per-buffer files") && out.contains("relMSE") && out.contains("temporal error"), "{out}");
+    let written = listing(&tmp.path().join("seq-denoised"));
+    assert_eq!(written, ["denoised_0000.exr", "denoised_0000.png", "denoised_0001.exr", "denoised_0001.png", "denoised_0002.exr", "denoised_0002.png"]);
+    assert_eq!(listing(&seq), before, "inputs untouched");
+    let img = read_first_rgba_layer_from_file(
+        tmp.path().join("seq-denoised/denoised_0001.exr"),
+        |res, _| vec![[0f32; 3]; res.width() * res.height()],
+        |px: &mut Vec<[f32; 3]>, pos, (r, g, b, _a): (f32, f32, f32, f32)| px[pos.y() * W + pos.x()] = [r, g, b],
+    )
+    .unwrap();
+    assert_eq!(img.layer_data.size, Vec2(W, H));
+    assert!(img.layer_data.channel_data.pixels.iter().flatten().all(|v| v.is_finite() && *v >= 0.0));
+    // A second run goes to a new folder beside the input.
+    assert!(denoise(&seq, &[]).0);
+    assert!(tmp.path().join("seq-denoised-2/denoised_0002.exr").exists());
+}
+
+#[test]
+fn frame_range_selects_frames() {
+    let tmp = tempfile::tempdir().unwrap();
+    let seq = seq_dir(&tmp);
+    per_buffer_sequence(&seq, 3);
+    let out = tmp.path().join("o");
+    let (ok, so, se) = denoise(&seq, &["-o", out.to_str().unwrap(), "--frames", "1..1", "--reset-at", "1"]);
+    assert!(ok, "{so}{se}");
+    assert_eq!(listing(&out), ["denoised_0001.exr"]);
+}
+
+#[test]
+fn blender_multilayer_exr_is_read_and_a_missing_buffer_is_named() {
+    let tmp = tempfile::tempdir().unwrap();
+    let seq = seq_dir(&tmp);
+    for f in 0..2 {
+        let mut ch = Vec::new();
+        let n = W * H;
+        let plane = |name: &str, v: Vec<f32>| AnyChannel::new(name, FlatSamples::F32(v));
+        for (c, k) in ["R", "G", "B"].iter().zip([0.01, 0.02, 0.03]) {
+            ch.push(plane(&format!("ViewLayer.Combined.{c}"), wave(n, k)));
+            ch.push(plane(&format!("ViewLayer.Denoising Albedo.{c}"), vec![0.5; n]));
+        }
+        ch.push(plane("ViewLayer.Combined.A", vec![1.0; n]));
+        for (c, v) in ["X", "Y", "Z"].iter().zip([0.0, 1.0, 0.0]) {
+            ch.push(plane(&format!("ViewLayer.Denoising Normal.{c}"), vec![v; n]));
+        }
+        ch.push(plane("ViewLayer.Denoising Depth.Z", vec![2.0; n]));
+        let layer = Layer::new((W, H), LayerAttributes::default(), Encoding::FAST_LOSSLESS, AnyChannels::sort(ch.into_iter().collect()));
+        Image::from_layer(layer).write().to_file(seq.join(format!("shot_{f:04}.exr"))).unwrap();
+    }
+    // The full model also needs roughness, which Blender does not write.
+    let (ok, _, err) = denoise(&seq, &[]);
+    assert!(!ok && err.contains("`roughness`"), "{err}");
+    // The paper-variant fixture uses color, albedo and normal.
+    let out = rae().arg("denoise").arg(&seq).args(["--weights", &fixture("weights_paper_tiny.safetensors")]).output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{text}{}", String::from_utf8_lossy(&out.stderr));
+    assert!(text.contains("multi-layer EXR"), "{text}");
+    assert_eq!(listing(&tmp.path().join("seq-denoised")).len(), 2);
+}
+
+#[test]
+fn reference_code_mosaic_png_is_read() {
+    let tmp = tempfile::tempdir().unwrap();
+    let seq = seq_dir(&tmp);
+    for f in 0..2u32 {
+        let img = image::RgbImage::from_fn(2 * W as u32, 3 * H as u32, |x, y| image::Rgb([(x * 3 + f) as u8, (y * 2) as u8, 128]));
+        img.save(seq.join(format!("{f:05}.png"))).unwrap();
+    }
+    let (ok, out, err) = denoise(&seq, &[]);
+    assert!(ok, "{out}{err}");
+    assert!(out.contains("mosaic") && out.contains("relMSE"), "{out}");
+}
+
+fn expect_error(seq: &Path, extra: &[&str], needles: &[&str]) {
+    let (ok, out, err) = denoise(seq, extra);
+    assert!(!ok, "should fail: {out}");
+    for n in needles {
+        assert!(err.contains(n), "error should mention {n:?}: {err}");
+    }
+}
+
+#[test]
+fn empty_folder_is_an_error() {
+    let tmp = tempfile::tempdir().unwrap();
+    let seq = seq_dir(&tmp);
+    expect_error(&seq, &[], &["seq", "no frames"]);
+    assert!(!tmp.path().join("seq-denoised").exists(), "no output folder for a failed run");
+}
+
+#[test]
+fn missing_color_is_an_error() {
+    let tmp = tempfile::tempdir().unwrap();
+    let seq = seq_dir(&tmp);
+    per_buffer_sequence(&seq, 2);
+    std::fs::remove_file(seq.join("color_0001.exr")).unwrap();
+    expect_error(&seq, &[], &["frame 1 has no color"]);
+}
+
+#[test]
+fn frames_of_different_sizes_are_an_error() {
+    let tmp = tempfile::tempdir().unwrap();
+    let seq = seq_dir(&tmp);
+    per_buffer_sequence(&seq, 2);
+    write_rgb(&seq.join("normal_0001.exr"), 16, 16, &vec![0.0; 16 * 16 * 3]);
+    expect_error(&seq, &[], &["normal_0001.exr", "16x16"]);
+}
+
+#[test]
+fn a_missing_frame_in_the_middle_is_an_error() {
+    let tmp = tempfile::tempdir().unwrap();
+    let seq = seq_dir(&tmp);
+    per_buffer_sequence(&seq, 4);
+    for b in ["color", "reference", "albedo", "normal", "depth", "roughness"] {
+        std::fs::remove_file(seq.join(format!("{b}_0002.exr"))).unwrap();
+    }
+    expect_error(&seq, &[], &["frame 2 is missing"]);
+}
+
+#[test]
+fn truncated_exr_fails_that_frame_and_leaves_no_partial_output() {
+    let tmp = tempfile::tempdir().unwrap();
+    let seq = seq_dir(&tmp);
+    per_buffer_sequence(&seq, 3);
+    let p = seq.join("color_0002.exr");
+    let bytes = std::fs::read(&p).unwrap();
+    std::fs::write(&p, &bytes[..bytes.len() * 2 / 3]).unwrap();
+    let out = tmp.path().join("out");
+    expect_error(&seq, &["-o", out.to_str().unwrap()], &["color_0002.exr"]);
+    assert_eq!(listing(&out), ["denoised_0000.exr", "denoised_0001.exr"], "frames before the failure are complete; nothing partial");
+}
+
+#[test]
+fn unknown_layer_names_are_an_error() {
+    let tmp = tempfile::tempdir().unwrap();
+    let seq = seq_dir(&tmp);
+    let n = W * H;
+    let ch: Vec<_> = ["R", "G", "B"]
+        .iter()
+        .flat_map(|c| [AnyChannel::new(format!("Combined.{c}").as_str(), FlatSamples::F32(vec![0.5; n])), AnyChannel::new(format!("Sparkle.{c}").as_str(), FlatSamples::F32(vec![0.5; n]))])
+        .collect();
+    let layer = Layer::new((W, H), LayerAttributes::default(), Encoding::FAST_LOSSLESS, AnyChannels::sort(ch.into_iter().collect()));
+    Image::from_layer(layer).write().to_file(seq.join("frame_0000.exr")).unwrap();
+    expect_error(&seq, &[], &["frame_0000.exr", "unknown layer names", "Sparkle"]);
+}
+
+#[test]
+fn nan_and_inf_pixels_are_named_unless_allowed() {
+    let tmp = tempfile::tempdir().unwrap();
+    let seq = seq_dir(&tmp);
+    per_buffer_sequence(&seq, 2);
+    let mut color = wave(W * H * 3, 0.02);
+    color[5] = f32::NAN;
+    color[77] = f32::INFINITY;
+    write_rgb(&seq.join("color_0001.exr"), W, H, &color);
+    let out = tmp.path().join("o");
+    expect_error(&seq, &["-o", out.to_str().unwrap()], &["color_0001.exr", "2 NaN/Inf", "--allow-nonfinite"]);
+    assert_eq!(listing(&out), ["denoised_0000.exr"], "no output for the failed frame");
+    let (ok, so, se) = denoise(&seq, &["-o", tmp.path().join("p").to_str().unwrap(), "--allow-nonfinite"]);
+    assert!(ok, "{so}{se}");
+}
+
+#[test]
+fn output_folder_equal_to_input_or_unwritable_is_an_error() {
+    let tmp = tempfile::tempdir().unwrap();
+    let seq = seq_dir(&tmp);
+    per_buffer_sequence(&seq, 1);
+    let before = listing(&seq);
+    expect_error(&seq, &["-o", seq.to_str().unwrap()], &["is the input folder"]);
+    assert_eq!(listing(&seq), before);
+    let file = tmp.path().join("a-file");
+    std::fs::write(&file, b"x").unwrap();
+    let under_file = file.join("out");
+    expect_error(&seq, &["-o", under_file.to_str().unwrap()], &["a-file/out", "cannot create the output folder"]);
+}
+
+#[test]
+fn weights_that_do_not_fit_are_an_error() {
+    let tmp = tempfile::tempdir().unwrap();
+    let seq = seq_dir(&tmp);
+    for f in 0..2 {
+        write_rgb(&seq.join(format!("color_{f:04}.exr")), W, H, &wave(W * H * 3, 0.01));
+    }
+    expect_error(&seq, &[], &["needs the `normal` buffer"]);
+    let bad = tmp.path().join("bad.safetensors");
+    std::fs::write(&bad, b"not weights").unwrap();
+    let out = rae().arg("denoise").arg(&seq).args(["--weights", bad.to_str().unwrap()]).output().unwrap();
+    assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("bad.safetensors"));
+    // The color-only fixture fits.
+    let out = rae().arg("denoise").arg(&seq).args(["--weights", &fixture("weights_color_tiny.safetensors")]).output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+}

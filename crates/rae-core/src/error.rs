@@ -135,6 +135,22 @@ pub enum Error {
         /// What is wrong.
         reason: String,
     },
+    /// An input frame file or folder is unusable.
+    #[error("{path}: {reason}")]
+    Input {
+        /// The file or folder.
+        path: PathBuf,
+        /// What is wrong and, where it helps, what to do.
+        reason: String,
+    },
+    /// An output file or folder cannot be written.
+    #[error("{path}: {reason}")]
+    Output {
+        /// The file or folder.
+        path: PathBuf,
+        /// What is wrong.
+        reason: String,
+    },
     /// The GPU failed while running or reading back a frame.
     #[error("GPU: {0}")]
     Gpu(String),

@@ -12,6 +12,8 @@ pub mod frame;
 pub mod golden;
 pub mod gpu;
 pub mod graph;
+pub mod io;
+pub mod metrics;
 pub mod kernels;
 pub mod model;
 pub mod weights;

@@ -12,7 +12,7 @@ use crate::error::{Error, Result};
 pub const ARCH_KEY: &str = "rae.arch";
 
 /// A buffer a renderer hands over for each frame.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum InputBuffer {
     /// Noisy radiance, RGB.

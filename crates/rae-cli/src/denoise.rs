@@ -1,0 +1,231 @@
+//! `rae-cli denoise SEQ/`: a folder of frames in, denoised frames out, error against run time.
+
+use std::collections::BTreeSet;
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+use anyhow::{Context, Result, bail};
+use indicatif::{ProgressBar, ProgressStyle};
+use rae_core::io::{self, Sequence, Slot};
+use rae_core::{Denoiser, Gpu, InputBuffer, Weights, metrics};
+
+/// What `denoise` was asked to do.
+pub struct Options {
+    /// The sequence folder.
+    pub input: PathBuf,
+    /// Output folder (None: a new folder beside the input).
+    pub output: Option<PathBuf>,
+    /// Weights file (None: the best shipped model for the buffers present).
+    pub weights: Option<PathBuf>,
+    /// Folder of shipped models.
+    pub models: PathBuf,
+    /// Frame numbers to denoise, inclusive.
+    pub frames: Option<(Option<u32>, Option<u32>)>,
+    /// Frame numbers before which the hidden state is reset (scene cuts).
+    pub reset_at: Vec<u32>,
+    /// Also write tonemapped sRGB PNG previews.
+    pub png: bool,
+    /// Write half-float EXR.
+    pub half: bool,
+    /// Sanitize NaN/Inf input values instead of refusing the frame.
+    pub allow_nonfinite: bool,
+}
+
+/// Parse `A..B`, `A..`, `..B` or `A` (inclusive frame numbers).
+pub fn parse_range(s: &str) -> Result<(Option<u32>, Option<u32>)> {
+    let num = |t: &str| -> Result<Option<u32>> {
+        if t.is_empty() { Ok(None) } else { Ok(Some(t.parse().with_context(|| format!("`{t}` in --frames {s} is not a frame number"))?)) }
+    };
+    match s.split_once("..") {
+        Some((a, b)) => Ok((num(a)?, num(b)?)),
+        None => {
+            let n = num(s)?;
+            Ok((n, n))
+        }
+    }
+}
+
+/// The shipped model with the most inputs among those whose buffers the sequence has.
+fn pick_model(models: &Path, present: &BTreeSet<InputBuffer>) -> Result<PathBuf> {
+    let mut candidates = Vec::new();
+    let entries = std::fs::read_dir(models).with_context(|| format!("reading the shipped models in {} (or pass --weights FILE)", models.display()))?;
+    for e in entries {
+        let p = e?.path();
+        if p.extension().is_some_and(|x| x == "safetensors") {
+            let w = Weights::load(&p)?;
+            let need = w.arch.required_buffers();
+            if need.iter().all(|b| present.contains(b)) {
+                candidates.push((need.len(), p));
+            }
+        }
+    }
+    candidates.sort();
+    candidates.pop().map(|(_, p)| p).with_context(|| {
+        format!("no shipped model in {} fits the buffers present {:?}; pass --weights FILE", models.display(), present.iter().map(|b| b.name()).collect::<Vec<_>>())
+    })
+}
+
+/// A new folder beside `input`: `NAME-denoised`, or `-denoised-2`, ... if taken.
+fn default_output(input: &Path) -> PathBuf {
+    let name = input.file_name().map(|n| n.to_string_lossy().to_string()).unwrap_or_else(|| "sequence".into());
+    let parent = input.parent().unwrap_or(Path::new("."));
+    (1..)
+        .map(|k| parent.join(if k == 1 { format!("{name}-denoised") } else { format!("{name}-denoised-{k}") }))
+        .find(|p| !p.exists())
+        .expect("some name is free")
+}
+
+fn prepare_output(input: &Path, out: &Path) -> Result<()> {
+    if out.exists() && std::fs::canonicalize(out)? == std::fs::canonicalize(input)? {
+        bail!("{}: the output folder is the input folder; choose another with -o (inputs are never overwritten)", out.display());
+    }
+    std::fs::create_dir_all(out).with_context(|| format!("{}: cannot create the output folder", out.display()))?;
+    let probe = out.join(".rae-write-test");
+    std::fs::write(&probe, b"").with_context(|| format!("{}: the output folder is not writable", out.display()))?;
+    std::fs::remove_file(&probe).ok();
+    Ok(())
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+fn ms(d: Duration) -> f64 {
+    d.as_secs_f64() * 1e3
+}
+
+struct FrameReport {
+    number: u32,
+    ms: f64,
+    noisy: Option<(f64, f64, f64)>,
+    rae: Option<(f64, f64, f64)>,
+}
+
+/// Run `denoise`.
+pub fn run(o: &Options) -> Result<()> {
+    let seq = Sequence::scan(&o.input)?;
+    let present: BTreeSet<InputBuffer> = seq.inputs().into_iter().collect();
+    let weights_path = match &o.weights {
+        Some(p) => p.clone(),
+        None => pick_model(&o.models, &present)?,
+    };
+    let weights = Weights::load(&weights_path)?;
+    for b in weights.arch.required_buffers() {
+        if !present.contains(&b) {
+            bail!(
+                "{}: the model {} needs the `{}` buffer, which the sequence lacks ({}_{:04}.exr or a `{}` layer); it has {:?}",
+                o.input.display(),
+                weights_path.display(),
+                b.name(),
+                b.name(),
+                seq.numbers[0],
+                b.name(),
+                present.iter().map(|b| b.name()).collect::<Vec<_>>()
+            );
+        }
+    }
+    let indices: Vec<usize> = (0..seq.numbers.len())
+        .filter(|&i| {
+            let n = seq.numbers[i];
+            o.frames.is_none_or(|(a, b)| a.is_none_or(|a| n >= a) && b.is_none_or(|b| n <= b))
+        })
+        .collect();
+    if indices.is_empty() {
+        bail!("{}: --frames selects none of frames {}..{}", o.input.display(), seq.numbers[0], seq.numbers[seq.numbers.len() - 1]);
+    }
+    let out_dir = o.output.clone().unwrap_or_else(|| default_output(&o.input));
+    prepare_output(&o.input, &out_dir)?;
+
+    let gpu = Gpu::new()?;
+    let mut d = Denoiser::new(&gpu.device, &gpu.queue, &weights, seq.width, seq.height)?;
+    let used: Vec<&str> = weights.arch.required_buffers().iter().map(|b| b.name()).collect();
+    println!("input:   {} ({}, {} frames {}..{}, {}x{})", o.input.display(), seq.layout, seq.numbers.len(), seq.numbers[0], seq.numbers[seq.numbers.len() - 1], seq.width, seq.height);
+    println!("buffers: {:?}{}", seq.slots.iter().map(|s| s.name()).collect::<Vec<_>>(), if seq.has_reference() { " (reference used for error only)" } else { "" });
+    println!("model:   {} (uses {used:?})", weights_path.display());
+    println!("device:  {}", gpu.describe());
+    println!("output:  {}", out_dir.display());
+
+    let bar = ProgressBar::new(indices.len() as u64);
+    bar.set_style(ProgressStyle::with_template("{bar:40} {pos}/{len} frames  {per_sec}  ETA {eta}").expect("valid template"));
+    let n = (seq.width * seq.height * 3) as usize;
+    let mut out = vec![0f32; n];
+    let (mut up, mut gpu_t, mut down) = (Vec::new(), Vec::new(), Vec::new());
+    let mut reports = Vec::new();
+    let mut prev: Option<(Vec<f32>, Vec<f32>, Vec<f32>)> = None; // (noisy, rae, reference)
+    let (mut temporal_noisy, mut temporal_rae) = (Vec::new(), Vec::new());
+    for &i in &indices {
+        let frame = seq.load(i)?;
+        if let Some((buffer, path, count)) = frame.nonfinite.first()
+            && !o.allow_nonfinite
+        {
+            bail!("{}: {count} NaN/Inf values in `{buffer}` (frame {}); fix the renderer or pass --allow-nonfinite to have rae replace them (see rae-core's input policy)", path.display(), frame.number);
+        }
+        if o.reset_at.contains(&frame.number) {
+            d.reset();
+            prev = None;
+        }
+        let t = d.denoise_into(&frame.inputs(), &mut out).with_context(|| format!("frame {}", frame.number))?;
+        up.push(ms(t.upload));
+        gpu_t.push(ms(t.gpu));
+        down.push(ms(t.download));
+        let path = out_dir.join(format!("denoised_{:04}.exr", frame.number));
+        io::write_exr(&path, seq.width, seq.height, &out, o.half)?;
+        if o.png {
+            io::write_png(&path.with_extension("png"), seq.width, seq.height, &out)?;
+        }
+        let color = frame.buffers.get(&Slot::from(InputBuffer::Color)).expect("color is required");
+        let mut report = FrameReport { number: frame.number, ms: ms(t.upload + t.gpu + t.download), noisy: None, rae: None };
+        if let Some(r) = frame.reference() {
+            let m = |x: &[f32]| (metrics::relmse(x, r), metrics::psnr(x, r), metrics::ssim(x, r, seq.width, seq.height));
+            report.noisy = Some(m(color));
+            report.rae = Some(m(&out));
+            if let Some((pn, po, pr)) = &prev {
+                temporal_noisy.push(metrics::temporal_error(pn, color, pr, r));
+                temporal_rae.push(metrics::temporal_error(po, &out, pr, r));
+            }
+            prev = Some((color.clone(), out.clone(), r.to_vec()));
+        }
+        reports.push(report);
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+
+    println!();
+    println!("time per frame (median of {}, frame 0 includes shader compilation): upload {:.2} ms, GPU {:.1} ms, download {:.2} ms", reports.len(), median(up), median(gpu_t), median(down));
+    if reports.iter().any(|r| r.rae.is_some()) {
+        println!();
+        println!("{:>6} {:>11} {:>11} {:>9} {:>9} {:>8} {:>8} {:>9}", "frame", "relMSE in", "relMSE rae", "PSNR in", "PSNR rae", "SSIM in", "SSIM rae", "ms");
+        for r in &reports {
+            if let (Some(a), Some(b)) = (r.noisy, r.rae) {
+                println!("{:>6} {:>11.4} {:>11.4} {:>9.2} {:>9.2} {:>8.4} {:>8.4} {:>9.1}", r.number, a.0, b.0, a.1, b.1, a.2, b.2, r.ms);
+            }
+        }
+        let mean = |f: &dyn Fn(&FrameReport) -> Option<f64>| {
+            let v: Vec<f64> = reports.iter().filter_map(f).collect();
+            v.iter().sum::<f64>() / v.len().max(1) as f64
+        };
+        println!(
+            "{:>6} {:>11.4} {:>11.4} {:>9.2} {:>9.2} {:>8.4} {:>8.4} {:>9.1}",
+            "mean",
+            mean(&|r| r.noisy.map(|m| m.0)),
+            mean(&|r| r.rae.map(|m| m.0)),
+            mean(&|r| r.noisy.map(|m| m.1)),
+            mean(&|r| r.rae.map(|m| m.1)),
+            mean(&|r| r.noisy.map(|m| m.2)),
+            mean(&|r| r.rae.map(|m| m.2)),
+            mean(&|r| Some(r.ms)),
+        );
+        if !temporal_rae.is_empty() {
+            let avg = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+            println!("temporal error (mean |d out - d ref| between frames, tonemapped): input {:.5}, rae {:.5}", avg(&temporal_noisy), avg(&temporal_rae));
+        }
+    } else {
+        println!("(no reference in the sequence: no error reported)");
+    }
+    println!("wrote {} frames to {}", reports.len(), out_dir.display());
+    Ok(())
+}

@@ -1,0 +1,529 @@
+//! Frame sequences on disk: finding, validating and reading them, and writing results.
+//!
+//! A folder holds one sequence in one of three layouts, detected by [`Sequence::scan`]:
+//! 1. **Per-buffer files**: `color_0001.exr`, `albedo_0001.exr`, `normal_0001.exr`,
+//!    `depth_0001.exr`, `roughness_0001.exr`, `reference_0001.exr` (EXR half or float, any
+//!    compression the exr crate reads; PNG/JPEG read as sRGB LDR).
+//! 2. **Multi-layer EXR**, one file per frame, layers named by buffer: rae's names, or Blender
+//!    Cycles' (`Combined`/`Image`/`Noisy Image`, `Denoising Albedo`, `Denoising Normal`,
+//!    `Denoising Depth`), with or without a view-layer prefix (`ViewLayer.Combined.R`).
+//! 3. **Mosaic PNG** of the reference code: 2 columns x 3 rows of tiles, noisy shading |
+//!    reference shading, albedo | normal, depth | roughness. Shading times albedo gives color.
+//!
+//! Frame numbers come from the digits at the end of the file name; frames are sorted
+//! numerically and a gap is an error. The reference buffer is never a network input: it is
+//! there to measure error. Outputs are written under a temporary name in the destination folder
+//! and renamed, so an interrupted run leaves no partial file.
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::{Path, PathBuf};
+
+use crate::error::{Error, Result};
+use crate::frame::FrameInputs;
+use crate::model::InputBuffer;
+
+/// How a folder lays out its frames.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Layout {
+    /// One file per buffer per frame.
+    PerBuffer,
+    /// One multi-layer EXR per frame.
+    MultiLayer,
+    /// One mosaic PNG per frame (reference code).
+    Mosaic,
+}
+
+impl std::fmt::Display for Layout {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Layout::PerBuffer => "per-buffer files (color_NNNN.exr, ...)",
+            Layout::MultiLayer => "multi-layer EXR per frame",
+            Layout::Mosaic => "mosaic PNG per frame (reference code)",
+        })
+    }
+}
+
+/// A buffer a sequence may carry: a network input or the reference.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum Slot {
+    /// A renderer buffer.
+    Input(InputBuffer),
+    /// The clean reference (never fed to the network).
+    Reference,
+}
+
+impl From<InputBuffer> for Slot {
+    fn from(b: InputBuffer) -> Self {
+        Slot::Input(b)
+    }
+}
+
+impl Slot {
+    /// The input buffer, if this is one.
+    pub fn input(self) -> Option<InputBuffer> {
+        match self {
+            Slot::Input(b) => Some(b),
+            Slot::Reference => None,
+        }
+    }
+
+    /// Values per pixel.
+    pub fn channels(self) -> usize {
+        self.input().map_or(3, |b| b.channels())
+    }
+
+    /// rae's name.
+    pub fn name(self) -> &'static str {
+        self.input().map_or("reference", |b| b.name())
+    }
+
+    fn from_name(name: &str) -> Option<Slot> {
+        let lower = name.to_ascii_lowercase();
+        match lower.as_str() {
+            "color" | "combined" | "image" | "noisy image" | "noisy" => Some(InputBuffer::Color.into()),
+            "albedo" | "denoising albedo" => Some(InputBuffer::Albedo.into()),
+            "normal" | "denoising normal" => Some(InputBuffer::Normal.into()),
+            "depth" | "denoising depth" => Some(InputBuffer::Depth.into()),
+            "roughness" => Some(InputBuffer::Roughness.into()),
+            "reference" | "clean" => Some(Slot::Reference),
+            _ => None,
+        }
+    }
+}
+
+/// Where one frame's data lives.
+#[derive(Debug, Clone)]
+enum FrameFiles {
+    PerBuffer(BTreeMap<Slot, PathBuf>),
+    MultiLayer(PathBuf),
+    Mosaic(PathBuf),
+}
+
+/// A validated sequence: every frame has the same buffers and size, numbers are contiguous.
+#[derive(Debug, Clone)]
+pub struct Sequence {
+    /// The folder.
+    pub dir: PathBuf,
+    /// Its layout.
+    pub layout: Layout,
+    /// Frame width.
+    pub width: u32,
+    /// Frame height.
+    pub height: u32,
+    /// Frame numbers, ascending and contiguous.
+    pub numbers: Vec<u32>,
+    /// Buffers every frame carries (the reference included if present).
+    pub slots: BTreeSet<Slot>,
+    files: Vec<FrameFiles>,
+}
+
+/// One frame read from disk: `width * height * channels` f32 per buffer, top row first.
+#[derive(Debug, Clone)]
+pub struct LoadedFrame {
+    /// Frame number.
+    pub number: u32,
+    /// Buffers by slot.
+    pub buffers: BTreeMap<Slot, Vec<f32>>,
+    /// Non-finite values found (a depth of +inf, a miss, is not counted): (buffer, file, count).
+    pub nonfinite: Vec<(&'static str, PathBuf, usize)>,
+}
+
+impl LoadedFrame {
+    /// The renderer buffers as denoiser inputs (color must be present).
+    pub fn inputs(&self) -> FrameInputs<'_> {
+        let get = |b: InputBuffer| self.buffers.get(&b.into()).map(|v| v.as_slice());
+        FrameInputs {
+            color: get(InputBuffer::Color).unwrap_or(&[]),
+            albedo: get(InputBuffer::Albedo),
+            normal: get(InputBuffer::Normal),
+            depth: get(InputBuffer::Depth),
+            roughness: get(InputBuffer::Roughness),
+        }
+    }
+
+    /// The reference, if the sequence has one.
+    pub fn reference(&self) -> Option<&[f32]> {
+        self.buffers.get(&Slot::Reference).map(|v| v.as_slice())
+    }
+}
+
+fn input_err(path: &Path, reason: impl Into<String>) -> Error {
+    Error::Input { path: path.to_path_buf(), reason: reason.into() }
+}
+
+/// Split `name_0012.ext` into ("name", 12); a stem of digits only gives ("", n).
+fn split_number(stem: &str) -> Option<(&str, u32)> {
+    let digits = stem.len() - stem.bytes().rev().take_while(|b| b.is_ascii_digit()).count();
+    let n = stem[digits..].parse().ok()?;
+    Some((stem[..digits].trim_end_matches(['_', '-', '.']), n))
+}
+
+fn extension(path: &Path) -> Option<String> {
+    path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase())
+}
+
+fn exr_size_and_groups(path: &Path) -> Result<((u32, u32), Vec<(String, Vec<String>)>)> {
+    let meta = exr::meta::MetaData::read_from_file(path, false)
+        .map_err(|e| input_err(path, format!("not a readable EXR file: {e}")))?;
+    let mut groups: BTreeMap<String, Vec<String>> = BTreeMap::new();
+    let mut size = None;
+    for h in meta.headers.iter() {
+        let s = (h.layer_size.width() as u32, h.layer_size.height() as u32);
+        if *size.get_or_insert(s) != s {
+            return Err(input_err(path, "layers of different sizes"));
+        }
+        let layer = h.own_attributes.layer_name.as_ref().map(|t| t.to_string());
+        for c in &h.channels.list {
+            let full = match &layer {
+                Some(l) => format!("{l}.{}", c.name),
+                None => c.name.to_string(),
+            };
+            let (group, chan) = match full.rsplit_once('.') {
+                Some((g, c)) => (g.to_string(), c.to_string()),
+                None => (String::new(), full.clone()),
+            };
+            groups.entry(group).or_default().push(chan);
+        }
+    }
+    Ok((size.ok_or_else(|| input_err(path, "no layers"))?, groups.into_iter().collect()))
+}
+
+fn image_size(path: &Path) -> Result<(u32, u32)> {
+    if extension(path).as_deref() == Some("exr") {
+        return Ok(exr_size_and_groups(path)?.0);
+    }
+    image::image_dimensions(path).map_err(|e| input_err(path, format!("not a readable image: {e}")))
+}
+
+/// The buffer a multi-layer group name stands for ("ViewLayer.Denoising Albedo" -> albedo).
+fn slot_of_group(group: &str) -> Option<Slot> {
+    Slot::from_name(group).or_else(|| group.rsplit_once('.').and_then(|(_, last)| Slot::from_name(last)))
+}
+
+impl Sequence {
+    /// Find and validate the sequence in `dir`.
+    pub fn scan(dir: &Path) -> Result<Sequence> {
+        let entries = std::fs::read_dir(dir).map_err(|e| input_err(dir, format!("cannot read the folder: {e}")))?;
+        let mut files: Vec<PathBuf> = Vec::new();
+        for e in entries {
+            let p = e.map_err(|e| input_err(dir, e.to_string()))?.path();
+            let hidden = p.file_name().is_some_and(|n| n.to_string_lossy().starts_with('.'));
+            if p.is_file() && !hidden && matches!(extension(&p).as_deref(), Some("exr" | "png" | "jpg" | "jpeg")) {
+                files.push(p);
+            }
+        }
+        files.sort();
+        if files.is_empty() {
+            return Err(input_err(dir, "no frames: expected color_0001.exr (and albedo_, normal_, depth_, roughness_, reference_), one multi-layer .exr per frame, or mosaic .png frames"));
+        }
+        // Per-buffer files are named after a buffer.
+        let mut per_buffer: BTreeMap<u32, BTreeMap<Slot, PathBuf>> = BTreeMap::new();
+        for f in &files {
+            let stem = f.file_stem().unwrap_or_default().to_string_lossy().to_string();
+            if let Some((name, n)) = split_number(&stem)
+                && let Some(slot) = Slot::from_name(name)
+                && !name.is_empty()
+            {
+                if let Some(prev) = per_buffer.entry(n).or_default().insert(slot, f.clone()) {
+                    return Err(input_err(f, format!("frame {n} of `{}` is also in {}", slot.name(), prev.display())));
+                }
+            }
+        }
+        let (layout, numbered): (Layout, Vec<(u32, FrameFiles)>) = if !per_buffer.is_empty() {
+            (Layout::PerBuffer, per_buffer.into_iter().map(|(n, m)| (n, FrameFiles::PerBuffer(m))).collect())
+        } else {
+            let exrs: Vec<&PathBuf> = files.iter().filter(|f| extension(f).as_deref() == Some("exr")).collect();
+            let (layout, chosen) = if !exrs.is_empty() {
+                (Layout::MultiLayer, exrs)
+            } else {
+                (Layout::Mosaic, files.iter().filter(|f| extension(f).as_deref() == Some("png")).collect())
+            };
+            let mut v = Vec::new();
+            for f in chosen {
+                let stem = f.file_stem().unwrap_or_default().to_string_lossy().to_string();
+                let (_, n) = split_number(&stem).ok_or_else(|| input_err(f, "no frame number at the end of the file name"))?;
+                if v.iter().any(|(m, _)| *m == n) {
+                    return Err(input_err(f, format!("a second file for frame {n}")));
+                }
+                v.push((n, if layout == Layout::MultiLayer { FrameFiles::MultiLayer(f.clone()) } else { FrameFiles::Mosaic(f.clone()) }));
+            }
+            v.sort_by_key(|(n, _)| *n);
+            (layout, v)
+        };
+        if numbered.is_empty() {
+            return Err(input_err(dir, "no frames found (no color_NNNN, multi-layer EXR or mosaic PNG)"));
+        }
+        // Contiguous numbering.
+        for w in numbered.windows(2) {
+            if w[1].0 != w[0].0 + 1 {
+                return Err(input_err(dir, format!("frame {} is missing (frames {} and {} are present)", w[0].0 + 1, w[0].0, w[1].0)));
+            }
+        }
+        let first = &numbered[0];
+        let (mut width, mut height) = (0, 0);
+        let mut slots: Option<BTreeSet<Slot>> = None;
+        for (n, ff) in &numbered {
+            let (here, size, at) = match ff {
+                FrameFiles::PerBuffer(m) => {
+                    let color = m.get(&InputBuffer::Color.into()).ok_or_else(|| {
+                        input_err(dir, format!("frame {n} has no color buffer (color_{n:04}.exr); color is required"))
+                    })?;
+                    let size = image_size(color)?;
+                    for (slot, p) in m {
+                        let s = image_size(p)?;
+                        if s != size {
+                            return Err(input_err(p, format!("{}x{} differs from {}x{} of {}", s.0, s.1, size.0, size.1, color.display())));
+                        }
+                        let _ = slot;
+                    }
+                    (m.keys().copied().collect::<BTreeSet<_>>(), size, color.clone())
+                }
+                FrameFiles::MultiLayer(p) => {
+                    let (size, groups) = exr_size_and_groups(p)?;
+                    let mut here = BTreeSet::new();
+                    let mut unknown = Vec::new();
+                    for (g, _) in &groups {
+                        match slot_of_group(g) {
+                            Some(s) => {
+                                here.insert(s);
+                            }
+                            None if g.is_empty() => {
+                                here.insert(InputBuffer::Color.into());
+                            }
+                            None => unknown.push(g.clone()),
+                        }
+                    }
+                    if !unknown.is_empty() {
+                        return Err(input_err(p, format!(
+                            "unknown layer names {unknown:?}; known: color (or Combined, Image, Noisy Image), albedo (Denoising Albedo), normal (Denoising Normal), depth (Denoising Depth), roughness, reference"
+                        )));
+                    }
+                    if !here.contains(&InputBuffer::Color.into()) {
+                        return Err(input_err(p, "no color layer (color, Combined or Image)"));
+                    }
+                    (here, size, p.clone())
+                }
+                FrameFiles::Mosaic(p) => {
+                    let (w, h) = image_size(p)?;
+                    if w % 2 != 0 || h % 3 != 0 {
+                        return Err(input_err(p, format!("{w}x{h} is not a 2x3 mosaic of equal tiles")));
+                    }
+                    let all = [InputBuffer::Color, InputBuffer::Albedo, InputBuffer::Normal, InputBuffer::Depth, InputBuffer::Roughness];
+                    let mut here: BTreeSet<Slot> = all.into_iter().map(Slot::from).collect();
+                    here.insert(Slot::Reference);
+                    (here, (w / 2, h / 3), p.clone())
+                }
+            };
+            if *n == first.0 {
+                (width, height) = size;
+            } else if size != (width, height) {
+                return Err(input_err(&at, format!("frame {n} is {}x{}, frame {} is {width}x{height}", size.0, size.1, first.0)));
+            }
+            match &slots {
+                None => slots = Some(here),
+                Some(s) if *s != here => {
+                    let missing: Vec<_> = s.symmetric_difference(&here).map(|s| s.name()).collect();
+                    return Err(input_err(&at, format!("frame {n} differs from frame {} in buffers {missing:?}", first.0)));
+                }
+                _ => {}
+            }
+        }
+        Ok(Sequence {
+            dir: dir.to_path_buf(),
+            layout,
+            width,
+            height,
+            numbers: numbered.iter().map(|(n, _)| *n).collect(),
+            slots: slots.unwrap_or_default(),
+            files: numbered.into_iter().map(|(_, f)| f).collect(),
+        })
+    }
+
+    /// Whether the sequence has a reference to measure error against.
+    pub fn has_reference(&self) -> bool {
+        self.slots.contains(&Slot::Reference)
+    }
+
+    /// Input buffers present.
+    pub fn inputs(&self) -> Vec<InputBuffer> {
+        self.slots.iter().filter_map(|s| s.input()).collect()
+    }
+
+    /// The file holding `buffer` of frame index `i` (for messages).
+    pub fn file_of(&self, i: usize, slot: Slot) -> PathBuf {
+        match &self.files[i] {
+            FrameFiles::PerBuffer(m) => m.get(&slot).cloned().unwrap_or_else(|| self.dir.clone()),
+            FrameFiles::MultiLayer(p) | FrameFiles::Mosaic(p) => p.clone(),
+        }
+    }
+
+    /// Read frame index `i` (not number).
+    pub fn load(&self, i: usize) -> Result<LoadedFrame> {
+        let (w, h) = (self.width as usize, self.height as usize);
+        let mut buffers = BTreeMap::new();
+        match &self.files[i] {
+            FrameFiles::PerBuffer(m) => {
+                for (slot, p) in m {
+                    buffers.insert(*slot, read_buffer_file(p, *slot, w, h)?);
+                }
+            }
+            FrameFiles::MultiLayer(p) => {
+                for (slot, data) in read_multilayer(p, w, h)? {
+                    buffers.insert(slot, data);
+                }
+            }
+            FrameFiles::Mosaic(p) => buffers = read_mosaic(p, w, h)?,
+        }
+        let mut nonfinite = Vec::new();
+        for (slot, data) in &buffers {
+            let depth = *slot == Slot::from(InputBuffer::Depth);
+            let bad = data.iter().filter(|v| !(v.is_finite() || (depth && **v == f32::INFINITY))).count();
+            if bad > 0 {
+                nonfinite.push((slot.name(), self.file_of(i, *slot), bad));
+            }
+        }
+        Ok(LoadedFrame { number: self.numbers[i], buffers, nonfinite })
+    }
+}
+
+fn srgb_to_linear(c: f32) -> f32 {
+    if c <= 0.04045 { c / 12.92 } else { ((c + 0.055) / 1.055).powf(2.4) }
+}
+
+/// Channels of a slot from named EXR channels: RGB, XYZ, or one of Y, Z, R, V.
+fn pick_channels(path: &Path, slot: Slot, chans: &[(String, Vec<f32>)], n: usize) -> Result<Vec<f32>> {
+    let find = |name: &str| chans.iter().find(|(c, _)| c.eq_ignore_ascii_case(name)).map(|(_, d)| d);
+    let picked: Vec<&Vec<f32>> = if slot.channels() == 3 {
+        ["R", "G", "B"].iter().map(|c| find(c)).collect::<Option<Vec<_>>>()
+            .or_else(|| ["X", "Y", "Z"].iter().map(|c| find(c)).collect::<Option<Vec<_>>>())
+            .ok_or_else(|| input_err(path, format!("`{}` needs R, G, B (or X, Y, Z) channels; found {:?}", slot.name(), chans.iter().map(|c| &c.0).collect::<Vec<_>>())))?
+    } else {
+        vec![["Y", "Z", "R", "V"].iter().find_map(|c| find(c)).or(chans.first().map(|(_, d)| d))
+            .ok_or_else(|| input_err(path, format!("`{}` has no channel", slot.name())))?]
+    };
+    let mut out = vec![0f32; n * picked.len()];
+    for (k, data) in picked.iter().enumerate() {
+        for (i, v) in data.iter().enumerate().take(n) {
+            out[i * picked.len() + k] = *v;
+        }
+    }
+    Ok(out)
+}
+
+fn read_exr_groups(path: &Path) -> Result<BTreeMap<String, Vec<(String, Vec<f32>)>>> {
+    let image = exr::prelude::read_all_flat_layers_from_file(path).map_err(|e| input_err(path, format!("cannot read EXR: {e}")))?;
+    let mut groups: BTreeMap<String, Vec<(String, Vec<f32>)>> = BTreeMap::new();
+    for layer in &image.layer_data {
+        let lname = layer.attributes.layer_name.as_ref().map(|t| t.to_string());
+        for c in &layer.channel_data.list {
+            let full = match &lname {
+                Some(l) => format!("{l}.{}", c.name),
+                None => c.name.to_string(),
+            };
+            let (g, ch) = full.rsplit_once('.').map(|(g, c)| (g.to_string(), c.to_string())).unwrap_or((String::new(), full.clone()));
+            groups.entry(g).or_default().push((ch, c.sample_data.values_as_f32().collect()));
+        }
+    }
+    Ok(groups)
+}
+
+fn read_buffer_file(path: &Path, slot: Slot, w: usize, h: usize) -> Result<Vec<f32>> {
+    if extension(path).as_deref() == Some("exr") {
+        let groups = read_exr_groups(path)?;
+        let chans = groups.get("").or_else(|| groups.values().next()).ok_or_else(|| input_err(path, "no channels"))?;
+        return pick_channels(path, slot, chans, w * h);
+    }
+    let img = image::open(path).map_err(|e| input_err(path, format!("cannot read image: {e}")))?.to_rgb32f();
+    let px = img.as_raw();
+    Ok(match slot.input() {
+        Some(InputBuffer::Normal) => px.iter().map(|v| v * 2.0 - 1.0).collect(),
+        Some(InputBuffer::Depth | InputBuffer::Roughness) => px.chunks_exact(3).map(|c| c[0]).collect(),
+        _ => px.iter().map(|v| srgb_to_linear(*v)).collect(),
+    })
+}
+
+fn read_multilayer(path: &Path, w: usize, h: usize) -> Result<Vec<(Slot, Vec<f32>)>> {
+    let groups = read_exr_groups(path)?;
+    groups
+        .iter()
+        .map(|(g, chans)| {
+            let slot = slot_of_group(g).unwrap_or(InputBuffer::Color.into());
+            Ok((slot, pick_channels(path, slot, chans, w * h)?))
+        })
+        .collect()
+}
+
+fn read_mosaic(path: &Path, w: usize, h: usize) -> Result<BTreeMap<Slot, Vec<f32>>> {
+    let img = image::open(path).map_err(|e| input_err(path, format!("cannot read image: {e}")))?.to_rgb32f();
+    let tile = |col: usize, row: usize| -> Vec<f32> {
+        let mut v = Vec::with_capacity(w * h * 3);
+        for y in 0..h {
+            for x in 0..w {
+                v.extend_from_slice(&img.get_pixel((col * w + x) as u32, (row * h + y) as u32).0);
+            }
+        }
+        v
+    };
+    let lin = |v: Vec<f32>| -> Vec<f32> { v.into_iter().map(srgb_to_linear).collect() };
+    let albedo = lin(tile(0, 1));
+    // Shading tiles are demodulated: color = shading * albedo.
+    let remodulate = |s: Vec<f32>| -> Vec<f32> { s.iter().zip(&albedo).map(|(s, a)| s * a).collect() };
+    let mut out = BTreeMap::new();
+    out.insert(InputBuffer::Color.into(), remodulate(lin(tile(0, 0))));
+    out.insert(Slot::Reference, remodulate(lin(tile(1, 0))));
+    out.insert(InputBuffer::Normal.into(), tile(1, 1).into_iter().map(|v| v * 2.0 - 1.0).collect());
+    out.insert(InputBuffer::Depth.into(), tile(0, 2).chunks_exact(3).map(|c| c[0]).collect());
+    out.insert(InputBuffer::Roughness.into(), tile(1, 2).chunks_exact(3).map(|c| c[0]).collect());
+    out.insert(InputBuffer::Albedo.into(), albedo);
+    Ok(out)
+}
+
+fn atomic_write(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
+    let name = path.file_name().map(|n| n.to_string_lossy().to_string()).unwrap_or_default();
+    let tmp = path.with_file_name(format!(".{name}.partial"));
+    let result = write(&tmp).and_then(|_| {
+        std::fs::rename(&tmp, path).map_err(|e| Error::Output { path: path.into(), reason: format!("cannot rename into place: {e}") })
+    });
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result
+}
+
+/// Write RGB radiance as an EXR (f32, or f16 with `half`), atomically.
+pub fn write_exr(path: &Path, width: u32, height: u32, rgb: &[f32], half: bool) -> Result<()> {
+    use exr::prelude::*;
+    let w = width as usize;
+    atomic_write(path, |tmp| {
+        let res = if half {
+            let px = |p: Vec2<usize>| {
+                let i = 3 * (p.y() * w + p.x());
+                (f16::from_f32(rgb[i]), f16::from_f32(rgb[i + 1]), f16::from_f32(rgb[i + 2]))
+            };
+            Image::from_channels((w, height as usize), SpecificChannels::rgb(px)).write().to_file(tmp)
+        } else {
+            let px = |p: Vec2<usize>| {
+                let i = 3 * (p.y() * w + p.x());
+                (rgb[i], rgb[i + 1], rgb[i + 2])
+            };
+            Image::from_channels((w, height as usize), SpecificChannels::rgb(px)).write().to_file(tmp)
+        };
+        res.map_err(|e| crate::error::Error::Output { path: path.into(), reason: e.to_string() })
+    })
+}
+
+/// Tone map (x / (1 + x), then sRGB) to 8 bits: what previews and the metrics look at.
+pub fn tonemap(v: f32) -> f32 {
+    let x = if v.is_finite() { v.max(0.0) } else { 0.0 };
+    let t = x / (1.0 + x);
+    if t <= 0.0031308 { 12.92 * t } else { 1.055 * t.powf(1.0 / 2.4) - 0.055 }
+}
+
+/// Write a tonemapped sRGB PNG preview, atomically.
+pub fn write_png(path: &Path, width: u32, height: u32, rgb: &[f32]) -> Result<()> {
+    let bytes: Vec<u8> = rgb.iter().map(|v| (tonemap(*v) * 255.0 + 0.5) as u8).collect();
+    atomic_write(path, |tmp| {
+        image::save_buffer_with_format(tmp, &bytes, width, height, image::ExtendedColorType::Rgb8, image::ImageFormat::Png)
+            .map_err(|e| Error::Output { path: path.into(), reason: e.to_string() })
+    })
+}
