@@ -59,6 +59,14 @@ def main(argv: list[str] | None = None) -> int:
     g.add_argument("--out", default="tests/fixtures")
     g.add_argument("--check", metavar="DIR", help="regenerate into a temporary folder and compare with DIR")
     g.set_defaults(func=_golden)
+    sub.add_parser("train", help="train on rae-trace sequences (see `train --help`)", add_help=False)
+    if argv is None:
+        import sys as _sys
+        argv = _sys.argv[1:]
+    if argv and argv[0] == "train":
+        from .train import main as train_main
+
+        return train_main(argv[1:])
     args = p.parse_args(argv)
     try:
         return args.func(args)

@@ -63,6 +63,9 @@ enum Command {
         /// Longest path in bounces.
         #[arg(long, default_value_t = 8)]
         max_depth: u32,
+        /// Write half-float EXR (smaller) instead of float.
+        #[arg(long)]
+        half: bool,
         /// Output folder (created).
         out: PathBuf,
     },
@@ -106,14 +109,14 @@ fn create_dir(out: &Path) -> Result<()> {
     std::fs::create_dir_all(out).with_context(|| format!("creating output folder {}", out.display()))
 }
 
-fn render(choice: &SceneChoice, frames: u32, settings: Settings, out: &Path) -> Result<()> {
+fn render(choice: &SceneChoice, frames: u32, settings: Settings, precision: output::Precision, out: &Path) -> Result<()> {
     let (scene, name) = choice.build()?;
     create_dir(out)?;
     let bar = progress(frames);
     let start = Instant::now();
     for f in 0..frames {
         let fb = render_frame(&scene, f, frames, &settings);
-        output::write_frame(out, f, settings.width as usize, settings.height as usize, &fb)?;
+        output::write_frame(out, f, settings.width as usize, settings.height as usize, &fb, precision)?;
         bar.inc(1);
     }
     bar.finish_and_clear();
@@ -159,17 +162,18 @@ fn live(choice: &SceneChoice, weights: &Path, frames: u32, size: (u32, u32), out
         let denoised = denoiser.denoise(&frame)?;
         let t2 = Instant::now();
         println!("{f:>5} {:>10.1} {:>12.1}", (t1 - t0).as_secs_f64() * 1e3, (t2 - t1).as_secs_f64() * 1e3);
-        output::write_rgb(&output::frame_path(out, "color", f), w as usize, h as usize, &fb.color)?;
-        output::write_rgb(&output::frame_path(out, "denoised", f), w as usize, h as usize, &denoised)?;
+        output::write_rgb(&output::frame_path(out, "color", f), w as usize, h as usize, &fb.color, output::Precision::F32)?;
+        output::write_rgb(&output::frame_path(out, "denoised", f), w as usize, h as usize, &denoised, output::Precision::F32)?;
     }
     Ok(())
 }
 
 fn main() -> Result<()> {
     match Cli::parse().command {
-        Command::Render { scene, frames, spp, ref_spp, size, seed, max_depth, out } => {
+        Command::Render { scene, frames, spp, ref_spp, size, seed, max_depth, half, out } => {
             let (width, height) = parse_size(&size)?;
-            render(&scene, frames, Settings { width, height, spp, ref_spp, seed, max_depth }, &out)
+            let precision = if half { output::Precision::F16 } else { output::Precision::F32 };
+            render(&scene, frames, Settings { width, height, spp, ref_spp, seed, max_depth }, precision, &out)
         }
         Command::Live { scene, weights, frames, size, out } => live(&scene, &weights, frames, parse_size(&size)?, &out),
     }

@@ -1,6 +1,7 @@
 //! Writing a frame in rae-cli's per-buffer layout: `color_0007.exr`, `albedo_0007.exr`, ...
-//! (float EXR; RGB buffers as R, G, B; depth and roughness as Y; motion as R, G). Every file is
-//! written under a temporary name and renamed, so an interrupted render leaves no partial file.
+//! (ZIP-compressed EXR, float or half; RGB buffers as R, G, B; depth and roughness as Y; motion as
+//! R, G). Every file is written under a temporary name and renamed, so an interrupted render
+//! leaves no partial file.
 
 use std::path::{Path, PathBuf};
 
@@ -19,33 +20,66 @@ fn atomic(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
     result
 }
 
-/// Write RGB f32 data (`width * height * 3`).
-pub fn write_rgb(path: &Path, width: usize, height: usize, data: &[f32]) -> Result<()> {
+/// Sample precision of written files.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Precision {
+    /// 32-bit float.
+    F32,
+    /// 16-bit half (depth beyond 65504 becomes +inf, i.e. a miss).
+    F16,
+}
+
+fn finish(path: &Path, result: exr::error::UnitResult) -> Result<()> {
+    result.with_context(|| format!("writing {}", path.display()))
+}
+
+/// Write RGB data (`width * height * 3`).
+pub fn write_rgb(path: &Path, width: usize, height: usize, data: &[f32], precision: Precision) -> Result<()> {
+    let at = move |p: Vec2<usize>| 3 * (p.y() * width + p.x());
     atomic(path, |tmp| {
-        write_rgb_file(tmp, width, height, |x, y| {
-            let i = 3 * (y * width + x);
-            (data[i], data[i + 1], data[i + 2])
+        let size = (width, height);
+        let enc = Encoding::SMALL_LOSSLESS;
+        finish(path, match precision {
+            Precision::F32 => Image::from_encoded_channels(size, enc, SpecificChannels::rgb(|p| (data[at(p)], data[at(p) + 1], data[at(p) + 2]))).write().to_file(tmp),
+            Precision::F16 => Image::from_encoded_channels(size, enc, SpecificChannels::rgb(|p| {
+                (f16::from_f32(data[at(p)]), f16::from_f32(data[at(p) + 1]), f16::from_f32(data[at(p) + 2]))
+            }))
+            .write()
+            .to_file(tmp),
         })
-        .with_context(|| format!("writing {}", path.display()))
     })
 }
 
 /// Write one channel named `Y` (`width * height`).
-pub fn write_gray(path: &Path, width: usize, height: usize, data: &[f32]) -> Result<()> {
+pub fn write_gray(path: &Path, width: usize, height: usize, data: &[f32], precision: Precision) -> Result<()> {
+    let at = move |p: Vec2<usize>| p.y() * width + p.x();
     atomic(path, |tmp| {
-        let channels = SpecificChannels::build().with_channel("Y").with_pixel_fn(|p: Vec2<usize>| (data[p.y() * width + p.x()],));
-        Image::from_channels((width, height), channels).write().to_file(tmp).with_context(|| format!("writing {}", path.display()))
+        let (size, enc) = ((width, height), Encoding::SMALL_LOSSLESS);
+        finish(path, match precision {
+            Precision::F32 => Image::from_encoded_channels(size, enc, SpecificChannels::build().with_channel("Y").with_pixel_fn(|p| (data[at(p)],))).write().to_file(tmp),
+            Precision::F16 => Image::from_encoded_channels(size, enc, SpecificChannels::build().with_channel("Y").with_pixel_fn(|p| (f16::from_f32(data[at(p)]),))).write().to_file(tmp),
+        })
     })
 }
 
 /// Write two channels `R`, `G` (`width * height * 2`).
-pub fn write_rg(path: &Path, width: usize, height: usize, data: &[f32]) -> Result<()> {
+pub fn write_rg(path: &Path, width: usize, height: usize, data: &[f32], precision: Precision) -> Result<()> {
+    let at = move |p: Vec2<usize>| 2 * (p.y() * width + p.x());
     atomic(path, |tmp| {
-        let channels = SpecificChannels::build()
-            .with_channel("R")
-            .with_channel("G")
-            .with_pixel_fn(|p: Vec2<usize>| (data[2 * (p.y() * width + p.x())], data[2 * (p.y() * width + p.x()) + 1]));
-        Image::from_channels((width, height), channels).write().to_file(tmp).with_context(|| format!("writing {}", path.display()))
+        let (size, enc) = ((width, height), Encoding::SMALL_LOSSLESS);
+        finish(path, match precision {
+            Precision::F32 => {
+                let ch = SpecificChannels::build().with_channel("R").with_channel("G").with_pixel_fn(|p| (data[at(p)], data[at(p) + 1]));
+                Image::from_encoded_channels(size, enc, ch).write().to_file(tmp)
+            }
+            Precision::F16 => {
+                let ch = SpecificChannels::build()
+                    .with_channel("R")
+                    .with_channel("G")
+                    .with_pixel_fn(|p| (f16::from_f32(data[at(p)]), f16::from_f32(data[at(p) + 1])));
+                Image::from_encoded_channels(size, enc, ch).write().to_file(tmp)
+            }
+        })
     })
 }
 
@@ -55,14 +89,15 @@ pub fn frame_path(dir: &Path, name: &str, index: u32) -> PathBuf {
 }
 
 /// Write every buffer of a frame.
-pub fn write_frame(dir: &Path, index: u32, width: usize, height: usize, fb: &FrameBuffers) -> Result<()> {
-    write_rgb(&frame_path(dir, "color", index), width, height, &fb.color)?;
+pub fn write_frame(dir: &Path, index: u32, width: usize, height: usize, fb: &FrameBuffers, precision: Precision) -> Result<()> {
+    let p = precision;
+    write_rgb(&frame_path(dir, "color", index), width, height, &fb.color, p)?;
     if !fb.reference.is_empty() {
-        write_rgb(&frame_path(dir, "reference", index), width, height, &fb.reference)?;
+        write_rgb(&frame_path(dir, "reference", index), width, height, &fb.reference, p)?;
     }
-    write_rgb(&frame_path(dir, "albedo", index), width, height, &fb.albedo)?;
-    write_rgb(&frame_path(dir, "normal", index), width, height, &fb.normal)?;
-    write_gray(&frame_path(dir, "depth", index), width, height, &fb.depth)?;
-    write_gray(&frame_path(dir, "roughness", index), width, height, &fb.roughness)?;
-    write_rg(&frame_path(dir, "motion", index), width, height, &fb.motion)
+    write_rgb(&frame_path(dir, "albedo", index), width, height, &fb.albedo, p)?;
+    write_rgb(&frame_path(dir, "normal", index), width, height, &fb.normal, p)?;
+    write_gray(&frame_path(dir, "depth", index), width, height, &fb.depth, p)?;
+    write_gray(&frame_path(dir, "roughness", index), width, height, &fb.roughness, p)?;
+    write_rg(&frame_path(dir, "motion", index), width, height, &fb.motion, p)
 }

@@ -1,0 +1,177 @@
+"""Training: the paper's loss on 7-frame clips, Adam with a cosine schedule, checkpoints,
+resume, validation to CSV, export to rae's weights file.
+
+    python -m rae_weights train --data DATA/train --val DATA/val --out runs/default --steps 4000
+
+The network learns in its own space: inputs prepared exactly as rae-core prepares them
+(sanitised, color demodulated by albedo and passed through the transfer function), and the
+target is the reference prepared the same way, so rae-core's output stage inverts it.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import math
+import os
+import time
+from pathlib import Path
+
+import numpy as np
+import torch
+import torch.nn.functional as F
+
+from .arch import Arch
+from .data import Sequence, load_sequences, sample
+from .export import write_weights
+from .model import RecurrentAE, finish_output, prepare_input, sanitize_buffers
+
+#: The paper's per-frame loss weights for 7-frame clips (later frames count more).
+PAPER_FRAME_WEIGHTS = (0.011, 0.044, 0.135, 0.325, 0.607, 0.882, 1.0)
+
+
+def target_space(arch: Arch, clip: dict[str, torch.Tensor]) -> torch.Tensor:
+    """The reference in the network's output space: log1p(reference / (albedo + eps))."""
+    b = sanitize_buffers({"color": clip["reference"], "albedo": clip["albedo"]})
+    r = b["color"]
+    if arch.demodulate:
+        r = r / (b["albedo"] + arch.albedo_eps)
+    return torch.log1p(r) if arch.transfer == "log1p" else r
+
+
+def log_kernel(size: int = 5, sigma: float = 1.0) -> torch.Tensor:
+    """Laplacian of Gaussian, zero-sum, for the HFEN gradient term."""
+    ax = torch.arange(size, dtype=torch.float32) - size // 2
+    yy, xx = torch.meshgrid(ax, ax, indexing="ij")
+    r2 = (xx**2 + yy**2) / (2 * sigma**2)
+    k = (r2 - 1) * torch.exp(-r2)
+    return (k - k.mean()).view(1, 1, size, size)
+
+
+def loss_fn(ys: list[torch.Tensor], ts: list[torch.Tensor], weights: tuple[float, ...], log: torch.Tensor) -> torch.Tensor:
+    """0.8 spatial L1 + 0.1 HFEN L1 + 0.1 temporal L1, each frame weighted."""
+    total = torch.zeros(())
+    c = ys[0].shape[1]
+    k = log.repeat(c, 1, 1, 1)
+    for i, (y, t) in enumerate(zip(ys, ts)):
+        ls = F.l1_loss(y, t)
+        lg = F.l1_loss(F.conv2d(y, k, padding=2, groups=c), F.conv2d(t, k, padding=2, groups=c))
+        lt = F.l1_loss(y - ys[i - 1], t - ts[i - 1]) if i > 0 else torch.zeros(())
+        total = total + weights[i] * (0.8 * ls + 0.1 * lg + 0.1 * lt)
+    return total / sum(weights)
+
+
+def run_clip(model: RecurrentAE, arch: Arch, clip: dict[str, torch.Tensor]) -> list[torch.Tensor]:
+    """Network outputs for each frame of a clip ([T, C, H, W] buffers), hidden state carried."""
+    model.reset()
+    outs = []
+    for i in range(clip["color"].shape[0]):
+        frame = {k: v[i : i + 1] for k, v in clip.items() if k != "reference"}
+        x = prepare_input(arch, frame).contiguous(memory_format=torch.channels_last)
+        outs.append(model(x))
+    return outs
+
+
+@torch.no_grad()
+def validate(model: RecurrentAE, arch: Arch, seqs: list[Sequence]) -> dict[str, float]:
+    """relMSE of input and output, and temporal error, over whole held-out sequences."""
+    model.eval()
+    rel_in, rel_out, temp = [], [], []
+    for s in seqs:
+        clip = dict(s.buffers)
+        ys = run_clip(model, arch, clip)
+        prev = None
+        for i, y in enumerate(ys):
+            frame = {k: v[i : i + 1] for k, v in clip.items()}
+            out = finish_output(arch, y, frame)
+            ref, noisy = frame["reference"], torch.nan_to_num(frame["color"])
+            rel = lambda a: ((a - ref) ** 2 / (ref**2 + 0.01)).mean().item()  # noqa: E731
+            rel_in.append(rel(noisy))
+            rel_out.append(rel(out))
+            tm = lambda v: v.clamp(min=0) / (1 + v.clamp(min=0))  # noqa: E731
+            if prev is not None:
+                temp.append(((tm(out) - tm(prev[0])) - (tm(ref) - tm(prev[1]))).abs().mean().item())
+            prev = (out, ref)
+    model.train()
+    return {"relmse_input": float(np.mean(rel_in)), "relmse_rae": float(np.mean(rel_out)), "temporal_rae": float(np.mean(temp)) if temp else math.nan}
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(prog="rae-weights train", description=__doc__)
+    p.add_argument("--data", required=True, type=Path)
+    p.add_argument("--val", type=Path)
+    p.add_argument("--out", required=True, type=Path)
+    p.add_argument("--steps", type=int, default=4000)
+    p.add_argument("--lr", type=float, default=5e-4)
+    p.add_argument("--crop", type=int, default=128)
+    p.add_argument("--frames", type=int, default=7)
+    p.add_argument("--inputs", default="color,normal,depth,roughness")
+    p.add_argument("--frame-weights", choices=["paper", "equal"], default="paper")
+    p.add_argument("--val-every", type=int, default=500)
+    p.add_argument("--ckpt-every", type=int, default=250)
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--threads", type=int, default=max(1, (os.cpu_count() or 2)))
+    p.add_argument("--max-minutes", type=float, default=0.0, help="stop (checkpoint and export) after this long")
+    a = p.parse_args(argv)
+    torch.set_num_threads(a.threads)
+    torch.manual_seed(a.seed)
+    rng = np.random.default_rng(a.seed)
+    a.out.mkdir(parents=True, exist_ok=True)
+    arch = Arch(inputs=a.inputs.split(","))
+    model = RecurrentAE(arch).to(memory_format=torch.channels_last)
+    opt = torch.optim.Adam(model.parameters(), lr=a.lr, betas=(0.9, 0.99))
+    sched = torch.optim.lr_scheduler.LambdaLR(opt, lambda s: 0.5 * (1 + math.cos(math.pi * min(s, a.steps) / a.steps)) * min(1.0, (s + 1) / 100))
+    ckpt = a.out / "checkpoint.pt"
+    step = 0
+    if ckpt.exists():
+        state = torch.load(ckpt, map_location="cpu", weights_only=True)
+        model.load_state_dict(state["state_dict"])
+        opt.load_state_dict(state["optimizer"])
+        sched.load_state_dict(state["scheduler"])
+        step = int(state["step"])
+        print(f"resumed at step {step}")
+    train = load_sequences(a.data)
+    val = load_sequences(a.val) if a.val else []
+    print(f"{len(train)} training sequences, {len(val)} held out; arch {arch.to_json()}")
+    weights = PAPER_FRAME_WEIGHTS if a.frame_weights == "paper" and a.frames == 7 else (1.0,) * a.frames
+    log = log_kernel()
+    log_path = a.out / "log.csv"
+    new_log = not log_path.exists()
+    logf = log_path.open("a", newline="")
+    writer = csv.writer(logf)
+    if new_log:
+        writer.writerow(["step", "seconds", "loss", "lr", "relmse_input", "relmse_rae", "temporal_rae"])
+    start, running = time.time(), []
+
+    def save() -> None:
+        tmp = ckpt.with_suffix(".tmp")
+        torch.save({"arch": arch.to_json(), "state_dict": model.state_dict(), "optimizer": opt.state_dict(), "scheduler": sched.state_dict(), "step": step}, tmp)
+        os.replace(tmp, ckpt)
+
+    while step < a.steps:
+        clip = sample(train, a.frames, a.crop, rng)
+        ys = run_clip(model, arch, clip)
+        ts = [target_space(arch, {k: v[i : i + 1] for k, v in clip.items()}) for i in range(a.frames)]
+        loss = loss_fn(ys, ts, weights, log)
+        opt.zero_grad(set_to_none=True)
+        loss.backward()
+        torch.nn.utils.clip_grad_norm_(model.parameters(), 1.0)
+        opt.step()
+        sched.step()
+        step += 1
+        running.append(loss.item())
+        out_of_time = a.max_minutes > 0 and time.time() - start > 60 * a.max_minutes
+        if step % a.ckpt_every == 0 or step == a.steps or out_of_time:
+            save()
+        if step % a.val_every == 0 or step == a.steps or out_of_time:
+            v = validate(model, arch, val) if val else {"relmse_input": math.nan, "relmse_rae": math.nan, "temporal_rae": math.nan}
+            writer.writerow([step, round(time.time() - start, 1), float(np.mean(running)), sched.get_last_lr()[0], v["relmse_input"], v["relmse_rae"], v["temporal_rae"]])
+            logf.flush()
+            print(f"step {step}: loss {np.mean(running):.4f} {json.dumps(v)} ({time.time() - start:.0f} s)", flush=True)
+            running = []
+        if out_of_time:
+            break
+    write_weights(a.out / "model.safetensors", arch, model.state_dict())
+    print(f"wrote {a.out / 'model.safetensors'} after {step} steps, {time.time() - start:.0f} s")
+    return 0
