@@ -298,3 +298,21 @@ fn weights_that_do_not_fit_are_an_error() {
     let out = rae().arg("denoise").arg(&seq).args(["--weights", &fixture("weights_color_tiny.safetensors")]).output().unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
 }
+
+#[test]
+fn the_shipped_model_that_fits_is_chosen() {
+    let tmp = tempfile::tempdir().unwrap();
+    let seq = seq_dir(&tmp);
+    per_buffer_sequence(&seq, 2);
+    let out = rae().arg("denoise").arg(&seq).output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{text}{}", String::from_utf8_lossy(&out.stderr));
+    assert!(text.contains("rae-default.safetensors"), "{text}");
+    // A color-only sequence: no shipped model fits yet, and the message says what to do.
+    let only_color = tmp.path().join("c");
+    std::fs::create_dir(&only_color).unwrap();
+    write_rgb(&only_color.join("color_0000.exr"), W, H, &wave(W * H * 3, 0.01));
+    let out = rae().arg("denoise").arg(&only_color).output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("no shipped model") && err.contains("--weights"), "{err}");
+}
