@@ -158,7 +158,7 @@ pub fn run(o: &Options) -> Result<()> {
     let mut prev: Option<(Vec<f32>, Vec<f32>, Vec<f32>)> = None; // (noisy, rae, reference)
     let (mut temporal_noisy, mut temporal_rae) = (Vec::new(), Vec::new());
     for &i in &indices {
-        let frame = seq.load(i)?;
+        let mut frame = seq.load(i)?;
         if let Some((buffer, path, count)) = frame.nonfinite.first()
             && !o.allow_nonfinite
         {
@@ -187,7 +187,17 @@ pub fn run(o: &Options) -> Result<()> {
                 temporal_noisy.push(metrics::temporal_error(pn, color, pr, r));
                 temporal_rae.push(metrics::temporal_error(po, &out, pr, r));
             }
-            prev = Some((color.clone(), out.clone(), r.to_vec()));
+            // Keep this frame for the next temporal error: move the buffers, copy only the result.
+            let color = frame.buffers.remove(&Slot::from(InputBuffer::Color)).expect("color is required");
+            let reference = frame.buffers.remove(&Slot::Reference).expect("reference present");
+            let rae = match prev.take() {
+                Some((_, mut old, _)) => {
+                    old.copy_from_slice(&out);
+                    old
+                }
+                None => out.clone(),
+            };
+            prev = Some((color, rae, reference));
         }
         reports.push(report);
         bar.inc(1);
