@@ -4,11 +4,14 @@
 // upsampling never run as passes of their own.
 //
 // Activations are rgba32float texture arrays: layer l holds channels 4l..4l+3 (texture loads are
-// vectorised on lavapipe, storage-buffer loads run lane by lane). Weights are vec4s of 4 output
-// channels in a 2D texture; every invocation of a workgroup reads the same weight texel.
+// vectorised on lavapipe, storage-buffer loads run lane by lane). Weights sit in a uniform
+// binding of 64 KiB: every invocation reads the same weight at the same time, which lavapipe
+// turns into one load and a broadcast (and a discrete GPU serves from its constant cache). A
+// conv's weights are split into groups of OB output blocks, one 64 KiB chunk and one dispatch
+// per group, bound by dynamic offset.
 //
-// Specialised per layer kind by override constants (read modes, activation); sizes come in the
-// uniform, so one pipeline serves every resolution and width.
+// Specialised per layer kind by override constants (read modes, activation, output blocks per
+// invocation); sizes come in the uniform, so one pipeline serves every resolution and width.
 
 // How a source is read at output pixel (x, y).
 const READ_DIRECT: u32 = 0u;        // src[x, y]
@@ -19,11 +22,14 @@ const READ_POOL_UPSAMPLE: u32 = 3u; // upsample(pool(src)): max of the 2x2 block
 override MODE_A: u32 = 0u;
 override MODE_B: u32 = 0u;
 override LEAKY: bool = true;
+// Output blocks (4 channels each) per invocation: 1 or 2 (kernels::blocks_per_invocation).
+override OB: u32 = 2u;
 
-// Register tile: each invocation computes 4 output rows x 4 output channels (one block) at one
-// x, in four named accumulators: no indexable local arrays, which lavapipe would keep in
-// per-lane scratch memory.
-const ROWS: u32 = 4u;
+// Register tile: each invocation computes 16 output rows x OB output blocks at one x, in named
+// accumulators: no indexable local arrays, which lavapipe would keep in per-lane scratch memory.
+const ROWS: u32 = 16u;
+// vec4s in one weight chunk (64 KiB, the uniform binding limit).
+const CHUNK: u32 = 4096u;
 
 struct Params {
     width: u32,       // output (= convolution) resolution
@@ -31,27 +37,18 @@ struct Params {
     cin4_a: u32,      // channel blocks read from a
     cin4_b: u32,      // channel blocks read from b (0: no b, or a zeroed hidden state)
     cin4_total: u32,  // input blocks in the weight layout (a + b)
-    cout4: u32,       // output blocks stored
-    b_offset: u32,    // first vec4 of the bias in `weights`
-    t_offset: u32,    // first vec4 of the taps: [out block][in block][tap][in lane] -> vec4 out
+    ob0: u32,         // first output block (texture layer) of this group
+    ob_count: u32,    // output blocks stored by this group (1 ..= OB)
     slope: f32,       // LeakyReLU negative slope
-    _pad0: u32,
-    _pad1: u32,
-    _pad2: u32,
 }
 
+// Weight chunk of one group: taps at ((in block * 9 + tap) * 4 + in lane) * OB + j, a vec4 over
+// the 4 output channels of block ob0 + j; then the bias of block j at cin4_total * 36 * OB + j.
 @group(0) @binding(0) var<uniform> params: Params;
 @group(0) @binding(1) var src_a: texture_2d_array<f32>;
 @group(0) @binding(2) var src_b: texture_2d_array<f32>;
-@group(0) @binding(3) var weights: texture_2d<f32>;
+@group(0) @binding(3) var<uniform> weights: array<vec4<f32>, CHUNK>;
 @group(0) @binding(4) var dst: texture_storage_2d_array<rgba32float, write>;
-
-// Weights are WEIGHT_ROW vec4s per texture row (kernels::WEIGHT_ROW on the host).
-const WEIGHT_ROW: u32 = 4096u;
-
-fn weight(i: u32) -> vec4<f32> {
-    return textureLoad(weights, vec2<u32>(i % WEIGHT_ROW, i / WEIGHT_ROW), 0);
-}
 
 fn max4(t: texture_2d_array<f32>, p: vec2<i32>, layer: u32) -> vec4<f32> {
     let a = textureLoad(t, p, layer, 0);
@@ -74,40 +71,84 @@ fn fetch(t: texture_2d_array<f32>, mode: u32, x: i32, y: i32, layer: u32) -> vec
     }
 }
 
-// The four accumulated rows of a tile.
+// The 16 accumulated rows of one output block.
 struct Tile {
     r0: vec4<f32>,
     r1: vec4<f32>,
     r2: vec4<f32>,
     r3: vec4<f32>,
+    r4: vec4<f32>,
+    r5: vec4<f32>,
+    r6: vec4<f32>,
+    r7: vec4<f32>,
+    r8: vec4<f32>,
+    r9: vec4<f32>,
+    r10: vec4<f32>,
+    r11: vec4<f32>,
+    r12: vec4<f32>,
+    r13: vec4<f32>,
+    r14: vec4<f32>,
+    r15: vec4<f32>,
 }
 
-// The 4x4 block of weights of one tap: column l maps input lane l to the 4 output channels.
-fn tap(i: u32) -> mat4x4<f32> {
-    return mat4x4<f32>(weight(i), weight(i + 1u), weight(i + 2u), weight(i + 3u));
+// The 4x4 weights of one tap and output block j: column l maps input lane l to 4 outputs.
+fn tap(i: u32, j: u32) -> mat4x4<f32> {
+    return mat4x4<f32>(weights[i + j], weights[i + OB + j], weights[i + 2u * OB + j], weights[i + 3u * OB + j]);
 }
 
-// Add input block `layer` of `t` (read with `mode`) at weight block `cb` to the tile whose
+// Add the 3 taps of column kx, for output block j, to a tile (input column v0..v9).
+fn add_column(acc: ptr<function, Tile>, base: u32, j: u32, v0: vec4<f32>, v1: vec4<f32>, v2: vec4<f32>, v3: vec4<f32>, v4: vec4<f32>, v5: vec4<f32>, v6: vec4<f32>, v7: vec4<f32>, v8: vec4<f32>, v9: vec4<f32>, v10: vec4<f32>, v11: vec4<f32>, v12: vec4<f32>, v13: vec4<f32>, v14: vec4<f32>, v15: vec4<f32>, v16: vec4<f32>, v17: vec4<f32>) {
+    let m0 = tap(base, j);
+    let m1 = tap(base + 12u * OB, j);
+    let m2 = tap(base + 24u * OB, j);
+    (*acc).r0 += m0 * v0 + m1 * v1 + m2 * v2;
+    (*acc).r1 += m0 * v1 + m1 * v2 + m2 * v3;
+    (*acc).r2 += m0 * v2 + m1 * v3 + m2 * v4;
+    (*acc).r3 += m0 * v3 + m1 * v4 + m2 * v5;
+    (*acc).r4 += m0 * v4 + m1 * v5 + m2 * v6;
+    (*acc).r5 += m0 * v5 + m1 * v6 + m2 * v7;
+    (*acc).r6 += m0 * v6 + m1 * v7 + m2 * v8;
+    (*acc).r7 += m0 * v7 + m1 * v8 + m2 * v9;
+    (*acc).r8 += m0 * v8 + m1 * v9 + m2 * v10;
+    (*acc).r9 += m0 * v9 + m1 * v10 + m2 * v11;
+    (*acc).r10 += m0 * v10 + m1 * v11 + m2 * v12;
+    (*acc).r11 += m0 * v11 + m1 * v12 + m2 * v13;
+    (*acc).r12 += m0 * v12 + m1 * v13 + m2 * v14;
+    (*acc).r13 += m0 * v13 + m1 * v14 + m2 * v15;
+    (*acc).r14 += m0 * v14 + m1 * v15 + m2 * v16;
+    (*acc).r15 += m0 * v15 + m1 * v16 + m2 * v17;
+}
+
+// Add input block `layer` of `t` (read with `mode`) at weight block `cb` to the tiles whose
 // top-left output is (x, y0).
-fn accumulate(acc: ptr<function, Tile>, t: texture_2d_array<f32>, mode: u32, layer: u32, cb: u32, ob: u32, x: i32, y0: i32) {
-    let base = params.t_offset + (ob * params.cin4_total + cb) * 36u;
+fn accumulate(acc0: ptr<function, Tile>, acc1: ptr<function, Tile>, t: texture_2d_array<f32>, mode: u32, layer: u32, cb: u32, x: i32, y0: i32) {
     for (var kx = 0u; kx < 3u; kx++) {
         let sx = x + i32(kx) - 1;
-        // Column kx of the 6-row input window.
-        let v0 = fetch(t, mode, sx, y0 - 1, layer);
-        let v1 = fetch(t, mode, sx, y0, layer);
+        // Column kx of the 10-row input window.
+        let v0 = fetch(t, mode, sx, y0 + -1, layer);
+        let v1 = fetch(t, mode, sx, y0 + 0, layer);
         let v2 = fetch(t, mode, sx, y0 + 1, layer);
         let v3 = fetch(t, mode, sx, y0 + 2, layer);
         let v4 = fetch(t, mode, sx, y0 + 3, layer);
         let v5 = fetch(t, mode, sx, y0 + 4, layer);
-        // Taps (ky, kx) for ky = 0, 1, 2; tap index ky * 3 + kx, 4 vec4s each.
-        let m0 = tap(base + kx * 4u);
-        let m1 = tap(base + 12u + kx * 4u);
-        let m2 = tap(base + 24u + kx * 4u);
-        (*acc).r0 += m0 * v0 + m1 * v1 + m2 * v2;
-        (*acc).r1 += m0 * v1 + m1 * v2 + m2 * v3;
-        (*acc).r2 += m0 * v2 + m1 * v3 + m2 * v4;
-        (*acc).r3 += m0 * v3 + m1 * v4 + m2 * v5;
+        let v6 = fetch(t, mode, sx, y0 + 5, layer);
+        let v7 = fetch(t, mode, sx, y0 + 6, layer);
+        let v8 = fetch(t, mode, sx, y0 + 7, layer);
+        let v9 = fetch(t, mode, sx, y0 + 8, layer);
+        let v10 = fetch(t, mode, sx, y0 + 9, layer);
+        let v11 = fetch(t, mode, sx, y0 + 10, layer);
+        let v12 = fetch(t, mode, sx, y0 + 11, layer);
+        let v13 = fetch(t, mode, sx, y0 + 12, layer);
+        let v14 = fetch(t, mode, sx, y0 + 13, layer);
+        let v15 = fetch(t, mode, sx, y0 + 14, layer);
+        let v16 = fetch(t, mode, sx, y0 + 15, layer);
+        let v17 = fetch(t, mode, sx, y0 + 16, layer);
+        // Tap (ky, kx) starts at ((cb * 9 + ky * 3 + kx) * 4) * OB.
+        let base = (cb * 36u + kx * 4u) * OB;
+        add_column(acc0, base, 0u, v0, v1, v2, v3, v4, v5, v6, v7, v8, v9, v10, v11, v12, v13, v14, v15, v16, v17);
+        if OB > 1u {
+            add_column(acc1, base, 1u, v0, v1, v2, v3, v4, v5, v6, v7, v8, v9, v10, v11, v12, v13, v14, v15, v16, v17);
+        }
     }
 }
 
@@ -118,29 +159,53 @@ fn activate(v: vec4<f32>) -> vec4<f32> {
     return v;
 }
 
+fn store(acc: Tile, x: u32, y0: u32, layer: u32) {
+    // Rows past the bottom edge are dropped.
+    let h = params.height;
+    textureStore(dst, vec2<u32>(x, y0), layer, activate(acc.r0));
+    if y0 + 1u < h { textureStore(dst, vec2<u32>(x, y0 + 1u), layer, activate(acc.r1)); }
+    if y0 + 2u < h { textureStore(dst, vec2<u32>(x, y0 + 2u), layer, activate(acc.r2)); }
+    if y0 + 3u < h { textureStore(dst, vec2<u32>(x, y0 + 3u), layer, activate(acc.r3)); }
+    if y0 + 4u < h { textureStore(dst, vec2<u32>(x, y0 + 4u), layer, activate(acc.r4)); }
+    if y0 + 5u < h { textureStore(dst, vec2<u32>(x, y0 + 5u), layer, activate(acc.r5)); }
+    if y0 + 6u < h { textureStore(dst, vec2<u32>(x, y0 + 6u), layer, activate(acc.r6)); }
+    if y0 + 7u < h { textureStore(dst, vec2<u32>(x, y0 + 7u), layer, activate(acc.r7)); }
+    if y0 + 8u < h { textureStore(dst, vec2<u32>(x, y0 + 8u), layer, activate(acc.r8)); }
+    if y0 + 9u < h { textureStore(dst, vec2<u32>(x, y0 + 9u), layer, activate(acc.r9)); }
+    if y0 + 10u < h { textureStore(dst, vec2<u32>(x, y0 + 10u), layer, activate(acc.r10)); }
+    if y0 + 11u < h { textureStore(dst, vec2<u32>(x, y0 + 11u), layer, activate(acc.r11)); }
+    if y0 + 12u < h { textureStore(dst, vec2<u32>(x, y0 + 12u), layer, activate(acc.r12)); }
+    if y0 + 13u < h { textureStore(dst, vec2<u32>(x, y0 + 13u), layer, activate(acc.r13)); }
+    if y0 + 14u < h { textureStore(dst, vec2<u32>(x, y0 + 14u), layer, activate(acc.r14)); }
+    if y0 + 15u < h { textureStore(dst, vec2<u32>(x, y0 + 15u), layer, activate(acc.r15)); }
+}
+
 @compute @workgroup_size(8, 8, 1)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let x = gid.x;
     let y0 = gid.y * ROWS;
-    let ob = gid.z;
-    if x >= params.width || y0 >= params.height || ob >= params.cout4 {
+    if x >= params.width || y0 >= params.height {
         return;
     }
-    let bias = weight(params.b_offset + ob);
-    var acc = Tile(bias, bias, bias, bias);
+    let bias_at = params.cin4_total * 36u * OB;
+    let b0 = weights[bias_at];
+    var acc0 = Tile(b0, b0, b0, b0, b0, b0, b0, b0, b0, b0, b0, b0, b0, b0, b0, b0);
+    var acc1 = acc0;
+    if OB > 1u {
+        let b1 = weights[bias_at + 1u];
+        acc1 = Tile(b1, b1, b1, b1, b1, b1, b1, b1, b1, b1, b1, b1, b1, b1, b1, b1);
+    }
     let xi = i32(x);
     let yi = i32(y0);
     // Source a: input blocks 0 .. cin4_a; then source b: blocks cin4_a .. cin4_a + cin4_b.
     for (var c = 0u; c < params.cin4_a; c++) {
-        accumulate(&acc, src_a, MODE_A, c, c, ob, xi, yi);
+        accumulate(&acc0, &acc1, src_a, MODE_A, c, c, xi, yi);
     }
     for (var c = 0u; c < params.cin4_b; c++) {
-        accumulate(&acc, src_b, MODE_B, c, params.cin4_a + c, ob, xi, yi);
+        accumulate(&acc0, &acc1, src_b, MODE_B, c, params.cin4_a + c, xi, yi);
     }
-    // Store with the activation fused (rows past the bottom edge are dropped).
-    let h = params.height;
-    textureStore(dst, vec2<u32>(x, y0), ob, activate(acc.r0));
-    if y0 + 1u < h { textureStore(dst, vec2<u32>(x, y0 + 1u), ob, activate(acc.r1)); }
-    if y0 + 2u < h { textureStore(dst, vec2<u32>(x, y0 + 2u), ob, activate(acc.r2)); }
-    if y0 + 3u < h { textureStore(dst, vec2<u32>(x, y0 + 3u), ob, activate(acc.r3)); }
+    store(acc0, x, y0, params.ob0);
+    if OB > 1u && params.ob_count > 1u {
+        store(acc1, x, y0, params.ob0 + 1u);
+    }
 }

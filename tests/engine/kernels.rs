@@ -3,7 +3,7 @@
 use rae_core::cpu::{self, Chw};
 use rae_core::denoiser::read_texture;
 use rae_core::graph::Read;
-use rae_core::kernels::{self, ConvParams, ConvVariant, Kernels, blocks};
+use rae_core::kernels::{self, ConvPlan, ConvSpec, Kernels, blocks};
 use rae_core::{Denoiser, FrameInputs, Weights};
 use wgpu::util::DeviceExt;
 
@@ -58,29 +58,23 @@ fn gpu_conv(a: (&Chw, Read), b: Option<(&Chw, Read)>, weight: &[f32], bias: &[f3
     let dev = &g.device;
     let cout = bias.len();
     let mut kernels = Kernels::new(dev);
-    let variant = ConvVariant { read_a: a.1, read_b: b.map_or(Read::Direct, |b| b.1), leaky };
-    let pipeline = kernels.conv(dev, variant);
     let cb = b.map_or(0, |b| b.0.c);
-    let mut packed = Vec::new();
-    let (b_offset, t_offset) = kernels::pack_conv(weight, bias, cout, a.0.c, cb, &mut packed);
-    let weights = kernels::weight_texture(dev, &g.queue, &packed).create_view(&Default::default());
-    let params = ConvParams {
+    let spec = ConvSpec {
+        name: "test",
         width: w as u32,
         height: h as u32,
-        cin4_a: blocks(a.0.c),
-        cin4_b: blocks(cb),
-        cin4_total: blocks(a.0.c) + blocks(cb),
-        cout4: blocks(cout),
-        b_offset,
-        t_offset,
+        ca: a.0.c,
+        cb,
+        cout,
+        weight,
+        bias,
+        read_a: a.1,
+        read_b: b.map_or(Read::Direct, |b| b.1),
+        leaky,
         slope: 0.1,
-        _pad: [0; 3],
+        b_is_hidden: false,
     };
-    let uniform = dev.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: None,
-        contents: bytemuck::bytes_of(&params),
-        usage: wgpu::BufferUsages::UNIFORM,
-    });
+    let plan = ConvPlan::new(dev, &mut kernels, &[spec]).unwrap();
     let ta = upload(a.0);
     let tb = upload(b.map_or(&Chw::zeros(1, 1, 1), |b| b.0));
     let out = dev.create_texture(&wgpu::TextureDescriptor {
@@ -93,25 +87,12 @@ fn gpu_conv(a: (&Chw, Read), b: Option<(&Chw, Read)>, weight: &[f32], bias: &[f3
         usage: wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC,
         view_formats: &[],
     });
-    let group = dev.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: None,
-        layout: &kernels.conv_layout,
-        entries: &[
-            wgpu::BindGroupEntry { binding: 0, resource: uniform.as_entire_binding() },
-            wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&array_view(&ta)) },
-            wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::TextureView(&array_view(&tb)) },
-            wgpu::BindGroupEntry { binding: 3, resource: wgpu::BindingResource::TextureView(&weights) },
-            wgpu::BindGroupEntry { binding: 4, resource: wgpu::BindingResource::TextureView(&array_view(&out)) },
-        ],
-    });
+    let group = plan.bind_group(dev, &kernels, &array_view(&ta), &array_view(&tb), &array_view(&out));
     let mut enc = dev.create_command_encoder(&Default::default());
     {
         let mut pass = enc.begin_compute_pass(&Default::default());
-        pass.set_pipeline(&pipeline);
-        pass.set_bind_group(0, &group, &[]);
-        let (x, y, z) = kernels::conv_workgroups(w as u32, h as u32, cout);
-        assert!(x > 1 && y > 1, "the test must span several workgroups");
-        pass.dispatch_workgroups(x, y, z);
+        assert!(w > 8 && h > kernels::CONV_ROWS as usize, "the test must span several workgroups in x and row tiles in y");
+        plan.record(&mut pass, 0, false, &group);
     }
     g.queue.submit(Some(enc.finish()));
     let raw = read_texture(dev, &g.queue, &out).unwrap();
@@ -163,6 +144,38 @@ fn conv_upsample_and_pooled_skip_matches_cpu() {
 fn conv_upsample_and_prepool_skip_matches_cpu() {
     // The paper's decoder: cat(up(prev), skip before pooling).
     check_conv((tensor(4, 23, 19, 6), Read::Upsample), Some((tensor(9, 45, 37, 7), Read::Direct)), 3, false, 37, 45, 40);
+}
+
+#[test]
+fn conv_wide_input_uses_one_block_per_invocation_and_matches_cpu() {
+    // 250 input channels (63 blocks): two output blocks' taps no longer fit a 64 KiB chunk.
+    assert_eq!(kernels::blocks_per_invocation(63), Some(1));
+    assert_eq!(kernels::blocks_per_invocation(51), Some(2), "the widest conv of the default network");
+    check_conv((tensor(130, 45, 37, 8), Read::Direct), Some((tensor(120, 45, 37, 9), Read::Direct)), 7, true, 37, 45, 50);
+}
+
+#[test]
+fn conv_too_wide_for_a_weight_chunk_is_an_error() {
+    let g = gpu();
+    let mut kernels = Kernels::new(&g.device);
+    let (weight, bias) = (vec![0.0; 4 * 460 * 9], vec![0.0; 4]);
+    let spec = ConvSpec {
+        name: "d1.l1.0",
+        width: 8,
+        height: 8,
+        ca: 460,
+        cb: 0,
+        cout: 4,
+        weight: &weight,
+        bias: &bias,
+        read_a: Read::Direct,
+        read_b: Read::Direct,
+        leaky: true,
+        slope: 0.1,
+        b_is_hidden: false,
+    };
+    let err = ConvPlan::new(&g.device, &mut kernels, &[spec]).err().expect("460 channels do not fit").to_string();
+    assert!(err.contains("d1.l1.0") && err.contains("460"), "{err}");
 }
 
 /// A frame of `w x h` with every buffer, smooth values plus the extremes the input policy

@@ -60,6 +60,7 @@ def main(argv: list[str] | None = None) -> int:
     g.add_argument("--check", metavar="DIR", help="regenerate into a temporary folder and compare with DIR")
     g.set_defaults(func=_golden)
     sub.add_parser("train", help="train on rae-trace sequences (see `train --help`)", add_help=False)
+    sub.add_parser("bench", help="PyTorch CPU time per frame of a weights file (see `bench --help`)", add_help=False)
     if argv is None:
         import sys as _sys
         argv = _sys.argv[1:]
@@ -67,6 +68,10 @@ def main(argv: list[str] | None = None) -> int:
         from .train import main as train_main
 
         return train_main(argv[1:])
+    if argv and argv[0] == "bench":
+        from .bench import main as bench_main
+
+        return bench_main(argv[1:])
     args = p.parse_args(argv)
     try:
         return args.func(args)

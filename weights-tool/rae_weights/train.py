@@ -22,9 +22,10 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 
-from .arch import Arch
+from .arch import INPUT_CHANNELS, Arch
 from .data import Sequence, load_sequences, sample
-from .export import write_weights
+from .export import load_checkpoint, write_weights
+from .metrics import sequence_metrics
 from .model import RecurrentAE, finish_output, prepare_input, sanitize_buffers
 
 #: The paper's per-frame loss weights for 7-frame clips (later frames count more).
@@ -75,26 +76,60 @@ def run_clip(model: RecurrentAE, arch: Arch, clip: dict[str, torch.Tensor]) -> l
 
 @torch.no_grad()
 def validate(model: RecurrentAE, arch: Arch, seqs: list[Sequence]) -> dict[str, float]:
-    """relMSE of input and output, and temporal error, over whole held-out sequences."""
+    """Held-out metrics over whole sequences (``metrics.sequence_metrics``), input and rae,
+    averaged over sequences."""
     model.eval()
-    rel_in, rel_out, temp = [], [], []
+    rows: dict[str, list[float]] = {}
     for s in seqs:
         clip = dict(s.buffers)
         ys = run_clip(model, arch, clip)
-        prev = None
+        outs, noisy, refs = [], [], []
         for i, y in enumerate(ys):
             frame = {k: v[i : i + 1] for k, v in clip.items()}
-            out = finish_output(arch, y, frame)
-            ref, noisy = frame["reference"], torch.nan_to_num(frame["color"])
-            rel = lambda a: ((a - ref) ** 2 / (ref**2 + 0.01)).mean().item()  # noqa: E731
-            rel_in.append(rel(noisy))
-            rel_out.append(rel(out))
-            tm = lambda v: v.clamp(min=0) / (1 + v.clamp(min=0))  # noqa: E731
-            if prev is not None:
-                temp.append(((tm(out) - tm(prev[0])) - (tm(ref) - tm(prev[1]))).abs().mean().item())
-            prev = (out, ref)
+            outs.append(finish_output(arch, y, frame)[0].permute(1, 2, 0).numpy())
+            noisy.append(frame["color"][0].permute(1, 2, 0).numpy())
+            refs.append(frame["reference"][0].permute(1, 2, 0).numpy())
+        for who, imgs in (("input", noisy), ("rae", outs)):
+            for k, v in sequence_metrics(imgs, refs).items():
+                rows.setdefault(f"{k}_{who}", []).append(v)
     model.train()
-    return {"relmse_input": float(np.mean(rel_in)), "relmse_rae": float(np.mean(rel_out)), "temporal_rae": float(np.mean(temp)) if temp else math.nan}
+    return {k: float(np.mean(v)) for k, v in rows.items()}
+
+
+#: Validation columns of the training log, in order.
+VAL_COLUMNS = ["relmse_input", "relmse_rae", "ssim_input", "ssim_rae", "temporal_input", "temporal_rae"]
+
+
+def warm_start(model: RecurrentAE, arch: Arch, state: dict[str, torch.Tensor], src: Arch) -> int:
+    """Initialise ``model`` from another architecture's weights: every tensor of equal shape is
+    copied; the first convolution's input columns are copied by buffer name (a color+normal net
+    starts from the default net's color and normal columns). Returns the tensors copied."""
+    own = model.state_dict()
+    copied = 0
+    for name, t in own.items():
+        w = state.get(name)
+        if w is None:
+            continue
+        if w.shape == t.shape:
+            own[name] = w.clone()
+            copied += 1
+        elif name == "d1.l1.0.weight" and w.shape[0] == t.shape[0]:
+            new = t.clone()
+            offsets = {}
+            c = 0
+            for b in src.inputs:
+                offsets[b] = c
+                c += INPUT_CHANNELS[b]
+            c = 0
+            for b in arch.inputs:
+                n = INPUT_CHANNELS[b]
+                if b in offsets:
+                    new[:, c : c + n] = w[:, offsets[b] : offsets[b] + n]
+                c += n
+            own[name] = new
+            copied += 1
+    model.load_state_dict(own)
+    return copied
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -107,6 +142,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--crop", type=int, default=128)
     p.add_argument("--frames", type=int, default=7)
     p.add_argument("--inputs", default="color,normal,depth,roughness")
+    p.add_argument("--no-demodulate", action="store_true", help="feed color as is (no albedo needed)")
+    p.add_argument("--init", type=Path, help="warm start from a checkpoint of another architecture (see warm_start)")
     p.add_argument("--frame-weights", choices=["paper", "equal"], default="paper")
     p.add_argument("--val-every", type=int, default=500)
     p.add_argument("--ckpt-every", type=int, default=250)
@@ -118,11 +155,16 @@ def main(argv: list[str] | None = None) -> int:
     torch.manual_seed(a.seed)
     rng = np.random.default_rng(a.seed)
     a.out.mkdir(parents=True, exist_ok=True)
-    arch = Arch(inputs=a.inputs.split(","))
-    model = RecurrentAE(arch).to(memory_format=torch.channels_last)
+    arch = Arch(inputs=a.inputs.split(","), demodulate=not a.no_demodulate)
+    model = RecurrentAE(arch)
+    ckpt = a.out / "checkpoint.pt"
+    if a.init and not ckpt.exists():
+        state, src = load_checkpoint(a.init)
+        n = warm_start(model, arch, state, src or Arch())
+        print(f"warm start from {a.init}: {n} of {len(model.state_dict())} tensors")
+    model = model.to(memory_format=torch.channels_last)
     opt = torch.optim.Adam(model.parameters(), lr=a.lr, betas=(0.9, 0.99))
     sched = torch.optim.lr_scheduler.LambdaLR(opt, lambda s: 0.5 * (1 + math.cos(math.pi * min(s, a.steps) / a.steps)) * min(1.0, (s + 1) / 100))
-    ckpt = a.out / "checkpoint.pt"
     step = 0
     if ckpt.exists():
         state = torch.load(ckpt, map_location="cpu", weights_only=True)
@@ -141,7 +183,7 @@ def main(argv: list[str] | None = None) -> int:
     logf = log_path.open("a", newline="")
     writer = csv.writer(logf)
     if new_log:
-        writer.writerow(["step", "seconds", "loss", "lr", "relmse_input", "relmse_rae", "temporal_rae"])
+        writer.writerow(["step", "seconds", "loss", "lr", *VAL_COLUMNS])
     start, running = time.time(), []
 
     def save() -> None:
@@ -165,8 +207,8 @@ def main(argv: list[str] | None = None) -> int:
         if step % a.ckpt_every == 0 or step == a.steps or out_of_time:
             save()
         if step % a.val_every == 0 or step == a.steps or out_of_time:
-            v = validate(model, arch, val) if val else {"relmse_input": math.nan, "relmse_rae": math.nan, "temporal_rae": math.nan}
-            writer.writerow([step, round(time.time() - start, 1), float(np.mean(running)), sched.get_last_lr()[0], v["relmse_input"], v["relmse_rae"], v["temporal_rae"]])
+            v = validate(model, arch, val) if val else {}
+            writer.writerow([step, round(time.time() - start, 1), float(np.mean(running)), sched.get_last_lr()[0], *(v.get(c, math.nan) for c in VAL_COLUMNS)])
             logf.flush()
             print(f"step {step}: loss {np.mean(running):.4f} {json.dumps(v)} ({time.time() - start:.0f} s)", flush=True)
             running = []

@@ -53,3 +53,37 @@ def test_two_training_steps_write_checkpoint_log_and_weights(tmp_path: Path) -> 
     assert rows[0].startswith("step,") and rows[-1].startswith("2,")
     # Resuming at the last step runs nothing more and exports again.
     assert main(args) == 0
+
+
+def test_warm_start_copies_shared_tensors_and_input_columns_by_buffer() -> None:
+    from rae_weights import RecurrentAE
+    from rae_weights.train import warm_start
+
+    torch.manual_seed(0)
+    src_arch = Arch()  # color, normal, depth, roughness
+    src = RecurrentAE(src_arch).state_dict()
+    arch = Arch(inputs=["color", "albedo", "normal"])
+    model = RecurrentAE(arch)
+    fresh = model.state_dict()["d1.l1.0.weight"].clone()
+    n = warm_start(model, arch, src, src_arch)
+    got = model.state_dict()
+    assert n == len(got), "every tensor has a source: equal shapes, or the first conv by columns"
+    w, s = got["d1.l1.0.weight"], src["d1.l1.0.weight"]
+    assert torch.equal(w[:, 0:3], s[:, 0:3]), "color columns"
+    assert torch.equal(w[:, 6:9], s[:, 3:6]), "normal columns"
+    assert torch.equal(w[:, 3:6], fresh[:, 3:6]), "albedo has no source column: left as initialised"
+    assert torch.equal(got["u1.l1.3.weight"], src["u1.l1.3.weight"])
+
+
+def test_metrics_match_their_definitions() -> None:
+    from rae_weights import metrics
+
+    rng = np.random.default_rng(0)
+    r = rng.random((24, 17, 3)).astype(np.float32)
+    assert metrics.relmse(r, r) == 0 and metrics.psnr(r, r) == float("inf")
+    assert abs(metrics.ssim(r, r) - 1) < 1e-12
+    noisy = r + (rng.random(r.shape) < 0.1) * 0.5
+    assert metrics.ssim(noisy, r) < 0.99 and metrics.psnr(noisy, r) < 40
+    x = np.full((1, 1, 3), 3.0, dtype=np.float32)
+    assert abs(metrics.relmse(x, np.zeros_like(x)) - 900.0) < 1e-9, "(3-0)^2 / (0 + 0.01)"
+    assert metrics.temporal_error(r, noisy, r, noisy) == 0, "the same change as the reference"

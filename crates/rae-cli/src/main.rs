@@ -76,6 +76,9 @@ enum Command {
         /// Timed frames per size (after 2 warm-up frames).
         #[arg(long, default_value_t = 10)]
         frames: usize,
+        /// Also time every stage with GPU timestamp queries and print a table per size.
+        #[arg(long)]
+        layers: bool,
     },
 }
 
@@ -89,7 +92,7 @@ fn median(v: &mut [f64]) -> f64 {
     v[v.len() / 2]
 }
 
-fn bench(path: &Path, sizes: &[String], frames: usize) -> Result<()> {
+fn bench(path: &Path, sizes: &[String], frames: usize, layers: bool) -> Result<()> {
     let weights = Weights::load(path)?;
     let gpu = Gpu::new()?;
     let flop_px = 2.0 * Graph::new(&weights.arch).macs_per_pixel();
@@ -121,7 +124,36 @@ fn bench(path: &Path, sizes: &[String], frames: usize) -> Result<()> {
         let gflops = flop_px * (pw * ph) as f64 / (g * 1e-3) / 1e9;
         let mib = d.gpu_bytes() as f64 / (1 << 20) as f64;
         println!("{s:>10} {:>10.1} {:>10.2} {g:>10.1} {:>10.2} {gflops:>10.2} {mib:>10.1}", median(&mut total), median(&mut up), median(&mut down));
+        if layers {
+            stage_table(&mut d, &frame, &mut out, frames.max(1))?;
+        }
     }
+    Ok(())
+}
+
+/// Median GPU time of every stage over `frames` profiled frames, with its share and GFLOP/s.
+fn stage_table(d: &mut Denoiser, frame: &rae_core::FrameInputs, out: &mut [f32], frames: usize) -> Result<()> {
+    let runs: Vec<Vec<(String, f64)>> = (0..frames).map(|_| d.denoise_profiled(frame, out)).collect::<rae_core::Result<_>>()?;
+    let (pw, ph) = d.padded_size();
+    let nodes = &d.graph().nodes;
+    let mut rows: Vec<(String, f64, String, f64)> = Vec::new();
+    for (k, (name, _)) in runs[0].iter().enumerate() {
+        let mut t: Vec<f64> = runs.iter().map(|r| r[k].1).collect();
+        let ms = median(&mut t);
+        let node = k.checked_sub(1).and_then(|i| nodes.get(i));
+        let (shape, flop) = node.map_or((String::new(), 0.0), |n| {
+            let px = (pw >> n.level) as f64 * (ph >> n.level) as f64;
+            (format!("L{} {}->{}", n.level, n.cin(), n.cout), 2.0 * 9.0 * (n.cin() * n.cout) as f64 * px)
+        });
+        rows.push((name.clone(), ms, shape, flop));
+    }
+    let total: f64 = rows.iter().map(|r| r.1).sum();
+    println!("    {:<14} {:<16} {:>9} {:>7} {:>9}", "stage", "level cin->cout", "GPU ms", "share", "GFLOP/s");
+    for (name, ms, shape, flop) in &rows {
+        let rate = if *flop > 0.0 { format!("{:.2}", flop / (ms * 1e-3) / 1e9) } else { String::new() };
+        println!("    {name:<14} {shape:<16} {ms:>9.2} {:>6.1}% {rate:>9}", 100.0 * ms / total);
+    }
+    println!("    {:<14} {:<16} {total:>9.2}", "sum", "");
     Ok(())
 }
 
@@ -195,6 +227,6 @@ fn main() -> Result<()> {
         Command::Info { file } => info(&file),
         Command::Devices => devices(),
         Command::Verify { golden } => verify(&golden),
-        Command::Bench { weights, sizes, frames } => bench(&weights, &sizes, frames),
+        Command::Bench { weights, sizes, frames, layers } => bench(&weights, &sizes, frames, layers),
     }
 }

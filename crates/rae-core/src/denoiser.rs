@@ -14,8 +14,9 @@
 //!   convs run with a uniform block that reads zero channels from the hidden state, which is
 //!   exactly a zero hidden state (the skipped terms are the last summed), so frame 0 after
 //!   `reset()` is bit-identical to frame 0 of a fresh denoiser.
-//! - **Weights** sit in one rgba32float texture (texture loads are vectorised on lavapipe,
-//!   storage-buffer loads are not), bias and taps of every conv at fixed offsets.
+//! - **Weights** sit in one uniform buffer of 64 KiB chunks, one per (conv, output-block group),
+//!   bound by dynamic offset ([`ConvPlan`]): every invocation reads the same weight at once,
+//!   which lavapipe broadcasts from one load and a discrete GPU serves from its constant cache.
 //!
 //! Frames are `width x height`; the network runs at the size padded to a multiple of
 //! `2^levels` (the prep kernel replicates edge pixels into the padding) and the output kernel
@@ -26,8 +27,8 @@ use std::time::Instant;
 
 use crate::error::{Error, Result};
 use crate::frame::{FrameInputs, FrameTimings};
-use crate::graph::{Graph, Value};
-use crate::kernels::{self, ConvParams, ConvVariant, Kernels, OutputParams, PrepParams, WORKGROUP, blocks};
+use crate::graph::{Graph, Read, Value};
+use crate::kernels::{self, ConvPlan, ConvSpec, Kernels, OutputParams, PrepParams, WORKGROUP, blocks};
 use crate::model::{Arch, InputBuffer, Transfer};
 use crate::weights::Weights;
 
@@ -91,10 +92,9 @@ pub struct Denoiser {
     pwidth: u32,
     pheight: u32,
     kernels: Kernels,
-    conv_pipelines: Vec<wgpu::ComputePipeline>,
-    conv_dispatch: Vec<(u32, u32, u32)>,
-    /// `[reset][parity][node]`.
-    conv_groups: [[Vec<wgpu::BindGroup>; 2]; 2],
+    convs: ConvPlan,
+    /// `[parity][node]`.
+    conv_groups: [Vec<wgpu::BindGroup>; 2],
     prep_params: wgpu::Buffer,
     output_params: wgpu::Buffer,
     input_texture: wgpu::Texture,
@@ -173,76 +173,48 @@ impl Denoiser {
         let Value::Temp(out_temp) = graph.output else { unreachable!("the output is a temporary") };
         let output_view = slot_views[assign[out_temp]].clone();
 
-        // Weights: one texture, every conv at its offsets.
-        let (packed, offsets) = kernels::pack_all(&graph.nodes, weights);
-        let weight_texture = kernels::weight_texture(device, queue, &packed);
-        let weight_view = weight_texture.create_view(&Default::default());
-        bytes += weight_texture.size().width as u64 * weight_texture.size().height as u64 * 16;
-
-        // Conv uniforms: two slots per node (normal, reset), at the device's offset alignment.
-        let stride = (std::mem::size_of::<ConvParams>() as u64).next_multiple_of(limits.min_uniform_buffer_offset_alignment as u64);
-        let mut uniform = vec![0u8; (stride * 2 * graph.nodes.len() as u64) as usize];
-        for (i, node) in graph.nodes.iter().enumerate() {
-            let (w, h) = (pwidth >> node.level, pheight >> node.level);
-            let cin4_b = node.b.map_or(0, |b| blocks(b.channels));
-            for reset in 0..2 {
-                let reads_hidden = node.b.is_some_and(|b| matches!(b.value, Value::HiddenPrev(_)));
-                let p = ConvParams {
-                    width: w,
-                    height: h,
-                    cin4_a: blocks(node.a.channels),
-                    cin4_b: if reset == 1 && reads_hidden { 0 } else { cin4_b },
-                    cin4_total: blocks(node.a.channels) + cin4_b,
-                    cout4: blocks(node.cout),
-                    b_offset: offsets[i].0,
-                    t_offset: offsets[i].1,
-                    slope: arch.negative_slope,
-                    _pad: [0; 3],
-                };
-                let at = (stride * (2 * i + reset) as u64) as usize;
-                uniform[at..at + std::mem::size_of::<ConvParams>()].copy_from_slice(bytemuck::bytes_of(&p));
-            }
-        }
-        let conv_uniform = create_init(device, "conv params", &uniform, wgpu::BufferUsages::UNIFORM);
-
-        let conv_pipelines: Vec<_> = graph.nodes.iter().map(|n| kernels.conv(device, ConvVariant::of(n))).collect();
-        let conv_dispatch =
-            graph.nodes.iter().map(|n| kernels::conv_workgroups(pwidth >> n.level, pheight >> n.level, n.cout)).collect();
-        let conv_groups: [[Vec<wgpu::BindGroup>; 2]; 2] = std::array::from_fn(|reset| {
-            std::array::from_fn(|parity| {
-                graph
-                    .nodes
-                    .iter()
-                    .enumerate()
-                    .map(|(i, node)| {
-                        let src_b = node.b.map_or(&dummy_view, |b| view(b.value, parity));
-                        device.create_bind_group(&wgpu::BindGroupDescriptor {
-                            label: Some(&node.name),
-                            layout: &kernels.conv_layout,
-                            entries: &[
-                                wgpu::BindGroupEntry {
-                                    binding: 0,
-                                    resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                                        buffer: &conv_uniform,
-                                        offset: stride * (2 * i + reset) as u64,
-                                        size: wgpu::BufferSize::new(std::mem::size_of::<ConvParams>() as u64),
-                                    }),
-                                },
-                                wgpu::BindGroupEntry {
-                                    binding: 1,
-                                    resource: wgpu::BindingResource::TextureView(view(node.a.value, parity)),
-                                },
-                                wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::TextureView(src_b) },
-                                wgpu::BindGroupEntry { binding: 3, resource: wgpu::BindingResource::TextureView(&weight_view) },
-                                wgpu::BindGroupEntry {
-                                    binding: 4,
-                                    resource: wgpu::BindingResource::TextureView(view(node.out, parity)),
-                                },
-                            ],
-                        })
-                    })
-                    .collect()
+        // Weights and parameters of every conv, in uniform chunks (see kernels::ConvPlan).
+        let tensors: Vec<_> = graph
+            .nodes
+            .iter()
+            .map(|n| {
+                let w = weights.get(&format!("{}.weight", n.name)).expect("validated at load");
+                let b = weights.get(&format!("{}.bias", n.name)).expect("validated at load");
+                (w, b)
             })
+            .collect();
+        let specs: Vec<ConvSpec> = graph
+            .nodes
+            .iter()
+            .zip(&tensors)
+            .map(|(n, (w, b))| ConvSpec {
+                name: &n.name,
+                width: pwidth >> n.level,
+                height: pheight >> n.level,
+                ca: n.a.channels,
+                cb: n.b.map_or(0, |b| b.channels),
+                cout: n.cout,
+                weight: &w.data,
+                bias: &b.data,
+                read_a: n.a.read,
+                read_b: n.b.map_or(Read::Direct, |b| b.read),
+                leaky: n.leaky,
+                slope: arch.negative_slope,
+                b_is_hidden: n.b.is_some_and(|b| matches!(b.value, Value::HiddenPrev(_))),
+            })
+            .collect();
+        let convs = ConvPlan::new(device, &mut kernels, &specs)?;
+        bytes += convs.bytes();
+        // Bind groups of both parities (the reset variant only changes the dynamic offset).
+        let conv_groups: [Vec<wgpu::BindGroup>; 2] = std::array::from_fn(|parity| {
+            graph
+                .nodes
+                .iter()
+                .map(|node| {
+                    let src_b = node.b.map_or(&dummy_view, |b| view(b.value, parity));
+                    convs.bind_group(device, &kernels, view(node.a.value, parity), src_b, view(node.out, parity))
+                })
+                .collect()
         });
 
         // Prep and output uniforms.
@@ -284,8 +256,7 @@ impl Denoiser {
             pwidth,
             pheight,
             kernels,
-            conv_pipelines,
-            conv_dispatch,
+            convs,
             conv_groups,
             prep_params,
             output_params,
@@ -391,25 +362,37 @@ impl Denoiser {
     /// output buffer. Frames must be submitted in the order they are recorded (the hidden state
     /// advances at record time).
     pub fn record(&mut self, encoder: &mut wgpu::CommandEncoder, io: &IoBinding) -> Result<()> {
+        self.record_with(encoder, io, None)
+    }
+
+    /// [`Self::record`], writing a timestamp before the frame and after each stage into `queries`
+    /// (prep, every conv, output: [`Graph::nodes`]` + 3` queries).
+    fn record_with(&mut self, encoder: &mut wgpu::CommandEncoder, io: &IoBinding, queries: Option<&wgpu::QuerySet>) -> Result<()> {
         if io.owner != self.id {
             return Err(Error::GpuBuffer { buffer: "io", reason: "binding was made by another Denoiser".into() });
         }
-        let (reset, parity) = (self.reset_pending as usize, self.parity);
+        let (reset, parity) = (self.reset_pending, self.parity);
         {
             let mut pass =
                 encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("rae frame"), timestamp_writes: None });
+            let stamp = |pass: &mut wgpu::ComputePass, i: u32| {
+                if let Some(q) = queries {
+                    pass.write_timestamp(q, i);
+                }
+            };
+            stamp(&mut pass, 0);
             pass.set_pipeline(&self.kernels.prep);
             pass.set_bind_group(0, &io.prep, &[]);
             pass.dispatch_workgroups(self.pwidth.div_ceil(WORKGROUP), self.pheight.div_ceil(WORKGROUP), 1);
-            for (i, pipeline) in self.conv_pipelines.iter().enumerate() {
-                let (x, y, z) = self.conv_dispatch[i];
-                pass.set_pipeline(pipeline);
-                pass.set_bind_group(0, &self.conv_groups[reset][parity][i], &[]);
-                pass.dispatch_workgroups(x, y, z);
+            stamp(&mut pass, 1);
+            for (i, group) in self.conv_groups[parity].iter().enumerate() {
+                self.convs.record(&mut pass, i, reset, group);
+                stamp(&mut pass, 2 + i as u32);
             }
             pass.set_pipeline(&self.kernels.output);
             pass.set_bind_group(0, &io.output, &[]);
             pass.dispatch_workgroups(self.width.div_ceil(WORKGROUP), self.height.div_ceil(WORKGROUP), 1);
+            stamp(&mut pass, 2 + self.graph.nodes.len() as u32);
         }
         self.parity ^= 1;
         self.reset_pending = false;
@@ -452,6 +435,45 @@ impl Denoiser {
         let t3 = Instant::now();
         self.host = Some(host);
         result.map(|_| FrameTimings { upload: t1 - t0, gpu: t2 - t1, download: t3 - t2 })
+    }
+
+    /// Denoise one frame from host slices with a timestamp after every stage; returns each
+    /// stage's GPU time in milliseconds: `prep`, every conv by module name, `output`. Needs
+    /// `TIMESTAMP_QUERY_INSIDE_PASSES` (lavapipe and most Vulkan drivers have it).
+    pub fn denoise_profiled(&mut self, frame: &FrameInputs, out: &mut [f32]) -> Result<Vec<(String, f64)>> {
+        if !self.device.features().contains(wgpu::Features::TIMESTAMP_QUERY_INSIDE_PASSES) {
+            return Err(Error::Gpu("the device has no TIMESTAMP_QUERY_INSIDE_PASSES: no per-stage times".into()));
+        }
+        let needed = self.arch.required_buffers();
+        frame.validate(&needed, self.width, self.height)?;
+        if self.host.is_none() {
+            self.host = Some(self.make_host_io()?);
+        }
+        let count = self.graph.nodes.len() as u32 + 3;
+        let queries = self.device.create_query_set(&wgpu::QuerySetDescriptor { label: Some("stages"), ty: wgpu::QueryType::Timestamp, count });
+        let bytes = count as u64 * 8;
+        let buffer = |usage| self.device.create_buffer(&wgpu::BufferDescriptor { label: Some("timestamps"), size: bytes, usage, mapped_at_creation: false });
+        let resolved = buffer(wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC);
+        let readback = buffer(wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST);
+        let host = self.host.take().expect("made above");
+        for (b, buf) in &host.inputs {
+            self.queue.write_buffer(buf, 0, bytemuck::cast_slice(frame.get(*b).expect("validated")));
+        }
+        let mut encoder = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("rae frame (profiled)") });
+        let recorded = self.record_with(&mut encoder, &host.binding, Some(&queries));
+        encoder.resolve_query_set(&queries, 0..count, &resolved, 0);
+        encoder.copy_buffer_to_buffer(&resolved, 0, &readback, 0, bytes);
+        encoder.copy_buffer_to_buffer(&host.output, 0, &host.readback, 0, host.output.size());
+        self.queue.submit(Some(encoder.finish()));
+        let result = recorded.and_then(|_| read_buffer(&self.device, &host.readback, out));
+        self.host = Some(host);
+        result?;
+        let mut ticks = vec![0f32; 2 * count as usize];
+        read_buffer(&self.device, &readback, &mut ticks)?;
+        let ticks: &[u64] = bytemuck::cast_slice(&ticks);
+        let period = self.queue.get_timestamp_period() as f64;
+        let names = std::iter::once("prep".to_string()).chain(self.graph.nodes.iter().map(|n| n.name.clone())).chain(std::iter::once("output".to_string()));
+        Ok(names.zip(ticks.windows(2)).map(|(n, w)| (n, w[1].saturating_sub(w[0]) as f64 * period * 1e-6)).collect())
     }
 
     fn make_host_io(&self) -> Result<HostIo> {

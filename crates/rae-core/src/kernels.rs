@@ -5,8 +5,7 @@ use std::collections::HashMap;
 
 use bytemuck::{Pod, Zeroable};
 
-use crate::graph::{ConvNode, Read};
-use crate::weights::Weights;
+use crate::graph::Read;
 
 /// Every shader of rae, by name; the only place WGSL enters the crate.
 pub const SHADERS: &[(&str, &str)] = &[
@@ -16,9 +15,12 @@ pub const SHADERS: &[(&str, &str)] = &[
 ];
 
 /// Output rows per conv invocation (`ROWS` in conv3x3.wgsl).
-pub const CONV_ROWS: u32 = 4;
-/// Width of the weight texture in vec4s (`WEIGHT_ROW` in conv3x3.wgsl).
-pub const WEIGHT_ROW: u32 = 4096;
+pub const CONV_ROWS: u32 = 16;
+/// vec4s in one weight chunk (`CHUNK` in conv3x3.wgsl): a 64 KiB uniform binding, the limit
+/// every WebGPU device guarantees.
+pub const WEIGHT_CHUNK: u32 = 4096;
+/// Bytes of one weight-chunk binding.
+pub const WEIGHT_CHUNK_BYTES: u64 = WEIGHT_CHUNK as u64 * 16;
 /// Workgroup size in x and y of every kernel.
 pub const WORKGROUP: u32 = 8;
 /// Texture format of activations: a layer holds 4 channels.
@@ -34,7 +36,7 @@ pub fn blocks(channels: usize) -> u32 {
     channels.div_ceil(4) as u32
 }
 
-/// Uniform block of conv3x3.wgsl.
+/// Uniform block of conv3x3.wgsl: one per (conv, output-block group, reset).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable)]
 pub struct ConvParams {
@@ -48,16 +50,12 @@ pub struct ConvParams {
     pub cin4_b: u32,
     /// Input blocks in the weight layout.
     pub cin4_total: u32,
-    /// Output blocks stored.
-    pub cout4: u32,
-    /// Offset of the bias, in vec4s.
-    pub b_offset: u32,
-    /// Offset of the taps, in vec4s.
-    pub t_offset: u32,
+    /// First output block of the group.
+    pub ob0: u32,
+    /// Output blocks the group stores.
+    pub ob_count: u32,
     /// LeakyReLU slope.
     pub slope: f32,
-    /// Padding to 48 bytes.
-    pub _pad: [u32; 3],
 }
 
 /// Uniform block of prep.wgsl.
@@ -117,6 +115,19 @@ fn uniform_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
     }
 }
 
+fn dynamic_uniform_entry(binding: u32, size: u64) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Uniform,
+            has_dynamic_offset: true,
+            min_binding_size: wgpu::BufferSize::new(size),
+        },
+        count: None,
+    }
+}
+
 fn storage_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
@@ -137,19 +148,6 @@ fn texture_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
         ty: wgpu::BindingType::Texture {
             sample_type: wgpu::TextureSampleType::Float { filterable: false },
             view_dimension: wgpu::TextureViewDimension::D2Array,
-            multisampled: false,
-        },
-        count: None,
-    }
-}
-
-fn weight_texture_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Texture {
-            sample_type: wgpu::TextureSampleType::Float { filterable: false },
-            view_dimension: wgpu::TextureViewDimension::D2,
             multisampled: false,
         },
         count: None,
@@ -178,13 +176,8 @@ pub struct ConvVariant {
     pub read_b: Read,
     /// LeakyReLU or linear.
     pub leaky: bool,
-}
-
-impl ConvVariant {
-    /// The variant a node needs.
-    pub fn of(node: &ConvNode) -> Self {
-        Self { read_a: node.a.read, read_b: node.b.map_or(Read::Direct, |b| b.read), leaky: node.leaky }
-    }
+    /// Output blocks per invocation ([`blocks_per_invocation`]).
+    pub ob: u32,
 }
 
 /// Shader modules, layouts and pipelines of one device; conv pipelines are cached by variant.
@@ -218,7 +211,13 @@ impl Kernels {
         };
         let conv_layout = layout(
             "conv3x3",
-            &[uniform_entry(0), texture_entry(1), texture_entry(2), weight_texture_entry(3), storage_texture_entry(4)],
+            &[
+                dynamic_uniform_entry(0, std::mem::size_of::<ConvParams>() as u64),
+                texture_entry(1),
+                texture_entry(2),
+                dynamic_uniform_entry(3, WEIGHT_CHUNK_BYTES),
+                storage_texture_entry(4),
+            ],
         );
         let prep_layout = layout(
             "prep",
@@ -278,6 +277,7 @@ impl Kernels {
                     ("MODE_A", v.read_a as u32 as f64),
                     ("MODE_B", v.read_b as u32 as f64),
                     ("LEAKY", if v.leaky { 1.0 } else { 0.0 }),
+                    ("OB", v.ob as f64),
                 ];
                 device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                     label: Some("conv3x3"),
@@ -295,33 +295,24 @@ impl Kernels {
     }
 }
 
-/// Workgroups of a conv dispatch at `width` x `height` with `cout` output channels.
-pub fn conv_workgroups(width: u32, height: u32, cout: usize) -> (u32, u32, u32) {
-    (
-        width.div_ceil(WORKGROUP),
-        height.div_ceil(CONV_ROWS).div_ceil(WORKGROUP),
-        blocks(cout),
-    )
+/// Output blocks per invocation for a conv reading `cin4` input blocks: the most of 4, 2, 1
+/// whose taps and biases fit one weight chunk (more outputs per input fetch); `None` when not
+/// even one block fits (more than 113 input blocks, 452 channels).
+pub fn blocks_per_invocation(cin4: u32) -> Option<u32> {
+    [2, 1].into_iter().find(|&ob| (cin4 * 36 + 1) * ob <= WEIGHT_CHUNK)
 }
 
-/// A conv's bias and taps in the kernel's layout, appended to `out`; returns (bias, taps)
-/// offsets in vec4s.
+/// The weight chunk of output blocks `ob0 .. ob0 + ob` of a conv over `cat(a, b)`, laid out as
+/// conv3x3.wgsl reads it: taps `[in block][ky*3+kx][in lane][j]` -> vec4 over block `ob0 + j`'s
+/// 4 output channels, then `ob` bias vec4s.
 ///
-/// Bias: one vec4 per output block. Taps:
-/// `[out block][in block][ky*3+kx][in lane]` -> vec4 over the block's 4 output channels. Input
-/// blocks follow the sources: source a's channels padded to a multiple of 4, then source b's, so
-/// the kernel reads each source's texture layers without a concat. Padding weights are zero, so
-/// padding channels (always written as zero) contribute nothing.
-pub fn pack_conv(weight: &[f32], bias: &[f32], cout: usize, ca: usize, cb: usize, out: &mut Vec<[f32; 4]>) -> (u32, u32) {
+/// Input blocks follow the sources: source a's channels padded to a multiple of 4, then source
+/// b's, so the kernel reads each source's texture layers without a concat. Padding weights are
+/// zero, so padding channels (always written as zero) and padding outputs contribute nothing.
+pub fn pack_group(weight: &[f32], bias: &[f32], cout: usize, ca: usize, cb: usize, ob0: usize, ob: usize) -> Vec<[f32; 4]> {
     let cin = ca + cb;
     debug_assert_eq!(weight.len(), cout * cin * 9);
     let (ba, bb) = (blocks(ca) as usize, blocks(cb) as usize);
-    let cout4 = blocks(cout) as usize;
-    let b_offset = out.len() as u32;
-    for ob in 0..cout4 {
-        out.push(std::array::from_fn(|l| bias.get(4 * ob + l).copied().unwrap_or(0.0)));
-    }
-    let t_offset = out.len() as u32;
     // Input channel of (input block, lane), or None for padding.
     let channel = |ib: usize, lane: usize| -> Option<usize> {
         if ib < ba {
@@ -332,12 +323,13 @@ pub fn pack_conv(weight: &[f32], bias: &[f32], cout: usize, ca: usize, cb: usize
             (c < cb).then_some(ca + c)
         }
     };
-    for ob in 0..cout4 {
-        for ib in 0..ba + bb {
-            for tap in 0..9 {
-                for lane in 0..4 {
+    let mut out = Vec::with_capacity((ba + bb) * 36 * ob + ob);
+    for ib in 0..ba + bb {
+        for tap in 0..9 {
+            for lane in 0..4 {
+                for j in 0..ob {
                     out.push(std::array::from_fn(|l| {
-                        let o = 4 * ob + l;
+                        let o = 4 * (ob0 + j) + l;
                         match channel(ib, lane) {
                             Some(i) if o < cout => weight[(o * cin + i) * 9 + tap],
                             _ => 0.0,
@@ -347,43 +339,161 @@ pub fn pack_conv(weight: &[f32], bias: &[f32], cout: usize, ca: usize, cb: usize
             }
         }
     }
-    (b_offset, t_offset)
+    for j in 0..ob {
+        out.push(std::array::from_fn(|l| bias.get(4 * (ob0 + j) + l).copied().unwrap_or(0.0)));
+    }
+    out
 }
 
-/// Pack every conv of `nodes` from `weights` into one buffer's contents; returns the data and
-/// each node's (bias, taps) offsets.
-pub fn pack_all(nodes: &[ConvNode], weights: &Weights) -> (Vec<[f32; 4]>, Vec<(u32, u32)>) {
-    let mut data = Vec::new();
-    let offsets = nodes
-        .iter()
-        .map(|n| {
-            let w = weights.get(&format!("{}.weight", n.name)).expect("validated at load");
-            let b = weights.get(&format!("{}.bias", n.name)).expect("validated at load");
-            pack_conv(&w.data, &b.data, n.cout, n.a.channels, n.b.map_or(0, |b| b.channels), &mut data)
+/// One convolution to plan: its size, sources, weights and kernel variant.
+#[derive(Debug, Clone, Copy)]
+pub struct ConvSpec<'a> {
+    /// Module name, for errors and labels.
+    pub name: &'a str,
+    /// Output width (the convolution's resolution).
+    pub width: u32,
+    /// Output height.
+    pub height: u32,
+    /// Channels of source a (and how it is read).
+    pub ca: usize,
+    /// Channels of source b (0: none).
+    pub cb: usize,
+    /// Output channels.
+    pub cout: usize,
+    /// PyTorch layout `[cout][ca + cb][3][3]`.
+    pub weight: &'a [f32],
+    /// `[cout]`.
+    pub bias: &'a [f32],
+    /// Read modes of a and b.
+    pub read_a: Read,
+    /// Read mode of b (Direct when absent).
+    pub read_b: Read,
+    /// LeakyReLU after the conv.
+    pub leaky: bool,
+    /// LeakyReLU slope.
+    pub slope: f32,
+    /// Source b is a recurrent hidden state: a reset frame reads none of its channels.
+    pub b_is_hidden: bool,
+}
+
+/// One output-block group: a dispatch with its parameter and weight offsets.
+#[derive(Debug, Clone, Copy)]
+struct Group {
+    /// Offsets into the parameter buffer: normal frame, reset frame.
+    params: [u32; 2],
+    /// Offset into the weight buffer.
+    weights: u32,
+}
+
+/// A planned convolution: its pipeline, workgroups and groups.
+struct Planned {
+    pipeline: wgpu::ComputePipeline,
+    workgroups: (u32, u32),
+    groups: Vec<Group>,
+}
+
+/// Every convolution of a network, ready to dispatch: one uniform buffer of parameter blocks
+/// and one of weight chunks (each group's chunk at an aligned offset, bound by dynamic offset),
+/// and the pipeline and dispatches of each conv. Built once per [`crate::Denoiser`].
+pub struct ConvPlan {
+    params: wgpu::Buffer,
+    weights: wgpu::Buffer,
+    convs: Vec<Planned>,
+}
+
+impl ConvPlan {
+    /// Pack and upload every conv's weights and parameters; fails when a conv is too wide for
+    /// one weight chunk.
+    pub fn new(device: &wgpu::Device, kernels: &mut Kernels, specs: &[ConvSpec]) -> crate::Result<Self> {
+        use wgpu::util::DeviceExt;
+        let align = device.limits().min_uniform_buffer_offset_alignment as usize;
+        let mut params: Vec<u8> = Vec::new();
+        let mut weights: Vec<u8> = Vec::new();
+        let mut convs = Vec::with_capacity(specs.len());
+        for s in specs {
+            let (cin4_a, cin4_b) = (blocks(s.ca), blocks(s.cb));
+            let cin4 = cin4_a + cin4_b;
+            let ob = blocks_per_invocation(cin4).ok_or_else(|| crate::Error::Arch {
+                origin: s.name.to_string(),
+                reason: format!("{} input channels exceed one 64 KiB weight chunk (at most 452)", s.ca + s.cb),
+            })?;
+            let cout4 = blocks(s.cout);
+            let variant = ConvVariant { read_a: s.read_a, read_b: s.read_b, leaky: s.leaky, ob };
+            let mut groups = Vec::new();
+            for ob0 in (0..cout4).step_by(ob as usize) {
+                let mut group = Group { params: [0; 2], weights: 0 };
+                for reset in 0..2 {
+                    let p = ConvParams {
+                        width: s.width,
+                        height: s.height,
+                        cin4_a,
+                        cin4_b: if reset == 1 && s.b_is_hidden { 0 } else { cin4_b },
+                        cin4_total: cin4,
+                        ob0,
+                        ob_count: ob.min(cout4 - ob0),
+                        slope: s.slope,
+                    };
+                    params.resize(params.len().next_multiple_of(align), 0);
+                    group.params[reset] = params.len() as u32;
+                    params.extend_from_slice(bytemuck::bytes_of(&p));
+                }
+                weights.resize(weights.len().next_multiple_of(align), 0);
+                group.weights = weights.len() as u32;
+                let chunk = pack_group(s.weight, s.bias, s.cout, s.ca, s.cb, ob0 as usize, ob as usize);
+                weights.extend_from_slice(bytemuck::cast_slice(&chunk));
+                groups.push(group);
+            }
+            convs.push(Planned {
+                pipeline: kernels.conv(device, variant),
+                workgroups: (s.width.div_ceil(WORKGROUP), s.height.div_ceil(CONV_ROWS).div_ceil(WORKGROUP)),
+                groups,
+            });
+        }
+        // Every binding spans a whole chunk (and a whole parameter block) past its offset.
+        let last = convs.iter().flat_map(|c| &c.groups).map(|g| g.weights as u64).max().unwrap_or(0);
+        weights.resize((last + WEIGHT_CHUNK_BYTES) as usize, 0);
+        params.resize(params.len().next_multiple_of(16), 0);
+        let init = |label, contents: &[u8]| {
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some(label), contents, usage: wgpu::BufferUsages::UNIFORM })
+        };
+        Ok(Self { params: init("conv params", &params), weights: init("conv weights", &weights), convs })
+    }
+
+    /// Bytes of the weight and parameter buffers.
+    pub fn bytes(&self) -> u64 {
+        self.params.size() + self.weights.size()
+    }
+
+    /// Dispatches per frame.
+    pub fn dispatches(&self) -> usize {
+        self.convs.iter().map(|c| c.groups.len()).sum()
+    }
+
+    /// A bind group of the convs over the given textures (offsets are supplied per dispatch).
+    pub fn bind_group(&self, device: &wgpu::Device, kernels: &Kernels, a: &wgpu::TextureView, b: &wgpu::TextureView, dst: &wgpu::TextureView) -> wgpu::BindGroup {
+        let buffer = |buffer, size| {
+            wgpu::BindingResource::Buffer(wgpu::BufferBinding { buffer, offset: 0, size: wgpu::BufferSize::new(size) })
+        };
+        device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("conv3x3"),
+            layout: &kernels.conv_layout,
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: buffer(&self.params, std::mem::size_of::<ConvParams>() as u64) },
+                wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(a) },
+                wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::TextureView(b) },
+                wgpu::BindGroupEntry { binding: 3, resource: buffer(&self.weights, WEIGHT_CHUNK_BYTES) },
+                wgpu::BindGroupEntry { binding: 4, resource: wgpu::BindingResource::TextureView(dst) },
+            ],
         })
-        .collect();
-    (data, offsets)
-}
+    }
 
-/// Upload packed weights as the rgba32float texture conv3x3.wgsl reads, [`WEIGHT_ROW`] wide.
-pub fn weight_texture(device: &wgpu::Device, queue: &wgpu::Queue, packed: &[[f32; 4]]) -> wgpu::Texture {
-    use wgpu::util::DeviceExt;
-    let rows = (packed.len() as u32).div_ceil(WEIGHT_ROW).max(1);
-    let mut data = packed.to_vec();
-    data.resize((rows * WEIGHT_ROW) as usize, [0.0; 4]);
-    device.create_texture_with_data(
-        queue,
-        &wgpu::TextureDescriptor {
-            label: Some("weights"),
-            size: wgpu::Extent3d { width: WEIGHT_ROW, height: rows, depth_or_array_layers: 1 },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: ACTIVATION_FORMAT,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING,
-            view_formats: &[],
-        },
-        wgpu::util::TextureDataOrder::LayerMajor,
-        bytemuck::cast_slice(&data),
-    )
+    /// Record conv `i` (every output-block group) into a pass.
+    pub fn record(&self, pass: &mut wgpu::ComputePass, i: usize, reset: bool, group: &wgpu::BindGroup) {
+        let c = &self.convs[i];
+        pass.set_pipeline(&c.pipeline);
+        for g in &c.groups {
+            pass.set_bind_group(0, group, &[g.params[reset as usize], g.weights]);
+            pass.dispatch_workgroups(c.workgroups.0, c.workgroups.1, 1);
+        }
+    }
 }
