@@ -1,11 +1,19 @@
 // Output: network result (channel block 0 of a texture array, padded size) -> radiance, tightly
 // packed RGB f32 at the frame size (the padding is cropped here). Inverts the transfer function,
-// clamping first so the result is finite and non-negative, and remodulates by (albedo + eps).
+// clamping first so the result is finite, non-negative and bounded, and remodulates by
+// (albedo + eps).
+//
+// The bound: demodulated output radiance <= OUT_GAIN x the frame's largest demodulated input
+// radiance (prep.wgsl records its transfer-space value in `stats[0]`), and <= exp(80) - 1. A
+// denoiser moves energy between pixels; it does not make any, so a frame cannot come out
+// brighter than twice its brightest input, and an all-black frame comes out black
+// (rae-core `cpu::output_limit` is the same rule).
 
 const ALBEDO_MAX: f32 = 1e3;
 const RADIANCE_MAX: f32 = 1e8;
 // exp(80) - 1 ~ 5.5e34: finite in f32 with room for the albedo factor.
 const OUT_LOG_MAX: f32 = 80.0;
+const OUT_GAIN: f32 = 2.0;
 
 struct Params {
     width: u32,
@@ -22,6 +30,7 @@ struct Params {
 @group(0) @binding(1) var src: texture_2d_array<f32>;
 @group(0) @binding(2) var<storage, read> albedo: array<f32>;
 @group(0) @binding(3) var<storage, read_write> radiance: array<f32>;
+@group(0) @binding(4) var<storage, read> stats: array<u32, 4>;
 
 fn albedo_channel(v: f32) -> f32 {
     let b = bitcast<u32>(v);
@@ -37,11 +46,13 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let y = textureLoad(src, vec2<u32>(gid.x, gid.y), 0u, 0).xyz;
+    let in_max = bitcast<f32>(stats[0]);
     var r: vec3<f32>;
     if params.transfer == 1u {
-        r = exp(clamp(y, vec3<f32>(0.0), vec3<f32>(OUT_LOG_MAX))) - vec3<f32>(1.0);
+        let limit = min(log(1.0 + OUT_GAIN * (exp(in_max) - 1.0)), OUT_LOG_MAX);
+        r = exp(clamp(y, vec3<f32>(0.0), vec3<f32>(limit))) - vec3<f32>(1.0);
     } else {
-        r = clamp(y, vec3<f32>(0.0), vec3<f32>(RADIANCE_MAX));
+        r = clamp(y, vec3<f32>(0.0), vec3<f32>(min(OUT_GAIN * in_max, RADIANCE_MAX)));
     }
     let i = gid.y * params.width + gid.x;
     if params.demodulate != 0u {

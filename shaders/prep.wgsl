@@ -6,6 +6,10 @@
 // that transfer; depth goes through log1p. Only the buffers the model declares are packed, at the
 // channel offsets the host computed from the model. Pixels past the frame (padding to a multiple
 // of 2^levels) replicate the nearest edge pixel.
+//
+// It also records the frame's largest prepared color value in `stats` (cleared by the host
+// before the pass), which output.wgsl uses to bound the result. Prepared color is >= 0, so its
+// bits order like u32s and an atomicMax on the bits is a max on the values.
 
 const NONE: u32 = 0xffffffffu;
 const RADIANCE_MAX: f32 = 1e8;
@@ -38,6 +42,10 @@ struct Params {
 @group(0) @binding(4) var<storage, read> depth: array<f32>;
 @group(0) @binding(5) var<storage, read> roughness: array<f32>;
 @group(0) @binding(6) var dst: texture_storage_2d_array<rgba32float, write>;
+// [0]: bits of the largest prepared color value of the frame.
+@group(0) @binding(7) var<storage, read_write> stats: array<atomic<u32>, 4>;
+
+var<workgroup> group_max: atomic<u32>;
 
 // NaN -> 0, +Inf -> posinf, -Inf -> lo, then clamp to [lo, hi]. Decided on the bits, so no
 // compiler assumption about NaN can remove the test.
@@ -66,12 +74,26 @@ fn albedo_at(i: u32) -> vec3<f32> {
 }
 
 @compute @workgroup_size(8, 8, 1)
-fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    if gid.x >= params.pwidth || gid.y >= params.pheight {
-        return;
+fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) li: u32) {
+    if li == 0u {
+        atomicStore(&group_max, 0u);
     }
+    workgroupBarrier();
+    let inside = gid.x < params.pwidth && gid.y < params.pheight;
+    if inside {
+        atomicMax(&group_max, prepare(gid.xy));
+    }
+    workgroupBarrier();
+    if li == 0u {
+        atomicMax(&stats[0], atomicLoad(&group_max));
+    }
+}
+
+// Prepare and store one pixel of the padded input; returns the bits of its largest color value.
+fn prepare(gid: vec2<u32>) -> u32 {
     let i = min(gid.y, params.height - 1u) * params.width + min(gid.x, params.width - 1u);
     var ch: array<f32, 16>;
+    var color_max = 0.0;
 
     if params.off_color != NONE {
         let c = vec3<f32>(color[3u * i], color[3u * i + 1u], color[3u * i + 2u]);
@@ -86,6 +108,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         if params.transfer == 1u {
             s = log(vec3<f32>(1.0) + s);
         }
+        color_max = max(s.x, max(s.y, s.z));
         ch[params.off_color] = s.x;
         ch[params.off_color + 1u] = s.y;
         ch[params.off_color + 2u] = s.z;
@@ -112,4 +135,5 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         let v = vec4<f32>(ch[4u * l], ch[4u * l + 1u], ch[4u * l + 2u], ch[4u * l + 3u]);
         textureStore(dst, vec2<u32>(gid.x, gid.y), l, v);
     }
+    return bitcast<u32>(color_max);
 }

@@ -235,7 +235,7 @@ fn whole_pipeline_matches_cpu_on_odd_sizes() {
             assert_eq!(got.len(), w * h * 3, "output is cropped to the frame");
             let x = cpu::prepare(&weights.arch, &frame_of(&b), w, h, pw as usize, ph as usize);
             let y = cpu_net.forward(&x);
-            let want = cpu::finish(&weights.arch, &y, Some(&b[1]), w, h);
+            let want = cpu::finish(&weights.arch, &y, cpu::color_max(&x), Some(&b[1]), w, h);
             crate::assert_close(Tolerance { rel: 1e-4 }, &format!("{name} frame {t}"), &got, &want);
         }
     }

@@ -20,6 +20,8 @@ ALBEDO_MAX = 1e3
 DEPTH_MAX = 1e6
 #: The network output is clamped to [0, OUT_LOG_MAX] before the inverse transfer (no overflow).
 OUT_LOG_MAX = 80.0
+#: Denoised demodulated radiance is at most OUT_GAIN x the frame's largest demodulated input.
+OUT_GAIN = 2.0
 
 
 def _conv(cin: int, cout: int) -> nn.Conv2d:
@@ -148,12 +150,29 @@ def prepare_input(arch: Arch, frame: dict[str, torch.Tensor]) -> torch.Tensor:
     return torch.cat(parts, dim=1)
 
 
-def finish_output(arch: Arch, y: torch.Tensor, frame: dict[str, torch.Tensor]) -> torch.Tensor:
-    """Network output -> radiance, as ``output.wgsl`` does: inverse transfer, remodulation."""
+def prepared_color(arch: Arch, frame: dict[str, torch.Tensor]) -> torch.Tensor:
+    """Color as the network sees it (sanitised, demodulated, transfer applied), NCHW."""
+    b = sanitize_buffers({k: v for k, v in frame.items() if k in ("color", "albedo")})
+    t = b["color"]
+    if arch.demodulate:
+        t = t / (b["albedo"] + arch.albedo_eps)
+    return torch.log1p(t) if arch.transfer == "log1p" else t
+
+
+def output_limit(arch: Arch, in_max: torch.Tensor) -> torch.Tensor:
+    """Upper clamp of the network output given each frame's largest prepared color (rae-core
+    ``cpu::output_limit``): output radiance <= OUT_GAIN x the brightest input, and finite."""
     if arch.transfer == "log1p":
-        r = torch.expm1(y.clamp(0.0, OUT_LOG_MAX))
-    else:
-        r = y.clamp(0.0, RADIANCE_MAX)
+        return torch.log1p(OUT_GAIN * torch.expm1(in_max)).clamp(max=OUT_LOG_MAX)
+    return (OUT_GAIN * in_max).clamp(max=RADIANCE_MAX)
+
+
+def finish_output(arch: Arch, y: torch.Tensor, frame: dict[str, torch.Tensor]) -> torch.Tensor:
+    """Network output -> radiance, as ``output.wgsl`` does: clamp to [0, output_limit], inverse
+    transfer, remodulation."""
+    in_max = prepared_color(arch, frame).to(y.dtype).amax(dim=(1, 2, 3), keepdim=True)
+    y = torch.minimum(y.clamp(min=0.0), output_limit(arch, in_max))
+    r = torch.expm1(y) if arch.transfer == "log1p" else y
     if arch.demodulate:
         albedo = sanitize_buffers({"albedo": frame["albedo"]})["albedo"]
         r = r * (albedo + arch.albedo_eps)

@@ -27,8 +27,12 @@ def test_target_space_is_inverted_by_the_output_stage() -> None:
     ref = torch.rand(1, 3, 8, 8) * 20
     albedo = torch.rand(1, 3, 8, 8)
     y = target_space(arch, {"reference": ref, "albedo": albedo})
-    back = finish_output(arch, y, {"albedo": albedo})
+    # The input frame bounds the output (2x its brightest demodulated value): use the reference.
+    back = finish_output(arch, y, {"albedo": albedo, "color": ref})
     assert torch.allclose(back, ref, rtol=1e-4, atol=1e-5)
+    # A black input frame bounds everything to black, whatever the network says.
+    black = finish_output(arch, y, {"albedo": albedo, "color": torch.zeros_like(ref)})
+    assert black.abs().max().item() == 0.0
 
 
 def _write_sequence(folder: Path, frames: int, size: int) -> None:

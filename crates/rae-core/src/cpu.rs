@@ -173,6 +173,25 @@ pub mod limits {
     pub const DEPTH_MAX: f32 = 1e6;
     /// The network output is clamped to `[0, OUT_LOG_MAX]` before `exp(y) - 1`.
     pub const OUT_LOG_MAX: f32 = 80.0;
+    /// The output's demodulated radiance is at most `OUT_GAIN` times the frame's largest
+    /// demodulated input radiance (see [`super::output_limit`]).
+    pub const OUT_GAIN: f32 = 2.0;
+}
+
+/// Largest prepared color value (channels 0..3, transfer space) of a packed network input.
+pub fn color_max(x: &Chw) -> f32 {
+    x.data[..3 * x.h * x.w].iter().fold(0.0f32, |m, &v| m.max(v))
+}
+
+/// Upper clamp of the network output (transfer space) given the frame's largest prepared color
+/// `in_max`: the denoised demodulated radiance never exceeds `OUT_GAIN` times the brightest
+/// demodulated input radiance of the frame (a denoiser redistributes energy, it does not make
+/// it), nor `exp(OUT_LOG_MAX) - 1`. An all-black frame therefore gives an all-black result.
+pub fn output_limit(arch: &crate::Arch, in_max: f32) -> f32 {
+    match arch.transfer {
+        crate::model::Transfer::Log1p => ((limits::OUT_GAIN * (in_max.exp() - 1.0)).ln_1p()).min(limits::OUT_LOG_MAX),
+        crate::model::Transfer::None => (limits::OUT_GAIN * in_max).min(limits::RADIANCE_MAX),
+    }
 }
 
 /// NaN -> 0, +Inf -> `posinf`, -Inf -> `lo`, then clamp to `[lo, hi]`.
@@ -228,16 +247,17 @@ pub fn prepare(arch: &crate::Arch, frame: &crate::FrameInputs, w: usize, h: usiz
 }
 
 /// The output kernel on the CPU: raw network output (padded) -> RGB radiance at `w x h`.
-pub fn finish(arch: &crate::Arch, y: &Chw, albedo: Option<&[f32]>, w: usize, h: usize) -> Vec<f32> {
+pub fn finish(arch: &crate::Arch, y: &Chw, in_max: f32, albedo: Option<&[f32]>, w: usize, h: usize) -> Vec<f32> {
     use crate::model::Transfer;
+    let limit = output_limit(arch, in_max);
     let mut out = vec![0.0; w * h * 3];
     for py in 0..h {
         for px in 0..w {
             for k in 0..3 {
-                let v = y.at(k, py, px);
+                let v = y.at(k, py, px).clamp(0.0, limit);
                 let mut r = match arch.transfer {
-                    Transfer::Log1p => v.clamp(0.0, limits::OUT_LOG_MAX).exp() - 1.0,
-                    Transfer::None => v.clamp(0.0, limits::RADIANCE_MAX),
+                    Transfer::Log1p => v.exp() - 1.0,
+                    Transfer::None => v,
                 };
                 let i = py * w + px;
                 if arch.demodulate {

@@ -100,6 +100,9 @@ pub struct Denoiser {
     input_texture: wgpu::Texture,
     output_view: wgpu::TextureView,
     dummy: wgpu::Buffer,
+    /// Per-frame statistics prep writes and output reads (the frame's largest prepared color);
+    /// cleared at the start of every frame.
+    stats: wgpu::Buffer,
     textures: Vec<wgpu::Texture>,
     bytes: u64,
     host: Option<HostIo>,
@@ -244,6 +247,7 @@ impl Denoiser {
         let prep_params = create_init(device, "prep params", bytemuck::bytes_of(&prep), wgpu::BufferUsages::UNIFORM);
         let output_params = create_init(device, "output params", bytemuck::bytes_of(&out), wgpu::BufferUsages::UNIFORM);
         let dummy = create_init(device, "absent buffer", &[0u8; 16], wgpu::BufferUsages::STORAGE);
+        let stats = create_init(device, "frame stats", &[0u8; 16], wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST);
 
         Ok(Self {
             id: NEXT_ID.fetch_add(1, Ordering::Relaxed),
@@ -263,6 +267,7 @@ impl Denoiser {
             input_texture,
             output_view,
             dummy,
+            stats,
             textures,
             bytes,
             host: None,
@@ -343,6 +348,7 @@ impl Denoiser {
                         },
                     )),
                 },
+                wgpu::BindGroupEntry { binding: 7, resource: self.stats.as_entire_binding() },
             ],
         });
         let output = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -353,6 +359,7 @@ impl Denoiser {
                 wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&self.output_view) },
                 wgpu::BindGroupEntry { binding: 2, resource: pick(InputBuffer::Albedo).as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 3, resource: io.output.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 4, resource: self.stats.as_entire_binding() },
             ],
         });
         Ok(IoBinding { owner: self.id, prep, output })
@@ -372,6 +379,7 @@ impl Denoiser {
             return Err(Error::GpuBuffer { buffer: "io", reason: "binding was made by another Denoiser".into() });
         }
         let (reset, parity) = (self.reset_pending, self.parity);
+        encoder.clear_buffer(&self.stats, 0, None);
         {
             let mut pass =
                 encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("rae frame"), timestamp_writes: None });

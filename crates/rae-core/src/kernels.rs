@@ -229,10 +229,11 @@ impl Kernels {
                 storage_entry(4, true),
                 storage_entry(5, true),
                 storage_texture_entry(6),
+                storage_entry(7, false),
             ],
         );
         let output_layout =
-            layout("output", &[uniform_entry(0), texture_entry(1), storage_entry(2, true), storage_entry(3, false)]);
+            layout("output", &[uniform_entry(0), texture_entry(1), storage_entry(2, true), storage_entry(3, false), storage_entry(4, true)]);
         let pipeline_layout = |bgl: &wgpu::BindGroupLayout| {
             device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
                 label: None,
