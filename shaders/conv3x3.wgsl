@@ -24,6 +24,8 @@ override MODE_B: u32 = 0u;
 override LEAKY: bool = true;
 // Output blocks (4 channels each) per invocation: 1 or 2 (kernels::blocks_per_invocation).
 override OB: u32 = 2u;
+// Largest magnitude stored: f32::MAX for f32 activations, 65504 for f16 (no infinities).
+override STORE_MAX: f32 = 3.4028234e38;
 
 // Register tile: each invocation computes 16 output rows x OB output blocks at one x, in named
 // accumulators: no indexable local arrays, which lavapipe would keep in per-lane scratch memory.
@@ -153,10 +155,11 @@ fn accumulate(acc0: ptr<function, Tile>, acc1: ptr<function, Tile>, t: texture_2
 }
 
 fn activate(v: vec4<f32>) -> vec4<f32> {
+    var a = v;
     if LEAKY {
-        return select(v * params.slope, v, v >= vec4<f32>(0.0));
+        a = select(v * params.slope, v, v >= vec4<f32>(0.0));
     }
-    return v;
+    return clamp(a, vec4<f32>(-STORE_MAX), vec4<f32>(STORE_MAX));
 }
 
 fn store(acc: Tile, x: u32, y0: u32, layer: u32) {

@@ -15,6 +15,8 @@ const NONE: u32 = 0xffffffffu;
 const RADIANCE_MAX: f32 = 1e8;
 const ALBEDO_MAX: f32 = 1e3;
 const DEPTH_MAX: f32 = 1e6;
+// Largest magnitude stored: f32::MAX for f32 activations, 65504 for f16.
+override STORE_MAX: f32 = 3.4028234e38;
 
 struct Params {
     width: u32,        // frame size
@@ -132,7 +134,7 @@ fn prepare(gid: vec2<u32>) -> u32 {
         ch[params.off_roughness] = sanitize(roughness[i], 0.0, 1.0, 0.0);
     }
     for (var l = 0u; l < params.layers; l++) {
-        let v = vec4<f32>(ch[4u * l], ch[4u * l + 1u], ch[4u * l + 2u], ch[4u * l + 3u]);
+        let v = clamp(vec4<f32>(ch[4u * l], ch[4u * l + 1u], ch[4u * l + 2u], ch[4u * l + 3u]), vec4<f32>(-STORE_MAX), vec4<f32>(STORE_MAX));
         textureStore(dst, vec2<u32>(gid.x, gid.y), l, v);
     }
     return bitcast<u32>(color_max);

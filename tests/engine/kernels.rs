@@ -10,7 +10,7 @@ use wgpu::util::DeviceExt;
 use crate::{Tolerance, fixture, gpu};
 
 /// Deterministic pseudo-random values in [-1, 1) (xorshift), so the test needs no RNG crate.
-fn noise(n: usize, seed: u64) -> Vec<f32> {
+pub fn noise(n: usize, seed: u64) -> Vec<f32> {
     let mut s = seed.wrapping_mul(0x9E3779B97F4A7C15) | 1;
     (0..n)
         .map(|_| {
@@ -57,7 +57,7 @@ fn gpu_conv(a: (&Chw, Read), b: Option<(&Chw, Read)>, weight: &[f32], bias: &[f3
     let g = gpu();
     let dev = &g.device;
     let cout = bias.len();
-    let mut kernels = Kernels::new(dev);
+    let mut kernels = Kernels::new(dev, kernels::Precision::F32);
     let cb = b.map_or(0, |b| b.0.c);
     let spec = ConvSpec {
         name: "test",
@@ -157,7 +157,7 @@ fn conv_wide_input_uses_one_block_per_invocation_and_matches_cpu() {
 #[test]
 fn conv_too_wide_for_a_weight_chunk_is_an_error() {
     let g = gpu();
-    let mut kernels = Kernels::new(&g.device);
+    let mut kernels = Kernels::new(&g.device, kernels::Precision::F32);
     let (weight, bias) = (vec![0.0; 4 * 460 * 9], vec![0.0; 4]);
     let spec = ConvSpec {
         name: "d1.l1.0",

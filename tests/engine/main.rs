@@ -7,6 +7,7 @@
 mod golden;
 mod kernels;
 mod shaders;
+mod stability;
 mod state;
 mod weights;
 

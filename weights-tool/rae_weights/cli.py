@@ -61,6 +61,8 @@ def main(argv: list[str] | None = None) -> int:
     g.set_defaults(func=_golden)
     sub.add_parser("train", help="train on rae-trace sequences (see `train --help`)", add_help=False)
     sub.add_parser("bench", help="PyTorch CPU time per frame of a weights file (see `bench --help`)", add_help=False)
+    sub.add_parser("evaluate", help="held-out metrics of models, noisy input and OIDN (see `evaluate --help`)", add_help=False)
+    sub.add_parser("ranges", help="activation ranges and f16 headroom on real sequences (see `ranges --help`)", add_help=False)
     if argv is None:
         import sys as _sys
         argv = _sys.argv[1:]
@@ -72,6 +74,14 @@ def main(argv: list[str] | None = None) -> int:
         from .bench import main as bench_main
 
         return bench_main(argv[1:])
+    if argv and argv[0] == "evaluate":
+        from .evaluate import main as evaluate_main
+
+        return evaluate_main(argv[1:])
+    if argv and argv[0] == "ranges":
+        from .ranges import main as ranges_main
+
+        return ranges_main(argv[1:])
     args = p.parse_args(argv)
     try:
         return args.func(args)

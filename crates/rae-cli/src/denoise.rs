@@ -7,7 +7,7 @@ use std::time::Duration;
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
 use rae_core::io::{self, Sequence, Slot};
-use rae_core::{Denoiser, Gpu, InputBuffer, Weights, metrics};
+use rae_core::{Denoiser, Gpu, InputBuffer, Precision, Weights, metrics};
 
 /// What `denoise` was asked to do.
 pub struct Options {
@@ -29,6 +29,8 @@ pub struct Options {
     pub half: bool,
     /// Sanitize NaN/Inf input values instead of refusing the frame.
     pub allow_nonfinite: bool,
+    /// Storage precision of activations on the GPU.
+    pub precision: Precision,
 }
 
 /// Parse `A..B`, `A..`, `..B` or `A` (inclusive frame numbers).
@@ -141,7 +143,7 @@ pub fn run(o: &Options) -> Result<()> {
     prepare_output(&o.input, &out_dir)?;
 
     let gpu = Gpu::new()?;
-    let mut d = Denoiser::new(&gpu.device, &gpu.queue, &weights, seq.width, seq.height)?;
+    let mut d = Denoiser::with_precision(&gpu.device, &gpu.queue, &weights, seq.width, seq.height, o.precision)?;
     let used: Vec<&str> = weights.arch.required_buffers().iter().map(|b| b.name()).collect();
     println!("input:   {} ({}, {} frames {}..{}, {}x{})", o.input.display(), seq.layout, seq.numbers.len(), seq.numbers[0], seq.numbers[seq.numbers.len() - 1], seq.width, seq.height);
     println!("buffers: {:?}{}", seq.slots.iter().map(|s| s.name()).collect::<Vec<_>>(), if seq.has_reference() { " (reference used for error only)" } else { "" });

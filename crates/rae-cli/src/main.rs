@@ -9,7 +9,7 @@ use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand};
 use rae_core::golden::{Golden, Tolerance};
 use rae_core::graph::Graph;
-use rae_core::{Denoiser, Gpu, Weights};
+use rae_core::{Denoiser, Gpu, Precision, Weights};
 
 #[derive(Parser)]
 #[command(name = "rae-cli", version, about = "Recurrent denoising autoencoder for path-traced sequences, on wgpu")]
@@ -44,6 +44,9 @@ enum Command {
         /// Also write tonemapped sRGB PNG previews.
         #[arg(long)]
         png: bool,
+        /// Storage precision of activations on the GPU (arithmetic is f32 either way).
+        #[arg(long, value_enum, default_value_t = PrecisionArg::F32)]
+        precision: PrecisionArg,
         /// Write half-float EXR instead of float.
         #[arg(long)]
         half: bool,
@@ -79,7 +82,28 @@ enum Command {
         /// Also time every stage with GPU timestamp queries and print a table per size.
         #[arg(long)]
         layers: bool,
+        /// Storage precisions to time.
+        #[arg(long, value_enum, value_delimiter = ',', default_value = "f32,f16")]
+        precision: Vec<PrecisionArg>,
     },
+}
+
+/// `--precision` values.
+#[derive(Debug, Clone, Copy, clap::ValueEnum)]
+enum PrecisionArg {
+    /// rgba32float activations.
+    F32,
+    /// rgba16float activations (f32 arithmetic).
+    F16,
+}
+
+impl From<PrecisionArg> for Precision {
+    fn from(p: PrecisionArg) -> Self {
+        match p {
+            PrecisionArg::F32 => Precision::F32,
+            PrecisionArg::F16 => Precision::F16,
+        }
+    }
 }
 
 fn parse_size(s: &str) -> Result<(u32, u32)> {
@@ -92,15 +116,17 @@ fn median(v: &mut [f64]) -> f64 {
     v[v.len() / 2]
 }
 
-fn bench(path: &Path, sizes: &[String], frames: usize, layers: bool) -> Result<()> {
+fn bench(path: &Path, sizes: &[String], frames: usize, layers: bool, precisions: &[PrecisionArg]) -> Result<()> {
     let weights = Weights::load(path)?;
     let gpu = Gpu::new()?;
     let flop_px = 2.0 * Graph::new(&weights.arch).macs_per_pixel();
     println!("adapter: {}; weights: {}; {frames} timed frames after 2 warm-up", gpu.describe(), path.display());
-    println!("{:>10} {:>10} {:>10} {:>10} {:>10} {:>10} {:>10}", "size", "total ms", "upload", "gpu", "download", "GFLOP/s", "GPU MiB");
-    for s in sizes {
+    println!("{:>10} {:>9} {:>10} {:>10} {:>10} {:>10} {:>10} {:>10}", "size", "precision", "total ms", "upload", "gpu", "download", "GFLOP/s", "GPU MiB");
+    for (s, &p) in sizes.iter().flat_map(|s| precisions.iter().map(move |p| (s, p))) {
         let (w, h) = parse_size(s)?;
-        let mut d = Denoiser::new(&gpu.device, &gpu.queue, &weights, w, h)?;
+        let precision = Precision::from(p);
+        let mut d = Denoiser::with_precision(&gpu.device, &gpu.queue, &weights, w, h, precision)
+            .with_context(|| format!("building the {} denoiser at {s}", precision.name()))?;
         let n = (w * h) as usize;
         // Smooth, noisy, deterministic buffers: the timing does not depend on values.
         let wave: Vec<f32> = (0..3 * n).map(|i| 0.5 + 0.5 * ((i as f32) * 0.37).sin()).collect();
@@ -123,7 +149,7 @@ fn bench(path: &Path, sizes: &[String], frames: usize, layers: bool) -> Result<(
         let g = median(&mut gpu_t);
         let gflops = flop_px * (pw * ph) as f64 / (g * 1e-3) / 1e9;
         let mib = d.gpu_bytes() as f64 / (1 << 20) as f64;
-        println!("{s:>10} {:>10.1} {:>10.2} {g:>10.1} {:>10.2} {gflops:>10.2} {mib:>10.1}", median(&mut total), median(&mut up), median(&mut down));
+        println!("{s:>10} {:>9} {:>10.1} {:>10.2} {g:>10.1} {:>10.2} {gflops:>10.2} {mib:>10.1}", precision.name(), median(&mut total), median(&mut up), median(&mut down));
         if layers {
             stage_table(&mut d, &frame, &mut out, frames.max(1))?;
         }
@@ -220,13 +246,13 @@ fn verify(files: &[PathBuf]) -> Result<()> {
 
 fn main() -> Result<()> {
     match Cli::parse().command {
-        Command::Denoise { input, output, weights, models, frames, reset_at, png, half, allow_nonfinite } => {
+        Command::Denoise { input, output, weights, models, frames, reset_at, png, half, allow_nonfinite, precision } => {
             let frames = frames.as_deref().map(denoise::parse_range).transpose()?;
-            denoise::run(&denoise::Options { input, output, weights, models, frames, reset_at, png, half, allow_nonfinite })
+            denoise::run(&denoise::Options { input, output, weights, models, frames, reset_at, png, half, allow_nonfinite, precision: precision.into() })
         }
         Command::Info { file } => info(&file),
         Command::Devices => devices(),
         Command::Verify { golden } => verify(&golden),
-        Command::Bench { weights, sizes, frames, layers } => bench(&weights, &sizes, frames, layers),
+        Command::Bench { weights, sizes, frames, layers, precision } => bench(&weights, &sizes, frames, layers, &precision),
     }
 }

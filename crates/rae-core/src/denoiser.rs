@@ -28,7 +28,7 @@ use std::time::Instant;
 use crate::error::{Error, Result};
 use crate::frame::{FrameInputs, FrameTimings};
 use crate::graph::{Graph, Read, Value};
-use crate::kernels::{self, ConvPlan, ConvSpec, Kernels, OutputParams, PrepParams, WORKGROUP, blocks};
+use crate::kernels::{ConvPlan, ConvSpec, Kernels, OutputParams, PrepParams, Precision, WORKGROUP, blocks};
 use crate::model::{Arch, InputBuffer, Transfer};
 use crate::weights::Weights;
 
@@ -104,20 +104,23 @@ pub struct Denoiser {
     /// cleared at the start of every frame.
     stats: wgpu::Buffer,
     textures: Vec<wgpu::Texture>,
+    /// `[block][0|1]`, as in the module docs.
+    hidden_textures: Vec<[wgpu::Texture; 2]>,
+    precision: Precision,
     bytes: u64,
     host: Option<HostIo>,
     parity: usize,
     reset_pending: bool,
 }
 
-fn texture(device: &wgpu::Device, label: &str, w: u32, h: u32, layers: u32) -> (wgpu::Texture, wgpu::TextureView) {
+fn texture(device: &wgpu::Device, label: &str, w: u32, h: u32, layers: u32, format: wgpu::TextureFormat) -> (wgpu::Texture, wgpu::TextureView) {
     let t = device.create_texture(&wgpu::TextureDescriptor {
         label: Some(label),
         size: wgpu::Extent3d { width: w, height: h, depth_or_array_layers: layers },
         mip_level_count: 1,
         sample_count: 1,
         dimension: wgpu::TextureDimension::D2,
-        format: kernels::ACTIVATION_FORMAT,
+        format,
         usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC,
         view_formats: &[],
     });
@@ -129,9 +132,14 @@ fn texture(device: &wgpu::Device, label: &str, w: u32, h: u32, layers: u32) -> (
 }
 
 impl Denoiser {
-    /// Build everything for `weights` at `width` x `height` on a device: pipelines, textures,
-    /// weights, uniforms and the bind groups of both hidden-state parities.
+    /// Build everything for `weights` at `width` x `height` on a device, with f32 activations:
+    /// pipelines, textures, weights, uniforms and the bind groups of both hidden-state parities.
     pub fn new(device: &wgpu::Device, queue: &wgpu::Queue, weights: &Weights, width: u32, height: u32) -> Result<Self> {
+        Self::with_precision(device, queue, weights, width, height, Precision::F32)
+    }
+
+    /// [`Self::new`] with activations and hidden state stored in `precision`.
+    pub fn with_precision(device: &wgpu::Device, queue: &wgpu::Queue, weights: &Weights, width: u32, height: u32, precision: Precision) -> Result<Self> {
         let arch = weights.arch.clone();
         let multiple = 1u32 << arch.levels();
         let limits = device.limits();
@@ -144,27 +152,27 @@ impl Denoiser {
             return Err(size_err(format!("exceeds the device's texture limit {}", limits.max_texture_dimension_2d)));
         }
         let graph = Graph::new(&arch);
-        let mut kernels = Kernels::new(device);
+        let mut kernels = Kernels::new(device, precision);
+        let format = precision.format();
         let mut textures = Vec::new();
         let mut bytes = 0u64;
         let mut make = |label: &str, level: usize, channels: usize| {
             let (w, h, l) = (pwidth >> level, pheight >> level, blocks(channels));
-            bytes += w as u64 * h as u64 * l as u64 * 16;
-            let (t, v) = texture(device, label, w, h, l);
+            bytes += w as u64 * h as u64 * l as u64 * precision.texel_bytes();
+            let (t, v) = texture(device, label, w, h, l, format);
             textures.push(t.clone());
             (t, v)
         };
 
         // Activations: input, hidden pairs, temporaries by lifetime.
         let (input_texture, input_view) = make("input", 0, graph.in_channels);
-        let hidden: Vec<[wgpu::TextureView; 2]> = graph
-            .hidden
-            .iter()
-            .map(|&(c, level)| [make("hidden", level, c).1, make("hidden", level, c).1])
-            .collect();
+        let hidden_pairs: Vec<[(wgpu::Texture, wgpu::TextureView); 2]> =
+            graph.hidden.iter().map(|&(c, level)| [make("hidden", level, c), make("hidden", level, c)]).collect();
+        let hidden: Vec<[wgpu::TextureView; 2]> = hidden_pairs.iter().map(|[a, b]| [a.1.clone(), b.1.clone()]).collect();
+        let hidden_textures: Vec<[wgpu::Texture; 2]> = hidden_pairs.iter().map(|[a, b]| [a.0.clone(), b.0.clone()]).collect();
         let (assign, slots) = graph.allocate_temps();
         let slot_views: Vec<wgpu::TextureView> = slots.iter().map(|&(level, c)| make("temp", level, c).1).collect();
-        let (_, dummy_view) = texture(device, "unused source", 1, 1, 1);
+        let (_, dummy_view) = texture(device, "unused source", 1, 1, 1, format);
         let view = |v: Value, parity: usize| -> &wgpu::TextureView {
             match v {
                 Value::Input => &input_view,
@@ -269,6 +277,8 @@ impl Denoiser {
             dummy,
             stats,
             textures,
+            hidden_textures,
+            precision,
             bytes,
             host: None,
             parity: 0,
@@ -521,6 +531,24 @@ impl Denoiser {
         }).collect())
     }
 
+    /// Storage precision of activations and hidden state.
+    pub fn precision(&self) -> Precision {
+        self.precision
+    }
+
+    /// Largest |value| of each recurrent block's current hidden state (d1 .. bottleneck), read
+    /// back from the GPU: for watching the state over long sequences. A reset denoiser reports
+    /// the state it will ignore on its next frame.
+    pub fn hidden_max_abs(&self) -> Result<Vec<f32>> {
+        self.hidden_textures
+            .iter()
+            .map(|pair| {
+                let v = read_texture(&self.device, &self.queue, &pair[self.parity])?;
+                Ok(v.iter().fold(0.0f32, |m, x| if x.is_nan() { f32::NAN } else { m.max(x.abs()) }))
+            })
+            .collect()
+    }
+
     /// Textures held (for memory reports and tests).
     pub fn texture_count(&self) -> usize {
         self.textures.len()
@@ -548,11 +576,16 @@ fn read_buffer(device: &wgpu::Device, buffer: &wgpu::Buffer, out: &mut [f32]) ->
     Ok(())
 }
 
-/// Read a whole rgba32float texture array back: `layers x h x w x 4` f32.
+/// Read a whole rgba32float or rgba16float texture array back: `layers x h x w x 4` f32.
 pub fn read_texture(device: &wgpu::Device, queue: &wgpu::Queue, texture: &wgpu::Texture) -> Result<Vec<f32>> {
     let size = texture.size();
     let (w, h, l) = (size.width, size.height, size.depth_or_array_layers);
-    let row = (w * 16).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
+    let texel = match texture.format() {
+        wgpu::TextureFormat::Rgba32Float => 16,
+        wgpu::TextureFormat::Rgba16Float => 8,
+        f => return Err(Error::Gpu(format!("read_texture: unsupported format {f:?}"))),
+    };
+    let row = (w * texel).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
     let buf = device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("texture readback"),
         size: row as u64 * h as u64 * l as u64,
@@ -571,6 +604,16 @@ pub fn read_texture(device: &wgpu::Device, queue: &wgpu::Queue, texture: &wgpu::
     queue.submit(Some(enc.finish()));
     let mut raw = vec![0f32; (row / 4 * h * l) as usize];
     read_buffer(device, &buf, &mut raw)?;
+    if texel == 8 {
+        // Widen f16 texels: the same rows, each u16 to an f32.
+        let halves: &[u16] = bytemuck::cast_slice(&raw);
+        let rowh = (row / 2) as usize;
+        let mut out = Vec::with_capacity((w * h * l * 4) as usize);
+        for r in 0..(h * l) as usize {
+            out.extend(halves[r * rowh..r * rowh + w as usize * 4].iter().map(|&b| half::f16::from_bits(b).to_f32()));
+        }
+        return Ok(out);
+    }
     let rowf = (row / 4) as usize;
     let mut out = Vec::with_capacity((w * h * l * 4) as usize);
     for layer in 0..l as usize {

@@ -15,7 +15,9 @@
 //! | roughness | 0 | 0 | 0 | [0, 1] |
 //!
 //! Demodulation divides by `albedo + albedo_eps` (never by zero); the output is
-//! `(exp(clamp(y, 0, 80)) - 1) * (albedo + albedo_eps)`: finite and non-negative.
+//! `(exp(clamp(y, 0, L)) - 1) * (albedo + albedo_eps)` with `L = min(80, log1p(2 M))`, `M` the
+//! frame's largest demodulated input radiance: finite, non-negative, and at most
+//! `(albedo + eps) * 2 M` (docs/STABILITY.md, [`crate::cpu::output_limit`]).
 
 use crate::error::{Error, Result};
 use crate::model::InputBuffer;

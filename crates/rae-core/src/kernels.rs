@@ -23,7 +23,55 @@ pub const WEIGHT_CHUNK: u32 = 4096;
 pub const WEIGHT_CHUNK_BYTES: u64 = WEIGHT_CHUNK as u64 * 16;
 /// Workgroup size in x and y of every kernel.
 pub const WORKGROUP: u32 = 8;
-/// Texture format of activations: a layer holds 4 channels.
+/// Storage precision of activations and hidden state (arithmetic is f32 in both).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum Precision {
+    /// rgba32float textures.
+    #[default]
+    F32,
+    /// rgba16float textures: half the memory and bandwidth. Every stored value is clamped to
+    /// [-F16_MAX, F16_MAX] by the kernel that writes it, so f16 storage never holds an infinity.
+    F16,
+}
+
+/// Largest finite f16, the clamp of every value stored in f16.
+pub const F16_MAX: f32 = 65504.0;
+
+impl Precision {
+    /// Texture format of activations in this precision: a layer holds 4 channels.
+    pub fn format(self) -> wgpu::TextureFormat {
+        match self {
+            Precision::F32 => wgpu::TextureFormat::Rgba32Float,
+            Precision::F16 => wgpu::TextureFormat::Rgba16Float,
+        }
+    }
+
+    /// Bytes of one texel.
+    pub fn texel_bytes(self) -> u64 {
+        match self {
+            Precision::F32 => 16,
+            Precision::F16 => 8,
+        }
+    }
+
+    /// Largest magnitude a kernel stores.
+    pub fn store_max(self) -> f32 {
+        match self {
+            Precision::F32 => f32::MAX,
+            Precision::F16 => F16_MAX,
+        }
+    }
+
+    /// Name for tables and command lines.
+    pub fn name(self) -> &'static str {
+        match self {
+            Precision::F32 => "f32",
+            Precision::F16 => "f16",
+        }
+    }
+}
+
+/// Texture format of activations at f32 (weights-independent tests upload in it).
 pub const ACTIVATION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 
 /// Source text of a shader from [`SHADERS`].
@@ -154,13 +202,13 @@ fn texture_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
     }
 }
 
-fn storage_texture_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
+fn storage_texture_entry(binding: u32, format: wgpu::TextureFormat) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
         visibility: wgpu::ShaderStages::COMPUTE,
         ty: wgpu::BindingType::StorageTexture {
             access: wgpu::StorageTextureAccess::WriteOnly,
-            format: ACTIVATION_FORMAT,
+            format,
             view_dimension: wgpu::TextureViewDimension::D2Array,
         },
         count: None,
@@ -195,15 +243,25 @@ pub struct Kernels {
     conv_module: wgpu::ShaderModule,
     conv_pipeline_layout: wgpu::PipelineLayout,
     conv: HashMap<ConvVariant, wgpu::ComputePipeline>,
+    precision: Precision,
 }
 
 impl Kernels {
-    /// Compile the modules and the fixed pipelines.
-    pub fn new(device: &wgpu::Device) -> Self {
+    /// Compile the modules and the fixed pipelines for activations stored in `precision`.
+    ///
+    /// The storage texel format is the one thing WGSL cannot take as an override constant, so
+    /// for f16 the kernels' `rgba32float` storage declarations are rewritten to `rgba16float`;
+    /// everything else (the clamp to the f16 range) is the `STORE_MAX` override.
+    pub fn new(device: &wgpu::Device, precision: Precision) -> Self {
         let module = |name: &str| {
+            let src = shader_source(name);
+            let src = match precision {
+                Precision::F32 => std::borrow::Cow::Borrowed(src),
+                Precision::F16 => std::borrow::Cow::Owned(src.replace("rgba32float", "rgba16float")),
+            };
             device.create_shader_module(wgpu::ShaderModuleDescriptor {
                 label: Some(name),
-                source: wgpu::ShaderSource::Wgsl(shader_source(name).into()),
+                source: wgpu::ShaderSource::Wgsl(src),
             })
         };
         let layout = |label, entries: &[wgpu::BindGroupLayoutEntry]| {
@@ -216,7 +274,7 @@ impl Kernels {
                 texture_entry(1),
                 texture_entry(2),
                 dynamic_uniform_entry(3, WEIGHT_CHUNK_BYTES),
-                storage_texture_entry(4),
+                storage_texture_entry(4, precision.format()),
             ],
         );
         let prep_layout = layout(
@@ -228,7 +286,7 @@ impl Kernels {
                 storage_entry(3, true),
                 storage_entry(4, true),
                 storage_entry(5, true),
-                storage_texture_entry(6),
+                storage_texture_entry(6, precision.format()),
                 storage_entry(7, false),
             ],
         );
@@ -254,7 +312,8 @@ impl Kernels {
                 cache: None,
             })
         };
-        let prep = pipeline("prep", &pipeline_layout(&prep_layout), &module("prep"), &[]);
+        let store_max = [("STORE_MAX", precision.store_max() as f64)];
+        let prep = pipeline("prep", &pipeline_layout(&prep_layout), &module("prep"), &store_max);
         let output = pipeline("output", &pipeline_layout(&output_layout), &module("output"), &[]);
         Self {
             conv_pipeline_layout: pipeline_layout(&conv_layout),
@@ -265,12 +324,13 @@ impl Kernels {
             prep,
             output,
             conv: HashMap::new(),
+            precision,
         }
     }
 
     /// The conv pipeline for a variant, created on first use.
     pub fn conv(&mut self, device: &wgpu::Device, v: ConvVariant) -> wgpu::ComputePipeline {
-        let (module, layout) = (&self.conv_module, &self.conv_pipeline_layout);
+        let (module, layout, precision) = (&self.conv_module, &self.conv_pipeline_layout, self.precision);
         self.conv
             .entry(v)
             .or_insert_with(|| {
@@ -279,6 +339,7 @@ impl Kernels {
                     ("MODE_B", v.read_b as u32 as f64),
                     ("LEAKY", if v.leaky { 1.0 } else { 0.0 }),
                     ("OB", v.ob as f64),
+                    ("STORE_MAX", precision.store_max() as f64),
                 ];
                 device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                     label: Some("conv3x3"),

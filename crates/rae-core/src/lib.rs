@@ -19,6 +19,7 @@ pub mod model;
 pub mod weights;
 
 pub use denoiser::{Denoiser, GpuFrameIo, IoBinding};
+pub use kernels::Precision;
 pub use error::{Error, Result};
 pub use frame::{FrameInputs, FrameTimings};
 pub use gpu::Gpu;

@@ -1,0 +1,101 @@
+"""Held-out evaluation for the model card: the noisy input, each rae model, and Intel Open Image
+Denoise (pyoidn, color+albedo+normal, HDR) on the same frames.
+
+    python -m rae_weights evaluate ../models/*.safetensors --data 1spp=DATA/val 4spp=DATA/val4
+
+rae runs here in PyTorch (float32) from the shipped weights file, with rae-core's exact input and
+output stages (``prepare_input``/``finish_output``); the golden tests hold wgpu to the same
+network within 1e-4. Metrics are those of rae-core (``metrics``): relMSE on radiance, PSNR and
+SSIM on tonemapped images, temporal error on tonemapped frame differences; means over the
+frames of each sequence, then over sequences. Prints a Markdown table.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from .data import Sequence, load_sequences
+from .export import read_weights
+from .metrics import sequence_metrics
+from .model import RecurrentAE, finish_output, prepare_input
+
+
+def hwc(t: torch.Tensor) -> np.ndarray:
+    """[1, C, H, W] or [C, H, W] tensor -> HxWxC float32 array."""
+    return t.reshape(t.shape[-3:]).permute(1, 2, 0).contiguous().numpy().astype(np.float32)
+
+
+def run_rae(path: Path, seq: Sequence) -> list[np.ndarray]:
+    """Denoised frames of a sequence by a rae weights file (hidden state carried)."""
+    arch, state = read_weights(path)
+    model = RecurrentAE(arch).eval()
+    model.load_state_dict(state)
+    model.reset()
+    outs = []
+    with torch.inference_mode():
+        for i in range(seq.frames):
+            frame = {k: v[i : i + 1] for k, v in seq.buffers.items()}
+            outs.append(hwc(finish_output(arch, model(prepare_input(arch, frame)), frame)))
+    return outs
+
+
+def run_oidn(seq: Sequence, quality: str) -> list[np.ndarray]:
+    """OIDN's RT filter on each frame alone (it has no temporal mode): HDR color+albedo+normal."""
+    import pyoidn
+
+    outs = []
+    for i in range(seq.frames):
+        b = {k: np.nan_to_num(hwc(seq.buffers[k][i])) for k in ("color", "albedo", "normal")}
+        outs.append(np.asarray(pyoidn.denoise(b["color"], b["albedo"], b["normal"], hdr=True, quality=quality), dtype=np.float32))
+    return outs
+
+
+def evaluate(models: list[Path], sets: dict[str, Path], oidn: bool = True) -> list[dict[str, object]]:
+    """Rows of (set, method, metrics...) averaged over each set's sequences."""
+    rows: list[dict[str, object]] = []
+    for label, folder in sets.items():
+        seqs = load_sequences(folder)
+        methods: dict[str, list[dict[str, float]]] = {}
+        for s in seqs:
+            refs = [hwc(s.buffers["reference"][i]) for i in range(s.frames)]
+            noisy = [hwc(s.buffers["color"][i]) for i in range(s.frames)]
+            methods.setdefault("noisy input", []).append(sequence_metrics(noisy, refs))
+            for m in models:
+                methods.setdefault(f"rae {m.stem}", []).append(sequence_metrics(run_rae(m, s), refs))
+            if oidn:
+                methods.setdefault("OIDN 2.5 high (c+a+n)", []).append(sequence_metrics(run_oidn(s, "high"), refs))
+        for name, ms in methods.items():
+            row: dict[str, object] = {"set": label, "method": name, "sequences": len(ms)}
+            row.update({k: float(np.mean([m[k] for m in ms])) for k in ms[0]})
+            rows.append(row)
+    return rows
+
+
+def markdown(rows: list[dict[str, object]]) -> str:
+    """The rows as a Markdown table."""
+    out = ["| held-out set | method | relMSE | PSNR (dB) | SSIM | temporal error |", "|---|---|---:|---:|---:|---:|"]
+    for r in rows:
+        out.append(f"| {r['set']} | {r['method']} | {r['relmse']:.4f} | {r['psnr']:.2f} | {r['ssim']:.4f} | {r['temporal']:.4f} |")
+    return "\n".join(out)
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(prog="rae-weights evaluate", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("models", nargs="+", type=Path, help="rae weights files")
+    p.add_argument("--data", nargs="+", required=True, metavar="LABEL=FOLDER", help="held-out sets, e.g. 1spp=data/val")
+    p.add_argument("--no-oidn", action="store_true")
+    p.add_argument("--threads", type=int, default=2)
+    a = p.parse_args(argv)
+    torch.set_num_threads(a.threads)
+    sets = {}
+    for d in a.data:
+        label, _, folder = d.partition("=")
+        if not folder:
+            p.error(f"--data {d}: expected LABEL=FOLDER")
+        sets[label] = Path(folder)
+    print(markdown(evaluate(a.models, sets, oidn=not a.no_oidn)))
+    return 0
