@@ -179,9 +179,9 @@ fn static_sequence_of_2000_frames_converges_and_stays_bounded() {
 }
 
 #[test]
-fn moving_noisy_sequence_of_2000_frames_stays_bounded_in_f32_and_f16() {
-    // 2,000 frames in f32; 500 in f16 (its overflow guard is tested on extreme inputs above),
-    // to keep the suite within CI's time on 2 cores.
+fn moving_noisy_sequence_of_2000_frames_stays_bounded() {
+    // f32 only: f16's overflow guard is asserted on the extreme inputs above and its distance
+    // from f32 below; a second 2,000-frame run would cost CI minutes on 2 cores.
     // A pattern sliding one pixel per frame with fresh noise every frame.
     let moving = |t: usize| {
         let mut f = Frame::plausible(64 + 64, 64, 1000 + t as u64);
@@ -192,11 +192,9 @@ fn moving_noisy_sequence_of_2000_frames_stays_bounded_in_f32_and_f16() {
         }
         f
     };
-    for (precision, frames) in [(Precision::F32, 2000), (Precision::F16, 500)] {
-        let (rows, _, _) = long_run(precision, frames, 100, &moving);
-        print_rows(&format!("moving, {frames} frames, {}", precision.name()), &rows);
-        assert_bounded_hidden(precision.name(), &rows);
-    }
+    let (rows, _, _) = long_run(Precision::F32, 2000, 100, &moving);
+    print_rows("moving, 2000 frames", &rows);
+    assert_bounded_hidden("moving", &rows);
 }
 
 #[test]

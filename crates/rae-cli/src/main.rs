@@ -58,6 +58,9 @@ enum Command {
     Info {
         /// A .safetensors weights file written by weights-tool.
         file: PathBuf,
+        /// Also report GPU memory for these frame sizes (WxH), f32 and f16.
+        #[arg(long, value_delimiter = ',')]
+        size: Vec<String>,
     },
     /// List the adapters wgpu sees (WGPU_BACKEND filters; WGPU_ADAPTER_NAME picks one).
     Devices,
@@ -85,6 +88,10 @@ enum Command {
         /// Storage precisions to time.
         #[arg(long, value_enum, value_delimiter = ',', default_value = "f32,f16")]
         precision: Vec<PrecisionArg>,
+        /// The adapter's fp32 peak in GFLOP/s, to report the share achieved (e.g. 156 for this
+        /// project's 2-core lavapipe machine; NVIDIA H100 SXM: 67,000).
+        #[arg(long)]
+        peak_gflops: Option<f64>,
     },
 }
 
@@ -116,12 +123,12 @@ fn median(v: &mut [f64]) -> f64 {
     v[v.len() / 2]
 }
 
-fn bench(path: &Path, sizes: &[String], frames: usize, layers: bool, precisions: &[PrecisionArg]) -> Result<()> {
+fn bench(path: &Path, sizes: &[String], frames: usize, layers: bool, precisions: &[PrecisionArg], peak: Option<f64>) -> Result<()> {
     let weights = Weights::load(path)?;
     let gpu = Gpu::new()?;
     let flop_px = 2.0 * Graph::new(&weights.arch).macs_per_pixel();
     println!("adapter: {}; weights: {}; {frames} timed frames after 2 warm-up", gpu.describe(), path.display());
-    println!("{:>10} {:>9} {:>10} {:>10} {:>10} {:>10} {:>10} {:>10}", "size", "precision", "total ms", "upload", "gpu", "download", "GFLOP/s", "GPU MiB");
+    println!("{:>10} {:>9} {:>10} {:>10} {:>10} {:>10} {:>10} {:>8} {:>10}", "size", "precision", "total ms", "upload", "gpu", "download", "GFLOP/s", "of peak", "GPU MiB");
     for (s, &p) in sizes.iter().flat_map(|s| precisions.iter().map(move |p| (s, p))) {
         let (w, h) = parse_size(s)?;
         let precision = Precision::from(p);
@@ -149,7 +156,8 @@ fn bench(path: &Path, sizes: &[String], frames: usize, layers: bool, precisions:
         let g = median(&mut gpu_t);
         let gflops = flop_px * (pw * ph) as f64 / (g * 1e-3) / 1e9;
         let mib = d.gpu_bytes() as f64 / (1 << 20) as f64;
-        println!("{s:>10} {:>9} {:>10.1} {:>10.2} {g:>10.1} {:>10.2} {gflops:>10.2} {mib:>10.1}", precision.name(), median(&mut total), median(&mut up), median(&mut down));
+        let share = peak.map_or("-".to_string(), |p| format!("{:.1}%", 100.0 * gflops / p));
+        println!("{s:>10} {:>9} {:>10.1} {:>10.2} {g:>10.1} {:>10.2} {gflops:>10.2} {share:>8} {mib:>10.1}", precision.name(), median(&mut total), median(&mut up), median(&mut down));
         if layers {
             stage_table(&mut d, &frame, &mut out, frames.max(1))?;
         }
@@ -183,7 +191,7 @@ fn stage_table(d: &mut Denoiser, frame: &rae_core::FrameInputs, out: &mut [f32],
     Ok(())
 }
 
-fn info(path: &Path) -> Result<()> {
+fn info(path: &Path, sizes: &[String]) -> Result<()> {
     let w = Weights::load(path)?;
     let a = &w.arch;
     let macs = Graph::new(a).macs_per_pixel();
@@ -199,6 +207,19 @@ fn info(path: &Path) -> Result<()> {
     println!("frame multiple:  {} (frames are padded to it)", 1 << a.levels());
     println!("parameters:      {}", a.parameter_count());
     println!("cost per pixel:  {:.0} multiply-adds, {:.1} kFLOP", macs, 2.0 * macs / 1e3);
+    let graph = Graph::new(a);
+    let m = 1u32 << a.levels();
+    for s in sizes {
+        let (w, h) = parse_size(s)?;
+        let (pw, ph) = (w.next_multiple_of(m), h.next_multiple_of(m));
+        let mib = |p: Precision| rae_core::denoiser::activation_bytes(&graph, pw, ph, p) as f64 / (1u64 << 20) as f64;
+        println!(
+            "memory {s}:  activations and hidden state {:.1} MiB f32, {:.1} MiB f16 (padded to {pw}x{ph}; weights {:.1} MiB more)",
+            mib(Precision::F32),
+            mib(Precision::F16),
+            (a.parameter_count() * 4) as f64 / (1u64 << 20) as f64,
+        );
+    }
     Ok(())
 }
 
@@ -250,9 +271,9 @@ fn main() -> Result<()> {
             let frames = frames.as_deref().map(denoise::parse_range).transpose()?;
             denoise::run(&denoise::Options { input, output, weights, models, frames, reset_at, png, half, allow_nonfinite, precision: precision.into() })
         }
-        Command::Info { file } => info(&file),
+        Command::Info { file, size } => info(&file, &size),
         Command::Devices => devices(),
         Command::Verify { golden } => verify(&golden),
-        Command::Bench { weights, sizes, frames, layers, precision } => bench(&weights, &sizes, frames, layers, &precision),
+        Command::Bench { weights, sizes, frames, layers, precision, peak_gflops } => bench(&weights, &sizes, frames, layers, &precision, peak_gflops),
     }
 }

@@ -215,6 +215,7 @@ impl Denoiser {
             })
             .collect();
         let convs = ConvPlan::new(device, &mut kernels, &specs)?;
+        debug_assert_eq!(bytes, activation_bytes(&graph, pwidth, pheight, precision));
         bytes += convs.bytes();
         // Bind groups of both parities (the reset variant only changes the dynamic offset).
         let conv_groups: [Vec<wgpu::BindGroup>; 2] = std::array::from_fn(|parity| {
@@ -553,6 +554,20 @@ impl Denoiser {
     pub fn texture_count(&self) -> usize {
         self.textures.len()
     }
+}
+
+/// Bytes of the activation and hidden-state textures a [`Denoiser`] allocates for `graph` at
+/// the padded size `pwidth` x `pheight`: the input, two textures per recurrent block, and the
+/// temporaries as shared by liveness. Weights and uniforms are not included. Needs no device,
+/// so memory at any size can be reported (`rae-cli info --size`).
+pub fn activation_bytes(graph: &Graph, pwidth: u32, pheight: u32, precision: Precision) -> u64 {
+    let tex = |level: usize, channels: usize| {
+        (pwidth >> level) as u64 * (pheight >> level) as u64 * blocks(channels) as u64 * precision.texel_bytes()
+    };
+    let input = tex(0, graph.in_channels);
+    let hidden: u64 = graph.hidden.iter().map(|&(c, level)| 2 * tex(level, c)).sum();
+    let temps: u64 = graph.allocate_temps().1.iter().map(|&(level, c)| tex(level, c)).sum();
+    input + hidden + temps
 }
 
 fn create_init(device: &wgpu::Device, label: &str, contents: &[u8], usage: wgpu::BufferUsages) -> wgpu::Buffer {
