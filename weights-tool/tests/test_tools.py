@@ -1,0 +1,54 @@
+"""The report-side commands: PyTorch bench cost model, activation ranges, evaluation table."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+import torch
+
+from rae_weights import Arch, RecurrentAE
+from rae_weights.bench import macs_per_pixel, time_frames
+from rae_weights.data import load_sequences
+from rae_weights.evaluate import evaluate, markdown
+from rae_weights.export import write_weights
+from rae_weights.ranges import activation_ranges
+
+
+def test_cost_model_matches_rae_core() -> None:
+    # rae-core's Graph::macs_per_pixel for the default architecture (rae-cli info prints it).
+    assert round(macs_per_pixel(RecurrentAE(Arch()))) == 73661
+    small = RecurrentAE(Arch(encoder=[8, 8], bottleneck=8, inputs=["color"], demodulate=False))
+    assert len(time_frames(small, 16, 16, 2)) == 2
+
+
+def _sequence(folder: Path, frames: int = 3, size: int = 16) -> None:
+    OpenEXR = pytest.importorskip("OpenEXR")
+    folder.mkdir(parents=True)
+    rng = np.random.default_rng(2)
+    for f in range(frames):
+        for name, c in [("color", 3), ("reference", 3), ("albedo", 3), ("normal", 3), ("depth", 1), ("roughness", 1)]:
+            a = rng.random((size, size, c), dtype=np.float32)
+            channels = {"RGB": a} if c == 3 else {"Y": a[..., 0]}
+            OpenEXR.File({"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}, channels).write(str(folder / f"{name}_{f:04}.exr"))
+
+
+def test_activation_ranges_cover_every_conv_and_see_the_input(tmp_path: Path) -> None:
+    _sequence(tmp_path / "s")
+    arch = Arch(encoder=[8, 8], bottleneck=8)
+    model = RecurrentAE(arch).eval()
+    extra: dict[str, float] = {}
+    ranges = activation_ranges(model, load_sequences(tmp_path), extra)
+    convs = [n for n, m in model.named_modules() if isinstance(m, torch.nn.Conv2d)]
+    assert sorted(ranges) == sorted(convs)
+    assert all(v >= 0 for v in ranges.values()) and extra["input"] > 0
+
+
+def test_evaluation_rows_for_input_and_each_model(tmp_path: Path) -> None:
+    _sequence(tmp_path / "data" / "s")
+    arch = Arch(encoder=[8, 8], bottleneck=8)
+    weights = tmp_path / "m.safetensors"
+    write_weights(weights, arch, RecurrentAE(arch).state_dict())
+    rows = evaluate([weights], {"1spp": tmp_path / "data"}, oidn=False)
+    assert [r["method"] for r in rows] == ["noisy input", "rae m"]
+    assert all(np.isfinite(r["relmse"]) and -1 <= r["ssim"] <= 1 and np.isfinite(r["temporal"]) for r in rows)
+    assert markdown(rows).count("\n") == 3
