@@ -3,7 +3,6 @@
 from pathlib import Path
 
 import numpy as np
-import pytest
 import torch
 
 from rae_weights import Arch, RecurrentAE
@@ -12,6 +11,7 @@ from rae_weights.data import load_sequences
 from rae_weights.evaluate import evaluate, markdown
 from rae_weights.export import write_weights
 from rae_weights.ranges import activation_ranges
+from sequences import write_sequence
 
 
 def test_cost_model_matches_rae_core() -> None:
@@ -21,19 +21,8 @@ def test_cost_model_matches_rae_core() -> None:
     assert len(time_frames(small, 16, 16, 2)) == 2
 
 
-def _sequence(folder: Path, frames: int = 3, size: int = 16) -> None:
-    OpenEXR = pytest.importorskip("OpenEXR")
-    folder.mkdir(parents=True)
-    rng = np.random.default_rng(2)
-    for f in range(frames):
-        for name, c in [("color", 3), ("reference", 3), ("albedo", 3), ("normal", 3), ("depth", 1), ("roughness", 1)]:
-            a = rng.random((size, size, c), dtype=np.float32)
-            channels = {"RGB": a} if c == 3 else {"Y": a[..., 0]}
-            OpenEXR.File({"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}, channels).write(str(folder / f"{name}_{f:04}.exr"))
-
-
 def test_activation_ranges_cover_every_conv_and_see_the_input(tmp_path: Path) -> None:
-    _sequence(tmp_path / "s")
+    write_sequence(tmp_path / "s", 3, 16, seed=2)
     arch = Arch(encoder=[8, 8], bottleneck=8)
     model = RecurrentAE(arch).eval()
     extra: dict[str, float] = {}
@@ -44,7 +33,7 @@ def test_activation_ranges_cover_every_conv_and_see_the_input(tmp_path: Path) ->
 
 
 def test_evaluation_rows_for_input_and_each_model(tmp_path: Path) -> None:
-    _sequence(tmp_path / "data" / "s")
+    write_sequence(tmp_path / "data" / "s", 3, 16, seed=2)
     arch = Arch(encoder=[8, 8], bottleneck=8)
     weights = tmp_path / "m.safetensors"
     write_weights(weights, arch, RecurrentAE(arch).state_dict())

@@ -3,10 +3,10 @@
 from pathlib import Path
 
 import numpy as np
-import pytest
 import torch
 
 from rae_weights import Arch, finish_output
+from sequences import write_sequence
 from rae_weights.train import PAPER_FRAME_WEIGHTS, log_kernel, loss_fn, main, target_space
 
 
@@ -35,20 +35,8 @@ def test_target_space_is_inverted_by_the_output_stage() -> None:
     assert black.abs().max().item() == 0.0
 
 
-def _write_sequence(folder: Path, frames: int, size: int) -> None:
-    OpenEXR = pytest.importorskip("OpenEXR")
-    folder.mkdir(parents=True)
-    rng = np.random.default_rng(1)
-    for f in range(frames):
-        for name, c in [("color", 3), ("reference", 3), ("albedo", 3), ("normal", 3), ("depth", 1), ("roughness", 1)]:
-            a = rng.random((size, size, c), dtype=np.float32)
-            channels = {"RGB": a} if c == 3 else {"Y": a[..., 0]}
-            header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
-            OpenEXR.File(header, channels).write(str(folder / f"{name}_{f:04}.exr"))
-
-
 def test_two_training_steps_write_checkpoint_log_and_weights(tmp_path: Path) -> None:
-    _write_sequence(tmp_path / "data" / "a", 8, 32)
+    write_sequence(tmp_path / "data" / "a", 8, 32)
     out = tmp_path / "run"
     args = ["--data", str(tmp_path / "data"), "--val", str(tmp_path / "data"), "--out", str(out), "--steps", "2", "--crop", "32", "--val-every", "2", "--threads", "1"]
     assert main(args) == 0
