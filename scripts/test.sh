@@ -7,9 +7,10 @@ cd "$(dirname "$0")/.."
 source scripts/env.sh
 
 # weights-tool and its packages (PyTorch's wheel is large: ~2 minutes on a fresh machine).
-if ! python3 -c "import torch, numpy, safetensors, pytest, OpenEXR" >/dev/null 2>&1; then
-  echo "== installing Python packages (torch, numpy, safetensors, pytest, OpenEXR)"
-  python3 -m pip install -q --disable-pip-version-check torch numpy safetensors pytest OpenEXR
+# The report's test also needs pyoidn, flip-evaluator and matplotlib.
+if ! python3 -c "import torch, numpy, safetensors, pytest, OpenEXR, pyoidn, flip_evaluator, matplotlib" >/dev/null 2>&1; then
+  echo "== installing Python packages (torch, numpy, safetensors, pytest, OpenEXR, pyoidn, flip-evaluator, matplotlib)"
+  python3 -m pip install -q --disable-pip-version-check torch numpy safetensors pytest OpenEXR pyoidn flip-evaluator matplotlib
 fi
 
 # On lavapipe unless the caller chose an adapter.

@@ -7,8 +7,9 @@
 // vectorised on lavapipe, storage-buffer loads run lane by lane). Weights sit in a uniform
 // binding of 64 KiB: every invocation reads the same weight at the same time, which lavapipe
 // turns into one load and a broadcast (and a discrete GPU serves from its constant cache). A
-// conv's weights are split into groups of OB output blocks, one 64 KiB chunk and one dispatch
-// per group, bound by dynamic offset.
+// conv's weights are split into groups of OB output blocks; as many groups as fit share one
+// 64 KiB binding (bound by dynamic offset) and one dispatch, workgroup z picking the group, so
+// narrow convs and small levels pay for few dispatches.
 //
 // Specialised per layer kind by override constants (read modes, activation, output blocks per
 // invocation); sizes come in the uniform, so one pipeline serves every resolution and width.
@@ -39,13 +40,15 @@ struct Params {
     cin4_a: u32,      // channel blocks read from a
     cin4_b: u32,      // channel blocks read from b (0: no b, or a zeroed hidden state)
     cin4_total: u32,  // input blocks in the weight layout (a + b)
-    ob0: u32,         // first output block (texture layer) of this group
-    ob_count: u32,    // output blocks stored by this group (1 ..= OB)
+    ob0: u32,         // first output block (texture layer) of the group at z = 0
+    cout4: u32,       // output blocks of the conv
     slope: f32,       // LeakyReLU negative slope
+    group_stride: u32,// vec4s from one group's weights to the next (group z at z * group_stride)
 }
 
-// Weight chunk of one group: taps at ((in block * 9 + tap) * 4 + in lane) * OB + j, a vec4 over
-// the 4 output channels of block ob0 + j; then the bias of block j at cin4_total * 36 * OB + j.
+// Weights of group z, from w = z * group_stride: taps at w + ((in block * 9 + tap) * 4 + in lane)
+// * OB + j, a vec4 over the 4 output channels of block ob0 + z * OB + j; then the bias of block j
+// at w + cin4_total * 36 * OB + j.
 @group(0) @binding(0) var<uniform> params: Params;
 @group(0) @binding(1) var src_a: texture_2d_array<f32>;
 @group(0) @binding(2) var src_b: texture_2d_array<f32>;
@@ -123,7 +126,7 @@ fn add_column(acc: ptr<function, Tile>, base: u32, j: u32, v0: vec4<f32>, v1: ve
 
 // Add input block `layer` of `t` (read with `mode`) at weight block `cb` to the tiles whose
 // top-left output is (x, y0).
-fn accumulate(acc0: ptr<function, Tile>, acc1: ptr<function, Tile>, t: texture_2d_array<f32>, mode: u32, layer: u32, cb: u32, x: i32, y0: i32) {
+fn accumulate(acc0: ptr<function, Tile>, acc1: ptr<function, Tile>, t: texture_2d_array<f32>, mode: u32, layer: u32, cb: u32, w: u32, x: i32, y0: i32) {
     for (var kx = 0u; kx < 3u; kx++) {
         let sx = x + i32(kx) - 1;
         // Column kx of the 10-row input window.
@@ -145,8 +148,8 @@ fn accumulate(acc0: ptr<function, Tile>, acc1: ptr<function, Tile>, t: texture_2
         let v15 = fetch(t, mode, sx, y0 + 14, layer);
         let v16 = fetch(t, mode, sx, y0 + 15, layer);
         let v17 = fetch(t, mode, sx, y0 + 16, layer);
-        // Tap (ky, kx) starts at ((cb * 9 + ky * 3 + kx) * 4) * OB.
-        let base = (cb * 36u + kx * 4u) * OB;
+        // Tap (ky, kx) starts at w + ((cb * 9 + ky * 3 + kx) * 4) * OB.
+        let base = w + (cb * 36u + kx * 4u) * OB;
         add_column(acc0, base, 0u, v0, v1, v2, v3, v4, v5, v6, v7, v8, v9, v10, v11, v12, v13, v14, v15, v16, v17);
         if OB > 1u {
             add_column(acc1, base, 1u, v0, v1, v2, v3, v4, v5, v6, v7, v8, v9, v10, v11, v12, v13, v14, v15, v16, v17);
@@ -187,10 +190,13 @@ fn store(acc: Tile, x: u32, y0: u32, layer: u32) {
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let x = gid.x;
     let y0 = gid.y * ROWS;
-    if x >= params.width || y0 >= params.height {
+    // This workgroup's group: its first output block and its weights (uniform over the group).
+    let ob0 = params.ob0 + gid.z * OB;
+    let w = gid.z * params.group_stride;
+    if x >= params.width || y0 >= params.height || ob0 >= params.cout4 {
         return;
     }
-    let bias_at = params.cin4_total * 36u * OB;
+    let bias_at = w + params.cin4_total * 36u * OB;
     let b0 = weights[bias_at];
     var acc0 = Tile(b0, b0, b0, b0, b0, b0, b0, b0, b0, b0, b0, b0, b0, b0, b0, b0);
     var acc1 = acc0;
@@ -202,13 +208,13 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let yi = i32(y0);
     // Source a: input blocks 0 .. cin4_a; then source b: blocks cin4_a .. cin4_a + cin4_b.
     for (var c = 0u; c < params.cin4_a; c++) {
-        accumulate(&acc0, &acc1, src_a, MODE_A, c, c, xi, yi);
+        accumulate(&acc0, &acc1, src_a, MODE_A, c, c, w, xi, yi);
     }
     for (var c = 0u; c < params.cin4_b; c++) {
-        accumulate(&acc0, &acc1, src_b, MODE_B, c, params.cin4_a + c, xi, yi);
+        accumulate(&acc0, &acc1, src_b, MODE_B, c, params.cin4_a + c, w, xi, yi);
     }
-    store(acc0, x, y0, params.ob0);
-    if OB > 1u && params.ob_count > 1u {
-        store(acc1, x, y0, params.ob0 + 1u);
+    store(acc0, x, y0, ob0);
+    if OB > 1u && ob0 + 1u < params.cout4 {
+        store(acc1, x, y0, ob0 + 1u);
     }
 }

@@ -62,6 +62,7 @@ def main(argv: list[str] | None = None) -> int:
     sub.add_parser("train", help="train on rae-trace sequences (see `train --help`)", add_help=False)
     sub.add_parser("bench", help="PyTorch CPU time per frame of a weights file (see `bench --help`)", add_help=False)
     sub.add_parser("evaluate", help="held-out metrics of models, noisy input and OIDN (see `evaluate --help`)", add_help=False)
+    sub.add_parser("report", help="error against run time of rae, PyTorch and OIDN -> docs/REPORT.md (see `report --help`)", add_help=False)
     sub.add_parser("ranges", help="activation ranges and f16 headroom on real sequences (see `ranges --help`)", add_help=False)
     if argv is None:
         import sys as _sys
@@ -78,6 +79,10 @@ def main(argv: list[str] | None = None) -> int:
         from .evaluate import main as evaluate_main
 
         return evaluate_main(argv[1:])
+    if argv and argv[0] == "report":
+        from .report import main as report_main
+
+        return report_main(argv[1:])
     if argv and argv[0] == "ranges":
         from .ranges import main as ranges_main
 

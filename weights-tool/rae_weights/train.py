@@ -50,8 +50,18 @@ def log_kernel(size: int = 5, sigma: float = 1.0) -> torch.Tensor:
     return (k - k.mean()).view(1, 1, size, size)
 
 
-def loss_fn(ys: list[torch.Tensor], ts: list[torch.Tensor], weights: tuple[float, ...], log: torch.Tensor) -> torch.Tensor:
-    """0.8 spatial L1 + 0.1 HFEN L1 + 0.1 temporal L1, each frame weighted."""
+PAPER_LOSS_WEIGHTS = (0.8, 0.1, 0.1)
+
+
+def loss_fn(
+    ys: list[torch.Tensor],
+    ts: list[torch.Tensor],
+    weights: tuple[float, ...],
+    log: torch.Tensor,
+    terms: tuple[float, float, float] = PAPER_LOSS_WEIGHTS,
+) -> torch.Tensor:
+    """ws spatial L1 + wg HFEN L1 + wt temporal L1 (the paper's 0.8/0.1/0.1), each frame weighted."""
+    ws, wg, wt = terms
     total = torch.zeros(())
     c = ys[0].shape[1]
     k = log.repeat(c, 1, 1, 1)
@@ -59,7 +69,7 @@ def loss_fn(ys: list[torch.Tensor], ts: list[torch.Tensor], weights: tuple[float
         ls = F.l1_loss(y, t)
         lg = F.l1_loss(F.conv2d(y, k, padding=2, groups=c), F.conv2d(t, k, padding=2, groups=c))
         lt = F.l1_loss(y - ys[i - 1], t - ts[i - 1]) if i > 0 else torch.zeros(())
-        total = total + weights[i] * (0.8 * ls + 0.1 * lg + 0.1 * lt)
+        total = total + weights[i] * (ws * ls + wg * lg + wt * lt)
     return total / sum(weights)
 
 
@@ -145,12 +155,20 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--no-demodulate", action="store_true", help="feed color as is (no albedo needed)")
     p.add_argument("--init", type=Path, help="warm start from a checkpoint of another architecture (see warm_start)")
     p.add_argument("--frame-weights", choices=["paper", "equal"], default="paper")
+    p.add_argument(
+        "--loss-weights",
+        default="0.8,0.1,0.1",
+        help="spatial,gradient,temporal weights of the loss (the paper's 0.8,0.1,0.1); a fine-tune may weigh temporal more",
+    )
     p.add_argument("--val-every", type=int, default=500)
     p.add_argument("--ckpt-every", type=int, default=250)
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--threads", type=int, default=max(1, (os.cpu_count() or 2)))
     p.add_argument("--max-minutes", type=float, default=0.0, help="stop (checkpoint and export) after this long")
     a = p.parse_args(argv)
+    terms = tuple(float(v) for v in a.loss_weights.split(","))
+    if len(terms) != 3 or min(terms) < 0 or sum(terms) <= 0:
+        p.error(f"--loss-weights {a.loss_weights}: expected three non-negative numbers, not all zero")
     torch.set_num_threads(a.threads)
     torch.manual_seed(a.seed)
     rng = np.random.default_rng(a.seed)
@@ -195,7 +213,7 @@ def main(argv: list[str] | None = None) -> int:
         clip = sample(train, a.frames, a.crop, rng)
         ys = run_clip(model, arch, clip)
         ts = [target_space(arch, {k: v[i : i + 1] for k, v in clip.items()}) for i in range(a.frames)]
-        loss = loss_fn(ys, ts, weights, log)
+        loss = loss_fn(ys, ts, weights, log, terms)  # type: ignore[arg-type]
         opt.zero_grad(set_to_none=True)
         loss.backward()
         torch.nn.utils.clip_grad_norm_(model.parameters(), 1.0)

@@ -20,6 +20,11 @@ def test_loss_is_zero_for_a_perfect_result_and_sees_temporal_error() -> None:
     flicker = [t + (0.1 if i % 2 else -0.1) for i, t in enumerate(ts)]
     assert loss_fn(flicker, ts, PAPER_FRAME_WEIGHTS, log) > loss_fn(steady, ts, PAPER_FRAME_WEIGHTS, log)
     assert log_kernel().sum().abs().item() < 1e-6, "LoG is zero-sum: flat images have no gradient loss"
+    # The term weights: temporal-only sees no error in the steady result, and weighing temporal
+    # more widens the gap between flicker and steady.
+    assert loss_fn(steady, ts, PAPER_FRAME_WEIGHTS, log, (0.0, 0.0, 1.0)).item() < 1e-6
+    gap = lambda terms: (loss_fn(flicker, ts, PAPER_FRAME_WEIGHTS, log, terms) - loss_fn(steady, ts, PAPER_FRAME_WEIGHTS, log, terms)).item()  # noqa: E731
+    assert gap((0.8, 0.1, 0.4)) > gap((0.8, 0.1, 0.1)) > 0
 
 
 def test_target_space_is_inverted_by_the_output_stage() -> None:

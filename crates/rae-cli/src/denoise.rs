@@ -31,6 +31,8 @@ pub struct Options {
     pub allow_nonfinite: bool,
     /// Storage precision of activations on the GPU.
     pub precision: Precision,
+    /// Write per-frame times (and errors, where a reference exists) as CSV to this file.
+    pub csv: Option<PathBuf>,
 }
 
 /// Parse `A..B`, `A..`, `..B` or `A` (inclusive frame numbers).
@@ -103,8 +105,25 @@ fn ms(d: Duration) -> f64 {
 struct FrameReport {
     number: u32,
     ms: f64,
+    times: [f64; 3],
     noisy: Option<(f64, f64, f64)>,
     rae: Option<(f64, f64, f64)>,
+}
+
+/// The per-frame CSV of `--csv`: frame, upload/GPU/download ms, then relMSE, PSNR and SSIM of the
+/// input and of the result (empty where the sequence has no reference).
+fn csv_text(reports: &[FrameReport]) -> String {
+    let mut s = String::from("frame,upload_ms,gpu_ms,download_ms,relmse_input,relmse_rae,psnr_input,psnr_rae,ssim_input,ssim_rae\n");
+    for r in reports {
+        let m = |x: Option<(f64, f64, f64)>, k: usize| x.map_or(String::new(), |v| format!("{}", [v.0, v.1, v.2][k]));
+        let [u, g, d] = r.times;
+        s += &format!("{},{u:.4},{g:.4},{d:.4}", r.number);
+        for k in 0..3 {
+            s += &format!(",{},{}", m(r.noisy, k), m(r.rae, k));
+        }
+        s.push('\n');
+    }
+    s
 }
 
 /// Run `denoise`.
@@ -180,7 +199,7 @@ pub fn run(o: &Options) -> Result<()> {
             io::write_png(&path.with_extension("png"), seq.width, seq.height, &out)?;
         }
         let color = frame.buffers.get(&Slot::from(InputBuffer::Color)).expect("color is required");
-        let mut report = FrameReport { number: frame.number, ms: ms(t.upload + t.gpu + t.download), noisy: None, rae: None };
+        let mut report = FrameReport { number: frame.number, ms: ms(t.upload + t.gpu + t.download), times: [ms(t.upload), ms(t.gpu), ms(t.download)], noisy: None, rae: None };
         if let Some(r) = frame.reference() {
             let m = |x: &[f32]| (metrics::relmse(x, r), metrics::psnr(x, r), metrics::ssim(x, r, seq.width, seq.height));
             report.noisy = Some(m(color));
@@ -237,6 +256,10 @@ pub fn run(o: &Options) -> Result<()> {
         }
     } else {
         println!("(no reference in the sequence: no error reported)");
+    }
+    if let Some(path) = &o.csv {
+        io::write_text(path, &csv_text(&reports))?;
+        println!("wrote per-frame times and errors to {}", path.display());
     }
     println!("wrote {} frames to {}", reports.len(), out_dir.display());
     Ok(())

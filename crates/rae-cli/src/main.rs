@@ -53,6 +53,10 @@ enum Command {
         /// Replace NaN/Inf input values (input policy) instead of refusing the frame.
         #[arg(long)]
         allow_nonfinite: bool,
+        /// Write per-frame times (upload, GPU, download ms) and, where a reference exists,
+        /// relMSE/PSNR/SSIM of input and result to this CSV file.
+        #[arg(long)]
+        csv: Option<PathBuf>,
     },
     /// Print a weights file's architecture, inputs, parameter count and cost per pixel.
     Info {
@@ -267,9 +271,9 @@ fn verify(files: &[PathBuf]) -> Result<()> {
 
 fn main() -> Result<()> {
     match Cli::parse().command {
-        Command::Denoise { input, output, weights, models, frames, reset_at, png, half, allow_nonfinite, precision } => {
+        Command::Denoise { input, output, weights, models, frames, reset_at, png, half, allow_nonfinite, precision, csv } => {
             let frames = frames.as_deref().map(denoise::parse_range).transpose()?;
-            denoise::run(&denoise::Options { input, output, weights, models, frames, reset_at, png, half, allow_nonfinite, precision: precision.into() })
+            denoise::run(&denoise::Options { input, output, weights, models, frames, reset_at, png, half, allow_nonfinite, precision: precision.into(), csv })
         }
         Command::Info { file, size } => info(&file, &size),
         Command::Devices => devices(),

@@ -120,9 +120,22 @@ fn per_buffer_sequence_is_denoised_with_error_report() {
     .unwrap();
     assert_eq!(img.layer_data.size, Vec2(W, H));
     assert!(img.layer_data.channel_data.pixels.iter().flatten().all(|v| v.is_finite() && *v >= 0.0));
-    // A second run goes to a new folder beside the input.
-    assert!(denoise(&seq, &[]).0);
+    // A second run goes to a new folder beside the input; --csv writes one row per frame whose
+    // errors are the ones printed.
+    let csv = tmp.path().join("times.csv");
+    let (ok, out2, err) = denoise(&seq, &["--csv", csv.to_str().unwrap()]);
+    assert!(ok, "{out2}{err}");
     assert!(tmp.path().join("seq-denoised-2/denoised_0002.exr").exists());
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let rows: Vec<Vec<&str>> = text.lines().map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows[0][..3], ["frame", "upload_ms", "gpu_ms"]);
+    assert_eq!(rows.len(), 4, "{text}");
+    for (i, r) in rows[1..].iter().enumerate() {
+        assert_eq!(r[0], i.to_string());
+        assert!(r[2].parse::<f64>().unwrap() > 0.0, "GPU time {text}");
+        let (rel_in, rel_rae): (f64, f64) = (r[4].parse().unwrap(), r[5].parse().unwrap());
+        assert!(out2.contains(&format!("{rel_in:>11.4} {rel_rae:>11.4}")), "row {i} matches the printed table: {text}\n{out2}");
+    }
 }
 
 #[test]

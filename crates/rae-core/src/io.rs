@@ -490,6 +490,11 @@ fn atomic_write(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result<
     result
 }
 
+/// Write a text file (a CSV, a report) atomically.
+pub fn write_text(path: &Path, text: &str) -> Result<()> {
+    atomic_write(path, |tmp| std::fs::write(tmp, text).map_err(|e| Error::Output { path: path.into(), reason: e.to_string() }))
+}
+
 /// Write RGB radiance as an EXR (f32, or f16 with `half`), atomically.
 pub fn write_exr(path: &Path, width: u32, height: u32, rgb: &[f32], half: bool) -> Result<()> {
     use exr::prelude::*;

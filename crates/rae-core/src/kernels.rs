@@ -98,12 +98,16 @@ pub struct ConvParams {
     pub cin4_b: u32,
     /// Input blocks in the weight layout.
     pub cin4_total: u32,
-    /// First output block of the group.
+    /// First output block of the dispatch's first group (workgroup z = 0).
     pub ob0: u32,
-    /// Output blocks the group stores.
-    pub ob_count: u32,
+    /// Output blocks of the conv (groups past it store nothing).
+    pub cout4: u32,
     /// LeakyReLU slope.
     pub slope: f32,
+    /// vec4s between the weight chunks of consecutive groups in one binding (workgroup z).
+    pub group_stride: u32,
+    /// Padding to the uniform's 16-byte size.
+    pub _pad: [u32; 3],
 }
 
 /// Uniform block of prep.wgsl.
@@ -357,7 +361,7 @@ impl Kernels {
     }
 }
 
-/// Output blocks per invocation for a conv reading `cin4` input blocks: the most of 4, 2, 1
+/// Output blocks per invocation for a conv reading `cin4` input blocks: the most of 2, 1
 /// whose taps and biases fit one weight chunk (more outputs per input fetch); `None` when not
 /// even one block fits (more than 113 input blocks, 452 channels).
 pub fn blocks_per_invocation(cin4: u32) -> Option<u32> {
@@ -438,13 +442,16 @@ pub struct ConvSpec<'a> {
     pub b_is_hidden: bool,
 }
 
-/// One output-block group: a dispatch with its parameter and weight offsets.
+/// One dispatch: `count` consecutive output-block groups (workgroup z), their parameter and
+/// weight offsets.
 #[derive(Debug, Clone, Copy)]
 struct Group {
     /// Offsets into the parameter buffer: normal frame, reset frame.
     params: [u32; 2],
     /// Offset into the weight buffer.
     weights: u32,
+    /// Groups in this dispatch (their chunks follow each other, `group_stride` apart).
+    count: u32,
 }
 
 /// A planned convolution: its pipeline, workgroups and groups.
@@ -481,9 +488,14 @@ impl ConvPlan {
             })?;
             let cout4 = blocks(s.cout);
             let variant = ConvVariant { read_a: s.read_a, read_b: s.read_b, leaky: s.leaky, ob };
+            // Groups of `ob` output blocks, as many per dispatch as fit one chunk (workgroup z).
+            let stride = (cin4 * 36 + 1) * ob;
+            let group_count = cout4.div_ceil(ob);
+            let per_dispatch = (WEIGHT_CHUNK / stride).min(group_count);
             let mut groups = Vec::new();
-            for ob0 in (0..cout4).step_by(ob as usize) {
-                let mut group = Group { params: [0; 2], weights: 0 };
+            for first in (0..group_count).step_by(per_dispatch as usize) {
+                let count = per_dispatch.min(group_count - first);
+                let mut group = Group { params: [0; 2], weights: 0, count };
                 for reset in 0..2 {
                     let p = ConvParams {
                         width: s.width,
@@ -491,9 +503,11 @@ impl ConvPlan {
                         cin4_a,
                         cin4_b: if reset == 1 && s.b_is_hidden { 0 } else { cin4_b },
                         cin4_total: cin4,
-                        ob0,
-                        ob_count: ob.min(cout4 - ob0),
+                        ob0: first * ob,
+                        cout4,
                         slope: s.slope,
+                        group_stride: stride,
+                        _pad: [0; 3],
                     };
                     params.resize(params.len().next_multiple_of(align), 0);
                     group.params[reset] = params.len() as u32;
@@ -501,8 +515,11 @@ impl ConvPlan {
                 }
                 weights.resize(weights.len().next_multiple_of(align), 0);
                 group.weights = weights.len() as u32;
-                let chunk = pack_group(s.weight, s.bias, s.cout, s.ca, s.cb, ob0 as usize, ob as usize);
-                weights.extend_from_slice(bytemuck::cast_slice(&chunk));
+                for g in first..first + count {
+                    let chunk = pack_group(s.weight, s.bias, s.cout, s.ca, s.cb, (g * ob) as usize, ob as usize);
+                    debug_assert_eq!(chunk.len() as u32, stride);
+                    weights.extend_from_slice(bytemuck::cast_slice(&chunk));
+                }
                 groups.push(group);
             }
             convs.push(Planned {
@@ -555,7 +572,7 @@ impl ConvPlan {
         pass.set_pipeline(&c.pipeline);
         for g in &c.groups {
             pass.set_bind_group(0, group, &[g.params[reset as usize], g.weights]);
-            pass.dispatch_workgroups(c.workgroups.0, c.workgroups.1, 1);
+            pass.dispatch_workgroups(c.workgroups.0, c.workgroups.1, g.count);
         }
     }
 }

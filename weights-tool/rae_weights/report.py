@@ -1,0 +1,381 @@
+"""Error against run time: rae beside its peers on the same held-out frames, written to docs/REPORT.md.
+
+    python -m rae_weights report ../models/*.safetensors --data 1spp=DATA/val 4spp=DATA/val4 \\
+        --out ../docs/REPORT.md --peak-gflops 156
+
+One run, side by side on the same frames: the noisy input; rae (``rae-cli denoise`` on the adapter
+wgpu picks) in each precision and with each model; PyTorch on the CPU with the same weights; Intel
+Open Image Denoise (pyoidn, color+albedo+normal, HDR) at quality high and fast. For each: median
+time per frame (host to host: upload, GPU and download for rae; the whole call for PyTorch and
+OIDN; first frame of each sequence left out, it holds shader compilation and warm-up), relMSE,
+PSNR, SSIM, FLIP (HDR-FLIP of flip-evaluator) and temporal error (rae-core's metrics, mirrored
+in ``metrics``). Also rae's error against PyTorch per model and precision, ``rae-cli bench``
+(sizes, precisions, per-stage GPU times), a PNG plot of error against time and a sheet of crops.
+Figures go beside the report (``report/`` next to it); every file is written atomically.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import importlib.metadata
+import os
+import platform
+import shlex
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from .data import Sequence, load_sequences, read_exr
+from .export import read_weights
+from .metrics import sequence_metrics, tonemap
+from .model import RecurrentAE, finish_output, prepare_input
+
+REPO = Path(__file__).resolve().parents[2]
+
+
+@dataclass
+class Method:
+    """One row of the report: a way of getting a clean frame, its outputs and its times."""
+
+    name: str
+    kind: str  # "input", "rae", "pytorch", "oidn"
+    outputs: dict[str, dict[str, list[np.ndarray]]] = field(default_factory=dict)  # set -> seq -> frames
+    times_ms: list[float] = field(default_factory=list)
+    metrics: dict[str, dict[str, float]] = field(default_factory=dict)  # set -> metric -> mean
+
+    def add(self, label: str, seq: str, frames: list[np.ndarray]) -> None:
+        self.outputs.setdefault(label, {})[seq] = frames
+
+    @property
+    def ms(self) -> float:
+        return statistics.median(self.times_ms) if self.times_ms else float("nan")
+
+
+def hwc(t: torch.Tensor) -> np.ndarray:
+    """[1, C, H, W] or [C, H, W] tensor -> HxWxC float32 array."""
+    return t.reshape(t.shape[-3:]).permute(1, 2, 0).contiguous().numpy().astype(np.float32)
+
+
+def find_rae_cli() -> Path | None:
+    """The workspace's rae-cli binary, if built: the newer of release and debug."""
+    built = [p for p in (REPO / "target" / prof / "rae-cli" for prof in ("release", "debug")) if p.exists()]
+    return max(built, key=lambda p: p.stat().st_mtime) if built else None
+
+
+def machine() -> str:
+    """CPU model, cores and memory of this machine, one line."""
+    cpu = platform.processor() or platform.machine()
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+        mem = next(int(l.split()[1]) for l in Path("/proc/meminfo").read_text().splitlines() if l.startswith("MemTotal"))
+        memory = f", {mem / 2**20:.0f} GiB"
+    except (OSError, StopIteration):
+        memory = ""
+    return f"{cpu}, {os.cpu_count()} logical cores{memory}, {platform.system()} {platform.release()}"
+
+
+def run_pytorch(path: Path, seq: Sequence, times: list[float]) -> list[np.ndarray]:
+    """rae's network in PyTorch (float32, CPU, channels_last), hidden state carried; appends the
+    time of every frame after the first to `times`."""
+    arch, state = read_weights(path)
+    model = RecurrentAE(arch).eval()
+    model.load_state_dict(state)
+    model = model.to(memory_format=torch.channels_last)
+    model.reset()
+    outs = []
+    with torch.inference_mode():
+        for i in range(seq.frames):
+            t = time.perf_counter()
+            frame = {k: v[i : i + 1] for k, v in seq.buffers.items()}
+            x = prepare_input(arch, frame).contiguous(memory_format=torch.channels_last)
+            y = finish_output(arch, model(x), frame)
+            out = hwc(y)
+            if i > 0:
+                times.append((time.perf_counter() - t) * 1e3)
+            outs.append(out)
+    return outs
+
+
+def run_oidn(seq: Sequence, quality: str, times: list[float]) -> list[np.ndarray]:
+    """OIDN's RT filter on each frame alone (it has no temporal mode), HDR color+albedo+normal.
+    One untimed call first: the filter is committed on a change of quality."""
+    import pyoidn
+
+    outs = []
+    for i in range(seq.frames):
+        b = {k: np.ascontiguousarray(np.nan_to_num(hwc(seq.buffers[k][i]))) for k in ("color", "albedo", "normal")}
+        if i == 0:
+            pyoidn.denoise(b["color"], b["albedo"], b["normal"], hdr=True, quality=quality)
+        t = time.perf_counter()
+        out = np.asarray(pyoidn.denoise(b["color"], b["albedo"], b["normal"], hdr=True, quality=quality), dtype=np.float32)
+        if i > 0:
+            times.append((time.perf_counter() - t) * 1e3)
+        outs.append(out)
+    return outs
+
+
+def run_rae_cli(cli: Path, weights: Path, precision: str, folder: Path, frames: int, times: list[float], log: list[str]) -> list[np.ndarray]:
+    """rae-cli denoise of one sequence folder; the denoised frames and per-frame times (all but
+    the first, which compiles the shaders)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        out, table = Path(tmp) / "out", Path(tmp) / "times.csv"
+        cmd = [str(cli), "denoise", str(folder), "-o", str(out), "--weights", str(weights), "--precision", precision, "--csv", str(table)]
+        r = subprocess.run(cmd, capture_output=True, text=True)
+        if r.returncode != 0:
+            raise RuntimeError(f"{shlex.join(cmd)} failed ({r.returncode}):\n{r.stdout}\n{r.stderr}")
+        device = next((l.split(":", 1)[1].strip() for l in r.stdout.splitlines() if l.startswith("device:")), "?")
+        if device not in log:
+            log.append(device)
+        with table.open() as f:
+            rows = list(csv.DictReader(f))
+        times.extend(float(x["upload_ms"]) + float(x["gpu_ms"]) + float(x["download_ms"]) for x in rows[1:])
+        files = sorted(out.glob("denoised_*.exr"))
+        if len(files) != frames:
+            raise RuntimeError(f"{folder}: rae-cli wrote {len(files)} frames, expected {frames}")
+        return [read_exr(p) for p in files]
+
+
+def flip_mean(outs: list[np.ndarray], refs: list[np.ndarray]) -> float:
+    """Mean HDR-FLIP over frames (flip-evaluator, default 67 pixels per degree)."""
+    import flip_evaluator
+
+    vals = []
+    for o, r in zip(outs, refs):
+        clean = lambda a: np.ascontiguousarray(np.maximum(np.nan_to_num(a, posinf=0.0), 0.0), dtype=np.float32)  # noqa: E731
+        vals.append(float(flip_evaluator.evaluate(clean(r), clean(o), "HDR", applyMagma=False)[1]))
+    return float(np.mean(vals))
+
+
+def score(methods: list[Method], refs: dict[str, dict[str, list[np.ndarray]]]) -> None:
+    """Fill each method's metrics: per sequence, then the mean over each set's sequences."""
+    for m in methods:
+        for label, seqs in m.outputs.items():
+            per_seq = []
+            for name, outs in seqs.items():
+                s = sequence_metrics(outs, refs[label][name])
+                s["flip"] = flip_mean(outs, refs[label][name])
+                per_seq.append(s)
+            m.metrics[label] = {k: float(np.mean([s[k] for s in per_seq])) for k in per_seq[0]}
+
+
+def abs_error(a: Method, b: Method) -> tuple[float, float, float]:
+    """(max |a - b|, mean |a - b|, max |a - b| over the frame's max |b|) over all frames of all sets."""
+    mx, total, n, rel = 0.0, 0.0, 0, 0.0
+    for label, seqs in a.outputs.items():
+        for name, outs in seqs.items():
+            for x, y in zip(outs, b.outputs[label][name]):
+                d = np.abs(x.astype(np.float64) - y)
+                mx, total, n = max(mx, float(d.max())), total + float(d.sum()), n + d.size
+                rel = max(rel, float(d.max()) / max(float(np.abs(y).max()), 1e-12))
+    return mx, total / max(n, 1), rel
+
+
+def atomic_save(path: Path, write) -> None:  # type: ignore[no-untyped-def]
+    """Call write(tmp) and rename tmp onto path; no partial file on failure."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.name}.partial{path.suffix}")
+    try:
+        write(tmp)
+        os.replace(tmp, path)
+    finally:
+        tmp.unlink(missing_ok=True)
+
+
+def plot(methods: list[Method], labels: list[str], path: Path, caption: str) -> None:
+    """Error (relMSE and FLIP) against time per frame, one column per held-out set."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(2, len(labels), figsize=(6.5 * len(labels), 8), squeeze=False)
+    markers = {"input": "x", "rae": "o", "pytorch": "s", "oidn": "^"}
+    for col, label in enumerate(labels):
+        for row, key in enumerate(("relmse", "flip")):
+            ax = axes[row][col]
+            for m in methods:
+                t = m.ms if m.kind != "input" else 0.1
+                ax.scatter(t, m.metrics[label][key], marker=markers[m.kind], s=40)
+                ax.annotate(m.name, (t, m.metrics[label][key]), fontsize=7, xytext=(4, 2), textcoords="offset points")
+            ax.set_xscale("log")
+            ax.set_yscale("log")
+            ax.set_xlabel("time per frame (ms; the input at 0.1)")
+            ax.set_ylabel(key if key != "relmse" else "relMSE")
+            ax.set_title(f"{label}: {'relMSE' if key == 'relmse' else 'FLIP'} against time")
+            ax.grid(True, which="both", alpha=0.3)
+    fig.suptitle(caption, fontsize=8)
+    fig.tight_layout(rect=(0, 0, 1, 0.96))
+    atomic_save(path, lambda p: fig.savefig(p, dpi=110, format="png"))
+    plt.close(fig)
+
+
+def crop_sheet(columns: list[tuple[str, np.ndarray]], ref: np.ndarray, path: Path, caption: str, size: int = 48) -> None:
+    """Crops of one frame: where the first method's error is largest and where the reference has
+    most detail; columns are the given methods and the reference, tonemapped as the metrics are."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    h, w, _ = ref.shape
+    c = min(size, h, w)
+    t_ref = tonemap(ref)
+
+    def best(v: np.ndarray) -> tuple[int, int]:
+        # Window sums from an integral image; the window with the largest sum.
+        s = np.pad(v.cumsum(0).cumsum(1), ((1, 0), (1, 0)))
+        win = s[c:, c:] - s[:-c, c:] - s[c:, :-c] + s[:-c, :-c]
+        y, x = np.unravel_index(int(np.argmax(win)), win.shape)
+        return int(y), int(x)
+
+    err = np.abs(tonemap(columns[1][1]) - t_ref).mean(-1)
+    detail = np.abs(np.diff(t_ref, axis=0, prepend=t_ref[:1])).mean(-1) + np.abs(np.diff(t_ref, axis=1, prepend=t_ref[:, :1])).mean(-1)
+    spots = [("largest rae error", best(err)), ("most detail", best(detail))]
+    cols = columns + [("reference", ref)]
+    fig, axes = plt.subplots(len(spots), len(cols), figsize=(2.2 * len(cols), 2.4 * len(spots) + 0.5), squeeze=False)
+    for r, (why, (y, x)) in enumerate(spots):
+        for k, (name, img) in enumerate(cols):
+            ax = axes[r][k]
+            ax.imshow(tonemap(img[y : y + c, x : x + c]), interpolation="nearest")
+            ax.set_xticks([])
+            ax.set_yticks([])
+            if r == 0:
+                ax.set_title(name, fontsize=8)
+            if k == 0:
+                ax.set_ylabel(f"{why}\n({x},{y}) {c}x{c}", fontsize=7)
+    fig.suptitle(caption, fontsize=7)
+    fig.tight_layout(rect=(0, 0, 1, 0.93))
+    atomic_save(path, lambda p: fig.savefig(p, dpi=110, format="png"))
+    plt.close(fig)
+
+
+def bench_text(cli: Path, weights: Path, sizes: str, frames: int, peak: float | None) -> tuple[str, str]:
+    """(command, output) of rae-cli bench with per-stage times."""
+    cmd = [str(cli), "bench", str(weights), "--sizes", sizes, "--frames", str(frames), "--precision", "f32,f16", "--layers"]
+    if peak:
+        cmd += ["--peak-gflops", str(peak)]
+    r = subprocess.run(cmd, capture_output=True, text=True)
+    if r.returncode != 0:
+        raise RuntimeError(f"{shlex.join(cmd)} failed ({r.returncode}):\n{r.stdout}\n{r.stderr}")
+    return shlex.join(cmd), r.stdout
+
+
+def rel(p: Path, to: Path) -> str:
+    """p relative to `to` where it lies below it (for links and commands), else as is."""
+    try:
+        return os.path.relpath(p, to)
+    except ValueError:
+        return str(p)
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(prog="rae-weights report", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("models", nargs="+", type=Path, help="rae weights files; the first is the one the crops, PyTorch row and bench show first")
+    p.add_argument("--data", nargs="+", required=True, metavar="LABEL=FOLDER", help="held-out sets, e.g. 1spp=data/val")
+    p.add_argument("--out", type=Path, default=REPO / "docs" / "REPORT.md")
+    p.add_argument("--rae-cli", type=Path, default=None, help="rae-cli binary (default: target/release or target/debug of this workspace)")
+    p.add_argument("--precisions", default="f32,f16")
+    p.add_argument("--bench-sizes", default="256x256,512x512,1280x720", help="rae-cli bench sizes; empty to skip the bench")
+    p.add_argument("--bench-frames", type=int, default=10)
+    p.add_argument("--peak-gflops", type=float, help="the adapter's fp32 peak, for the bench's share of peak")
+    p.add_argument("--threads", type=int, default=min(2, os.cpu_count() or 1), help="CPU threads of PyTorch")
+    a = p.parse_args(argv)
+    command = "python -m rae_weights report " + shlex.join(sys.argv[2:] if argv is None else argv)
+    cli = a.rae_cli or find_rae_cli()
+    if cli is None or not cli.exists():
+        p.error("no rae-cli binary: build it (cargo build --release -p rae-cli) or pass --rae-cli")
+    for m in a.models:
+        if not m.exists():
+            p.error(f"{m}: no such weights file")
+    sets: dict[str, Path] = {}
+    for d in a.data:
+        label, _, folder = d.partition("=")
+        if not folder:
+            p.error(f"--data {d}: expected LABEL=FOLDER")
+        sets[label] = Path(folder)
+    torch.set_num_threads(a.threads)
+    precisions = [x for x in a.precisions.split(",") if x]
+
+    # Every method on every sequence of every set.
+    noisy = Method("noisy input", "input")
+    raes = {(m, pr): Method(f"rae {m.stem} {pr}", "rae") for m in a.models for pr in precisions}
+    torches = {m: Method(f"PyTorch CPU {m.stem}", "pytorch") for m in a.models}
+    oidns = {q: Method(f"OIDN {q}", "oidn") for q in ("high", "fast")}
+    refs: dict[str, dict[str, list[np.ndarray]]] = {}
+    devices: list[str] = []
+    first: tuple[str, str, int] | None = None
+    for label, folder in sets.items():
+        for seq in load_sequences(folder):
+            seq_folder = next(f for f in sorted({q.parent for q in folder.rglob("color_0000.exr")}) if f.name == seq.name)
+            print(f"[{label}] {seq.name}: {seq.frames} frames", flush=True)
+            refs.setdefault(label, {})[seq.name] = [hwc(seq.buffers["reference"][i]) for i in range(seq.frames)]
+            noisy.add(label, seq.name, [hwc(seq.buffers["color"][i]) for i in range(seq.frames)])
+            for (m, pr), meth in raes.items():
+                meth.add(label, seq.name, run_rae_cli(cli, m, pr, seq_folder, seq.frames, meth.times_ms, devices))
+            for m, meth in torches.items():
+                meth.add(label, seq.name, run_pytorch(m, seq, meth.times_ms))
+            for q, meth in oidns.items():
+                meth.add(label, seq.name, run_oidn(seq, q, meth.times_ms))
+            first = first or (label, seq.name, seq.frames - 1)
+    methods = [noisy, *raes.values(), *torches.values(), *oidns.values()]
+    score(methods, refs)
+    assert first is not None
+
+    host = machine()
+    device = "; ".join(devices)
+    try:
+        oidn_version = importlib.metadata.version("pyoidn")
+    except importlib.metadata.PackageNotFoundError:
+        oidn_version = "?"
+    figures = a.out.parent / "report"
+    stamp = f"`{command}` on {host}; rae on {device}"
+    plot(methods, list(sets), figures / "error-vs-time.png", f"{command}\n{host}; rae: {device}")
+    label, name, k = first
+    crop_cols = [("noisy input", noisy.outputs[label][name][k]), (raes[(a.models[0], precisions[0])].name, raes[(a.models[0], precisions[0])].outputs[label][name][k]), ("OIDN high", oidns["high"].outputs[label][name][k])]
+    crop_sheet(crop_cols, refs[label][name][k], figures / "crops.png", f"{label}/{name} frame {k}: {command}\n{host}")
+
+    bench = None
+    if a.bench_sizes:
+        print("rae-cli bench ...", flush=True)
+        bench = bench_text(cli, a.models[0], a.bench_sizes, a.bench_frames, a.peak_gflops)
+
+    # The report.
+    L = ["# rae: error against run time", ""]
+    L += [f"Written by `{command}` (weights-tool/rae_weights/report.py); every table and figure below comes from this one run.", ""]
+    L += [f"- Machine: {host}.", f"- rae: `rae-cli denoise` on {device}.", f"- PyTorch {torch.__version__} on the CPU, {a.threads} threads, float32, channels_last, same weights files.", f"- OIDN: pyoidn {oidn_version}, RT filter, HDR, color+albedo+normal, on the CPU, frame by frame (it has no temporal state).", ""]
+    L += ["Time per frame: median over all frames but each sequence's first (shader compilation, warm-up), host memory to host memory (rae: upload + GPU + download as `rae-cli denoise --csv` records them). Errors: means over each sequence's frames, then over sequences; relMSE on radiance, PSNR/SSIM on tonemapped images (x/(1+x), sRGB), FLIP = mean HDR-FLIP (flip-evaluator), temporal = mean |d out - d ref| of tonemapped consecutive frames. Lower is better except PSNR and SSIM.", ""]
+    for label, folder in sets.items():
+        seqs = refs[label]
+        shape = next(iter(seqs.values()))[0].shape
+        L += [f"## Held-out set `{label}` ({folder}: {len(seqs)} sequences, {sum(len(v) for v in seqs.values())} frames, {shape[1]}x{shape[0]})", ""]
+        L += ["| method | ms / frame | relMSE | PSNR (dB) | SSIM | FLIP | temporal |", "|---|---:|---:|---:|---:|---:|---:|"]
+        for m in methods:
+            r = m.metrics[label]
+            t = "-" if m.kind == "input" else f"{m.ms:.1f}"
+            L.append(f"| {m.name} | {t} | {r['relmse']:.4f} | {r['psnr']:.2f} | {r['ssim']:.4f} | {r['flip']:.4f} | {r['temporal']:.4f} |")
+        L.append("")
+    L += ["## rae (wgpu) against PyTorch, same weights and frames", "", "Absolute difference of the output radiance over all frames of all sets; the last column divides each frame's largest difference by the frame's largest PyTorch value.", ""]
+    L += ["| model | precision | max abs | mean abs | max / frame max |", "|---|---|---:|---:|---:|"]
+    for (m, pr), meth in raes.items():
+        mx, mean, relmax = abs_error(meth, torches[m])
+        L.append(f"| {m.stem} | {pr} | {mx:.3e} | {mean:.3e} | {relmax:.3e} |")
+    L.append("")
+    L += ["## Error against time", "", f"![error against time]({rel(figures / 'error-vs-time.png', a.out.parent)})", "", f"Made by {stamp}.", ""]
+    L += ["## Crops", "", f"Set `{label}`, sequence `{name}`, frame {k}: where rae's error is largest and where the reference has the most detail.", "", f"![crops]({rel(figures / 'crops.png', a.out.parent)})", "", f"Made by {stamp}.", ""]
+    if bench:
+        bcmd, btext = bench
+        L += ["## rae-cli bench", "", f"`{bcmd}` on {host} (run by the report, after the runs above):", "", "```", btext.rstrip(), "```", ""]
+    atomic_save(a.out, lambda path: path.write_text("\n".join(L)))
+    print(f"wrote {a.out}, {figures / 'error-vs-time.png'}, {figures / 'crops.png'}")
+    return 0
