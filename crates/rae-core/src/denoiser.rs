@@ -72,12 +72,37 @@ pub struct IoBinding {
     output: wgpu::BindGroup,
 }
 
-/// Buffers of the host-slice path, made on its first use.
+/// Buffers of the host-slice path, made on its first use and kept: a frame creates no buffer.
+///
+/// `upload` is a persistent staging buffer (MAP_WRITE) holding every input back to back. It is
+/// mapped between frames: a frame writes the host slices into it, unmaps it, and the frame's
+/// encoder copies it into the input buffers; after the submit it is mapped again in the same
+/// poll that maps `readback`. (`queue.write_buffer` would stage through a fresh allocation in
+/// wgpu on every frame.)
 struct HostIo {
     inputs: Vec<(InputBuffer, wgpu::Buffer)>,
+    /// Offset of each input in `upload`, in the order of `inputs`.
+    offsets: Vec<u64>,
+    upload: wgpu::Buffer,
+    /// Whether `upload` is mapped now (wgpu has no query for it).
+    upload_mapped: std::sync::atomic::AtomicBool,
     output: wgpu::Buffer,
     readback: wgpu::Buffer,
     binding: IoBinding,
+}
+
+impl HostIo {
+    fn bytes(&self) -> u64 {
+        self.inputs.iter().map(|(_, b)| b.size()).sum::<u64>() + self.upload.size() + self.output.size() + self.readback.size()
+    }
+}
+
+/// Timestamp queries and their buffers for [`Denoiser::denoise_profiled`], made on first use.
+struct Profiler {
+    queries: wgpu::QuerySet,
+    resolved: wgpu::Buffer,
+    readback: wgpu::Buffer,
+    count: u32,
 }
 
 /// Runs one model at one frame size, frame after frame, keeping the hidden state on the GPU.
@@ -109,6 +134,7 @@ pub struct Denoiser {
     precision: Precision,
     bytes: u64,
     host: Option<HostIo>,
+    profiler: Option<Profiler>,
     parity: usize,
     reset_pending: bool,
 }
@@ -282,6 +308,7 @@ impl Denoiser {
             precision,
             bytes,
             host: None,
+            profiler: None,
             parity: 0,
             reset_pending: true,
         })
@@ -307,9 +334,11 @@ impl Denoiser {
         (self.pwidth, self.pheight)
     }
 
-    /// Bytes of GPU memory held for activations, hidden state and weights (host I/O excluded).
+    /// Bytes of GPU memory held for activations, hidden state, weights and uniforms, plus the
+    /// host-slice path's I/O buffers once [`Self::denoise_into`] has made them. Frames allocate
+    /// nothing, so this is also the peak.
     pub fn gpu_bytes(&self) -> u64 {
-        self.bytes
+        self.bytes + self.host.as_ref().map_or(0, HostIo::bytes)
     }
 
     /// Forget the hidden state: the next frame is denoised as the first of a sequence.
@@ -438,22 +467,49 @@ impl Denoiser {
         }
         let t0 = Instant::now();
         let host = self.host.take().expect("made above");
-        for (b, buf) in &host.inputs {
-            self.queue.write_buffer(buf, 0, bytemuck::cast_slice(frame.get(*b).expect("validated")));
-        }
         let mut encoder = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("rae frame") });
-        let recorded = self.record(&mut encoder, &host.binding);
+        let uploaded = self.upload(&host, frame, &mut encoder);
+        let recorded = uploaded.and_then(|_| self.record(&mut encoder, &host.binding));
         encoder.copy_buffer_to_buffer(&host.output, 0, &host.readback, 0, host.output.size());
         let t1 = Instant::now();
         self.queue.submit(Some(encoder.finish()));
         let waited = self.device.poll(wgpu::PollType::wait_indefinitely());
         let t2 = Instant::now();
-        let result = recorded.and(waited.map(|_| ()).map_err(|e| Error::Gpu(e.to_string()))).and_then(|_| {
-            read_buffer(&self.device, &host.readback, out)
-        });
+        let result = recorded
+            .and(waited.map(|_| ()).map_err(|e| Error::Gpu(e.to_string())))
+            .and_then(|_| finish_host_frame(&self.device, &host, out));
         let t3 = Instant::now();
         self.host = Some(host);
         result.map(|_| FrameTimings { upload: t1 - t0, gpu: t2 - t1, download: t3 - t2 })
+    }
+
+    /// Copy the frame's host slices into the mapped staging buffer, unmap it and record its
+    /// copies into the input buffers.
+    fn upload(&self, host: &HostIo, frame: &FrameInputs, encoder: &mut wgpu::CommandEncoder) -> Result<()> {
+        if !host.upload_mapped.load(Ordering::Relaxed) {
+            // Only after a failed frame: map it again (a frame normally ends with it mapped).
+            let (tx, rx) = std::sync::mpsc::channel();
+            host.upload.map_async(wgpu::MapMode::Write, .., move |r| {
+                let _ = tx.send(r);
+            });
+            self.device.poll(wgpu::PollType::wait_indefinitely()).map_err(|e| Error::Gpu(e.to_string()))?;
+            rx.recv().map_err(|e| Error::Gpu(e.to_string()))?.map_err(|e| Error::Gpu(e.to_string()))?;
+            host.upload_mapped.store(true, Ordering::Relaxed);
+        }
+        {
+            let mut view = host.upload.get_mapped_range_mut(..).map_err(|e| Error::Gpu(format!("staging buffer: {e:?}")))?;
+            for ((b, buf), &off) in host.inputs.iter().zip(&host.offsets) {
+                let src: &[u8] = bytemuck::cast_slice(frame.get(*b).expect("validated"));
+                view.slice(off as usize..off as usize + src.len()).copy_from_slice(src);
+                debug_assert_eq!(src.len() as u64, buf.size());
+            }
+        }
+        host.upload.unmap();
+        host.upload_mapped.store(false, Ordering::Relaxed);
+        for ((_, buf), &off) in host.inputs.iter().zip(&host.offsets) {
+            encoder.copy_buffer_to_buffer(&host.upload, off, buf, 0, buf.size());
+        }
+        Ok(())
     }
 
     /// Denoise one frame from host slices with a timestamp after every stage; returns each
@@ -468,27 +524,30 @@ impl Denoiser {
         if self.host.is_none() {
             self.host = Some(self.make_host_io()?);
         }
-        let count = self.graph.nodes.len() as u32 + 3;
-        let queries = self.device.create_query_set(&wgpu::QuerySetDescriptor { label: Some("stages"), ty: wgpu::QueryType::Timestamp, count });
-        let bytes = count as u64 * 8;
-        let buffer = |usage| self.device.create_buffer(&wgpu::BufferDescriptor { label: Some("timestamps"), size: bytes, usage, mapped_at_creation: false });
-        let resolved = buffer(wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC);
-        let readback = buffer(wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST);
-        let host = self.host.take().expect("made above");
-        for (b, buf) in &host.inputs {
-            self.queue.write_buffer(buf, 0, bytemuck::cast_slice(frame.get(*b).expect("validated")));
+        if self.profiler.is_none() {
+            let count = self.graph.nodes.len() as u32 + 3;
+            let queries = self.device.create_query_set(&wgpu::QuerySetDescriptor { label: Some("stages"), ty: wgpu::QueryType::Timestamp, count });
+            let buffer = |usage| self.device.create_buffer(&wgpu::BufferDescriptor { label: Some("timestamps"), size: count as u64 * 8, usage, mapped_at_creation: false });
+            let resolved = buffer(wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC);
+            let readback = buffer(wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST);
+            self.profiler = Some(Profiler { queries, resolved, readback, count });
         }
+        let prof = self.profiler.take().expect("made above");
+        let count = prof.count;
+        let host = self.host.take().expect("made above");
         let mut encoder = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("rae frame (profiled)") });
-        let recorded = self.record_with(&mut encoder, &host.binding, Some(&queries));
-        encoder.resolve_query_set(&queries, 0..count, &resolved, 0);
-        encoder.copy_buffer_to_buffer(&resolved, 0, &readback, 0, bytes);
+        let uploaded = self.upload(&host, frame, &mut encoder);
+        let recorded = uploaded.and_then(|_| self.record_with(&mut encoder, &host.binding, Some(&prof.queries)));
+        encoder.resolve_query_set(&prof.queries, 0..count, &prof.resolved, 0);
+        encoder.copy_buffer_to_buffer(&prof.resolved, 0, &prof.readback, 0, count as u64 * 8);
         encoder.copy_buffer_to_buffer(&host.output, 0, &host.readback, 0, host.output.size());
         self.queue.submit(Some(encoder.finish()));
-        let result = recorded.and_then(|_| read_buffer(&self.device, &host.readback, out));
+        let result = recorded.and_then(|_| finish_host_frame(&self.device, &host, out));
         self.host = Some(host);
-        result?;
         let mut ticks = vec![0f32; 2 * count as usize];
-        read_buffer(&self.device, &readback, &mut ticks)?;
+        let read = result.and_then(|_| read_buffer(&self.device, &prof.readback, &mut ticks));
+        self.profiler = Some(prof);
+        read?;
         let ticks: &[u64] = bytemuck::cast_slice(&ticks);
         let period = self.queue.get_timestamp_period() as f64;
         let names = std::iter::once("prep".to_string()).chain(self.graph.nodes.iter().map(|n| n.name.clone())).chain(std::iter::once("output".to_string()));
@@ -506,6 +565,18 @@ impl Denoiser {
             .into_iter()
             .map(|b| (b, buffer(b.name(), pixels * b.channels() as u64 * 4, wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST)))
             .collect();
+        let mut offsets = Vec::with_capacity(inputs.len());
+        let mut staged = 0u64;
+        for (_, b) in &inputs {
+            offsets.push(staged);
+            staged += b.size().next_multiple_of(wgpu::COPY_BUFFER_ALIGNMENT);
+        }
+        let upload = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("upload staging"),
+            size: staged,
+            usage: wgpu::BufferUsages::MAP_WRITE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: true,
+        });
         let output = buffer("output", pixels * 12, wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC);
         let readback = buffer("readback", pixels * 12, wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST);
         let get = |b: InputBuffer| inputs.iter().find(|(x, _)| *x == b).map(|(_, buf)| buf);
@@ -517,7 +588,7 @@ impl Denoiser {
             roughness: get(InputBuffer::Roughness),
             output: &output,
         })?;
-        Ok(HostIo { inputs, output, readback, binding })
+        Ok(HostIo { inputs, offsets, upload, upload_mapped: std::sync::atomic::AtomicBool::new(true), output, readback, binding })
     }
 
     /// The packed network input of the last frame, channel-major (`channels x ph x pw`), for
@@ -573,6 +644,30 @@ pub fn activation_bytes(graph: &Graph, pwidth: u32, pheight: u32, precision: Pre
 fn create_init(device: &wgpu::Device, label: &str, contents: &[u8], usage: wgpu::BufferUsages) -> wgpu::Buffer {
     use wgpu::util::DeviceExt;
     device.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some(label), contents, usage })
+}
+
+/// After a host-path frame's submit: map the staging buffer for the next frame's writes and the
+/// readback for this frame's output in one poll, then copy the output into `out`.
+fn finish_host_frame(device: &wgpu::Device, host: &HostIo, out: &mut [f32]) -> Result<()> {
+    let (tx, rx) = std::sync::mpsc::channel();
+    let tx2 = tx.clone();
+    host.upload.map_async(wgpu::MapMode::Write, .., move |r| {
+        let _ = tx2.send(r);
+    });
+    host.readback.map_async(wgpu::MapMode::Read, .., move |r| {
+        let _ = tx.send(r);
+    });
+    device.poll(wgpu::PollType::wait_indefinitely()).map_err(|e| Error::Gpu(e.to_string()))?;
+    for _ in 0..2 {
+        rx.recv().map_err(|e| Error::Gpu(e.to_string()))?.map_err(|e| Error::Gpu(e.to_string()))?;
+    }
+    host.upload_mapped.store(true, Ordering::Relaxed);
+    {
+        let view = host.readback.get_mapped_range(..).map_err(|e| Error::Gpu(format!("{e:?}")))?;
+        out.copy_from_slice(&bytemuck::cast_slice::<u8, f32>(&view)[..out.len()]);
+    }
+    host.readback.unmap();
+    Ok(())
 }
 
 /// Map a MAP_READ buffer and copy its f32s into `out`.

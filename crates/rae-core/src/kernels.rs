@@ -487,6 +487,9 @@ impl ConvPlan {
                 reason: format!("{} input channels exceed one 64 KiB weight chunk (at most 452)", s.ca + s.cb),
             })?;
             let cout4 = blocks(s.cout);
+            // A conv with one output block (the 3-channel output convs) would compute a second,
+            // discarded tile with OB = 2.
+            let ob = ob.min(cout4);
             let variant = ConvVariant { read_a: s.read_a, read_b: s.read_b, leaky: s.leaky, ob };
             // Groups of `ob` output blocks, as many per dispatch as fit one chunk (workgroup z).
             let stride = (cin4 * 36 + 1) * ob;
