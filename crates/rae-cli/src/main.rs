@@ -76,12 +76,13 @@ enum Command {
         golden: Vec<PathBuf>,
     },
     /// Time frames of a weights file on the chosen adapter: median ms per frame (after
-    /// warm-up) split into upload, GPU and download, and achieved GFLOP/s.
+    /// warm-up) split into upload, GPU and download, achieved GFLOP/s (and share of a stated
+    /// peak), and the GPU memory the denoiser holds (its peak: frames allocate nothing).
     Bench {
         /// A .safetensors weights file.
         weights: PathBuf,
         /// Frame sizes, WxH.
-        #[arg(long, value_delimiter = ',', default_value = "256x256")]
+        #[arg(long, value_delimiter = ',', default_value = "256x256,512x512,1280x720")]
         sizes: Vec<String>,
         /// Timed frames per size (after 2 warm-up frames).
         #[arg(long, default_value_t = 10)]
@@ -132,7 +133,9 @@ fn bench(path: &Path, sizes: &[String], frames: usize, layers: bool, precisions:
     let gpu = Gpu::new()?;
     let flop_px = 2.0 * Graph::new(&weights.arch).macs_per_pixel();
     println!("adapter: {}; weights: {}; {frames} timed frames after 2 warm-up", gpu.describe(), path.display());
-    println!("{:>10} {:>9} {:>10} {:>10} {:>10} {:>10} {:>10} {:>8} {:>10}", "size", "precision", "total ms", "upload", "gpu", "download", "GFLOP/s", "of peak", "GPU MiB");
+    // Both precisions run everywhere: f16 is rgba16float storage (core WebGPU), arithmetic f32.
+    println!("precisions: f32, f16 (f16 = rgba16float activations, f32 arithmetic; SHADER_F16 {})", gpu.device.features().contains(wgpu::Features::SHADER_F16));
+    println!("{:>10} {:>9} {:>10} {:>10} {:>10} {:>10} {:>10} {:>8} {:>10}", "size", "precision", "total ms", "upload", "gpu", "download", "GFLOP/s", "of peak", "peak MiB");
     for (s, &p) in sizes.iter().flat_map(|s| precisions.iter().map(move |p| (s, p))) {
         let (w, h) = parse_size(s)?;
         let precision = Precision::from(p);
@@ -186,12 +189,12 @@ fn stage_table(d: &mut Denoiser, frame: &rae_core::FrameInputs, out: &mut [f32],
         rows.push((name.clone(), ms, shape, flop));
     }
     let total: f64 = rows.iter().map(|r| r.1).sum();
-    println!("    {:<14} {:<16} {:>9} {:>7} {:>9}", "stage", "level cin->cout", "GPU ms", "share", "GFLOP/s");
+    println!("    {:<16} {:<16} {:>9} {:>7} {:>9}", "stage", "level cin->cout", "GPU ms", "share", "GFLOP/s");
     for (name, ms, shape, flop) in &rows {
         let rate = if *flop > 0.0 { format!("{:.2}", flop / (ms * 1e-3) / 1e9) } else { String::new() };
-        println!("    {name:<14} {shape:<16} {ms:>9.2} {:>6.1}% {rate:>9}", 100.0 * ms / total);
+        println!("    {name:<16} {shape:<16} {ms:>9.2} {:>6.1}% {rate:>9}", 100.0 * ms / total);
     }
-    println!("    {:<14} {:<16} {total:>9.2}", "sum", "");
+    println!("    {:<16} {:<16} {total:>9.2}", "sum", "");
     Ok(())
 }
 

@@ -14,8 +14,9 @@
 //!   convs run with a uniform block that reads zero channels from the hidden state, which is
 //!   exactly a zero hidden state (the skipped terms are the last summed), so frame 0 after
 //!   `reset()` is bit-identical to frame 0 of a fresh denoiser.
-//! - **Weights** sit in one uniform buffer of 64 KiB chunks, one per (conv, output-block group),
-//!   bound by dynamic offset ([`ConvPlan`]): every invocation reads the same weight at once,
+//! - **Weights** sit in one uniform buffer of 64 KiB chunks, one per dispatch (as many of a
+//!   conv's output-block groups as fit), bound by dynamic offset ([`ConvPlan`]): every
+//!   invocation of a workgroup reads the same weight at once,
 //!   which lavapipe broadcasts from one load and a discrete GPU serves from its constant cache.
 //!
 //! Frames are `width x height`; the network runs at the size padded to a multiple of

@@ -84,7 +84,7 @@ pub fn blocks(channels: usize) -> u32 {
     channels.div_ceil(4) as u32
 }
 
-/// Uniform block of conv3x3.wgsl: one per (conv, output-block group, reset).
+/// Uniform block of conv3x3.wgsl: one per (dispatch, reset).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable)]
 pub struct ConvParams {
