@@ -28,9 +28,12 @@ override OB: u32 = 2u;
 // Largest magnitude stored: f32::MAX for f32 activations, 65504 for f16 (no infinities).
 override STORE_MAX: f32 = 3.4028234e38;
 
-// Register tile: each invocation computes 16 output rows x OB output blocks at one x, in named
-// accumulators: no indexable local arrays, which lavapipe would keep in per-lane scratch memory.
-const ROWS: u32 = 16u;
+// Register tile: each invocation computes ROWS output rows (at most 16) x OB output blocks at one
+// x, in named accumulators: no indexable local arrays, which lavapipe would keep in per-lane
+// scratch memory. Rows and input rows past ROWS sit behind `if ROWS > k` on the override, which
+// the compiler removes: levels only a few pixels high (the deepest, on small frames) do not pay
+// for 16 rows (kernels::rows_per_invocation).
+override ROWS: u32 = 16u;
 // vec4s in one weight chunk (64 KiB, the uniform binding limit).
 const CHUNK: u32 = 4096u;
 
@@ -107,21 +110,21 @@ fn add_column(acc: ptr<function, Tile>, base: u32, j: u32, v0: vec4<f32>, v1: ve
     let m1 = tap(base + 12u * OB, j);
     let m2 = tap(base + 24u * OB, j);
     (*acc).r0 += m0 * v0 + m1 * v1 + m2 * v2;
-    (*acc).r1 += m0 * v1 + m1 * v2 + m2 * v3;
-    (*acc).r2 += m0 * v2 + m1 * v3 + m2 * v4;
-    (*acc).r3 += m0 * v3 + m1 * v4 + m2 * v5;
-    (*acc).r4 += m0 * v4 + m1 * v5 + m2 * v6;
-    (*acc).r5 += m0 * v5 + m1 * v6 + m2 * v7;
-    (*acc).r6 += m0 * v6 + m1 * v7 + m2 * v8;
-    (*acc).r7 += m0 * v7 + m1 * v8 + m2 * v9;
-    (*acc).r8 += m0 * v8 + m1 * v9 + m2 * v10;
-    (*acc).r9 += m0 * v9 + m1 * v10 + m2 * v11;
-    (*acc).r10 += m0 * v10 + m1 * v11 + m2 * v12;
-    (*acc).r11 += m0 * v11 + m1 * v12 + m2 * v13;
-    (*acc).r12 += m0 * v12 + m1 * v13 + m2 * v14;
-    (*acc).r13 += m0 * v13 + m1 * v14 + m2 * v15;
-    (*acc).r14 += m0 * v14 + m1 * v15 + m2 * v16;
-    (*acc).r15 += m0 * v15 + m1 * v16 + m2 * v17;
+    if ROWS > 1u { (*acc).r1 += m0 * v1 + m1 * v2 + m2 * v3; }
+    if ROWS > 2u { (*acc).r2 += m0 * v2 + m1 * v3 + m2 * v4; }
+    if ROWS > 3u { (*acc).r3 += m0 * v3 + m1 * v4 + m2 * v5; }
+    if ROWS > 4u { (*acc).r4 += m0 * v4 + m1 * v5 + m2 * v6; }
+    if ROWS > 5u { (*acc).r5 += m0 * v5 + m1 * v6 + m2 * v7; }
+    if ROWS > 6u { (*acc).r6 += m0 * v6 + m1 * v7 + m2 * v8; }
+    if ROWS > 7u { (*acc).r7 += m0 * v7 + m1 * v8 + m2 * v9; }
+    if ROWS > 8u { (*acc).r8 += m0 * v8 + m1 * v9 + m2 * v10; }
+    if ROWS > 9u { (*acc).r9 += m0 * v9 + m1 * v10 + m2 * v11; }
+    if ROWS > 10u { (*acc).r10 += m0 * v10 + m1 * v11 + m2 * v12; }
+    if ROWS > 11u { (*acc).r11 += m0 * v11 + m1 * v12 + m2 * v13; }
+    if ROWS > 12u { (*acc).r12 += m0 * v12 + m1 * v13 + m2 * v14; }
+    if ROWS > 13u { (*acc).r13 += m0 * v13 + m1 * v14 + m2 * v15; }
+    if ROWS > 14u { (*acc).r14 += m0 * v14 + m1 * v15 + m2 * v16; }
+    if ROWS > 15u { (*acc).r15 += m0 * v15 + m1 * v16 + m2 * v17; }
 }
 
 // Add input block `layer` of `t` (read with `mode`) at weight block `cb` to the tiles whose
@@ -129,25 +132,41 @@ fn add_column(acc: ptr<function, Tile>, base: u32, j: u32, v0: vec4<f32>, v1: ve
 fn accumulate(acc0: ptr<function, Tile>, acc1: ptr<function, Tile>, t: texture_2d_array<f32>, mode: u32, layer: u32, cb: u32, w: u32, x: i32, y0: i32) {
     for (var kx = 0u; kx < 3u; kx++) {
         let sx = x + i32(kx) - 1;
-        // Column kx of the 10-row input window.
+        // Column kx of the (ROWS + 2)-row input window.
+        let zero = vec4<f32>(0.0);
         let v0 = fetch(t, mode, sx, y0 + -1, layer);
         let v1 = fetch(t, mode, sx, y0 + 0, layer);
         let v2 = fetch(t, mode, sx, y0 + 1, layer);
-        let v3 = fetch(t, mode, sx, y0 + 2, layer);
-        let v4 = fetch(t, mode, sx, y0 + 3, layer);
-        let v5 = fetch(t, mode, sx, y0 + 4, layer);
-        let v6 = fetch(t, mode, sx, y0 + 5, layer);
-        let v7 = fetch(t, mode, sx, y0 + 6, layer);
-        let v8 = fetch(t, mode, sx, y0 + 7, layer);
-        let v9 = fetch(t, mode, sx, y0 + 8, layer);
-        let v10 = fetch(t, mode, sx, y0 + 9, layer);
-        let v11 = fetch(t, mode, sx, y0 + 10, layer);
-        let v12 = fetch(t, mode, sx, y0 + 11, layer);
-        let v13 = fetch(t, mode, sx, y0 + 12, layer);
-        let v14 = fetch(t, mode, sx, y0 + 13, layer);
-        let v15 = fetch(t, mode, sx, y0 + 14, layer);
-        let v16 = fetch(t, mode, sx, y0 + 15, layer);
-        let v17 = fetch(t, mode, sx, y0 + 16, layer);
+        var v3 = zero;
+        if ROWS > 1u { v3 = fetch(t, mode, sx, y0 + 2, layer); }
+        var v4 = zero;
+        if ROWS > 2u { v4 = fetch(t, mode, sx, y0 + 3, layer); }
+        var v5 = zero;
+        if ROWS > 3u { v5 = fetch(t, mode, sx, y0 + 4, layer); }
+        var v6 = zero;
+        if ROWS > 4u { v6 = fetch(t, mode, sx, y0 + 5, layer); }
+        var v7 = zero;
+        if ROWS > 5u { v7 = fetch(t, mode, sx, y0 + 6, layer); }
+        var v8 = zero;
+        if ROWS > 6u { v8 = fetch(t, mode, sx, y0 + 7, layer); }
+        var v9 = zero;
+        if ROWS > 7u { v9 = fetch(t, mode, sx, y0 + 8, layer); }
+        var v10 = zero;
+        if ROWS > 8u { v10 = fetch(t, mode, sx, y0 + 9, layer); }
+        var v11 = zero;
+        if ROWS > 9u { v11 = fetch(t, mode, sx, y0 + 10, layer); }
+        var v12 = zero;
+        if ROWS > 10u { v12 = fetch(t, mode, sx, y0 + 11, layer); }
+        var v13 = zero;
+        if ROWS > 11u { v13 = fetch(t, mode, sx, y0 + 12, layer); }
+        var v14 = zero;
+        if ROWS > 12u { v14 = fetch(t, mode, sx, y0 + 13, layer); }
+        var v15 = zero;
+        if ROWS > 13u { v15 = fetch(t, mode, sx, y0 + 14, layer); }
+        var v16 = zero;
+        if ROWS > 14u { v16 = fetch(t, mode, sx, y0 + 15, layer); }
+        var v17 = zero;
+        if ROWS > 15u { v17 = fetch(t, mode, sx, y0 + 16, layer); }
         // Tap (ky, kx) starts at w + ((cb * 9 + ky * 3 + kx) * 4) * OB.
         let base = w + (cb * 36u + kx * 4u) * OB;
         add_column(acc0, base, 0u, v0, v1, v2, v3, v4, v5, v6, v7, v8, v9, v10, v11, v12, v13, v14, v15, v16, v17);
@@ -169,21 +188,21 @@ fn store(acc: Tile, x: u32, y0: u32, layer: u32) {
     // Rows past the bottom edge are dropped.
     let h = params.height;
     textureStore(dst, vec2<u32>(x, y0), layer, activate(acc.r0));
-    if y0 + 1u < h { textureStore(dst, vec2<u32>(x, y0 + 1u), layer, activate(acc.r1)); }
-    if y0 + 2u < h { textureStore(dst, vec2<u32>(x, y0 + 2u), layer, activate(acc.r2)); }
-    if y0 + 3u < h { textureStore(dst, vec2<u32>(x, y0 + 3u), layer, activate(acc.r3)); }
-    if y0 + 4u < h { textureStore(dst, vec2<u32>(x, y0 + 4u), layer, activate(acc.r4)); }
-    if y0 + 5u < h { textureStore(dst, vec2<u32>(x, y0 + 5u), layer, activate(acc.r5)); }
-    if y0 + 6u < h { textureStore(dst, vec2<u32>(x, y0 + 6u), layer, activate(acc.r6)); }
-    if y0 + 7u < h { textureStore(dst, vec2<u32>(x, y0 + 7u), layer, activate(acc.r7)); }
-    if y0 + 8u < h { textureStore(dst, vec2<u32>(x, y0 + 8u), layer, activate(acc.r8)); }
-    if y0 + 9u < h { textureStore(dst, vec2<u32>(x, y0 + 9u), layer, activate(acc.r9)); }
-    if y0 + 10u < h { textureStore(dst, vec2<u32>(x, y0 + 10u), layer, activate(acc.r10)); }
-    if y0 + 11u < h { textureStore(dst, vec2<u32>(x, y0 + 11u), layer, activate(acc.r11)); }
-    if y0 + 12u < h { textureStore(dst, vec2<u32>(x, y0 + 12u), layer, activate(acc.r12)); }
-    if y0 + 13u < h { textureStore(dst, vec2<u32>(x, y0 + 13u), layer, activate(acc.r13)); }
-    if y0 + 14u < h { textureStore(dst, vec2<u32>(x, y0 + 14u), layer, activate(acc.r14)); }
-    if y0 + 15u < h { textureStore(dst, vec2<u32>(x, y0 + 15u), layer, activate(acc.r15)); }
+    if ROWS > 1u && y0 + 1u < h { textureStore(dst, vec2<u32>(x, y0 + 1u), layer, activate(acc.r1)); }
+    if ROWS > 2u && y0 + 2u < h { textureStore(dst, vec2<u32>(x, y0 + 2u), layer, activate(acc.r2)); }
+    if ROWS > 3u && y0 + 3u < h { textureStore(dst, vec2<u32>(x, y0 + 3u), layer, activate(acc.r3)); }
+    if ROWS > 4u && y0 + 4u < h { textureStore(dst, vec2<u32>(x, y0 + 4u), layer, activate(acc.r4)); }
+    if ROWS > 5u && y0 + 5u < h { textureStore(dst, vec2<u32>(x, y0 + 5u), layer, activate(acc.r5)); }
+    if ROWS > 6u && y0 + 6u < h { textureStore(dst, vec2<u32>(x, y0 + 6u), layer, activate(acc.r6)); }
+    if ROWS > 7u && y0 + 7u < h { textureStore(dst, vec2<u32>(x, y0 + 7u), layer, activate(acc.r7)); }
+    if ROWS > 8u && y0 + 8u < h { textureStore(dst, vec2<u32>(x, y0 + 8u), layer, activate(acc.r8)); }
+    if ROWS > 9u && y0 + 9u < h { textureStore(dst, vec2<u32>(x, y0 + 9u), layer, activate(acc.r9)); }
+    if ROWS > 10u && y0 + 10u < h { textureStore(dst, vec2<u32>(x, y0 + 10u), layer, activate(acc.r10)); }
+    if ROWS > 11u && y0 + 11u < h { textureStore(dst, vec2<u32>(x, y0 + 11u), layer, activate(acc.r11)); }
+    if ROWS > 12u && y0 + 12u < h { textureStore(dst, vec2<u32>(x, y0 + 12u), layer, activate(acc.r12)); }
+    if ROWS > 13u && y0 + 13u < h { textureStore(dst, vec2<u32>(x, y0 + 13u), layer, activate(acc.r13)); }
+    if ROWS > 14u && y0 + 14u < h { textureStore(dst, vec2<u32>(x, y0 + 14u), layer, activate(acc.r14)); }
+    if ROWS > 15u && y0 + 15u < h { textureStore(dst, vec2<u32>(x, y0 + 15u), layer, activate(acc.r15)); }
 }
 
 @compute @workgroup_size(8, 8, 1)

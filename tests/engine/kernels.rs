@@ -91,7 +91,7 @@ fn gpu_conv(a: (&Chw, Read), b: Option<(&Chw, Read)>, weight: &[f32], bias: &[f3
     let mut enc = dev.create_command_encoder(&Default::default());
     {
         let mut pass = enc.begin_compute_pass(&Default::default());
-        assert!(w > 8 && h > kernels::CONV_ROWS as usize, "the test must span several workgroups in x and row tiles in y");
+        assert!(w > 8, "the test must span several workgroups in x");
         plan.record(&mut pass, 0, false, &group);
     }
     g.queue.submit(Some(enc.finish()));
@@ -125,6 +125,8 @@ fn tensor(c: usize, h: usize, w: usize, seed: u64) -> Chw {
 
 #[test]
 fn conv_direct_single_source_matches_cpu() {
+    // 45 rows: three 16-row tiles, the last partial.
+    assert!(45 > 2 * kernels::CONV_ROWS);
     check_conv((tensor(5, 45, 37, 1), Read::Direct), None, 9, true, 37, 45, 10);
 }
 
@@ -152,6 +154,17 @@ fn conv_wide_input_uses_one_block_per_invocation_and_matches_cpu() {
     assert_eq!(kernels::blocks_per_invocation(63), Some(1));
     assert_eq!(kernels::blocks_per_invocation(51), Some(2), "the widest conv of the default network");
     check_conv((tensor(130, 45, 37, 8), Read::Direct), Some((tensor(120, 45, 37, 9), Read::Direct)), 7, true, 37, 45, 50);
+}
+
+#[test]
+fn conv_on_low_levels_uses_short_tiles_and_matches_cpu() {
+    // Frames 1 to 9 pixels high run 2-, 4-, 8- and 16-row tiles; 40 outputs (10 blocks) with
+    // 9 inputs put all 5 two-block groups in one dispatch (workgroup z).
+    assert_eq!([1, 2, 3, 4, 5, 8, 9, 64].map(kernels::rows_per_invocation), [2, 2, 4, 4, 8, 8, 16, 16]);
+    for (h, seed) in [(1, 60), (2, 61), (3, 62), (5, 63), (9, 64)] {
+        check_conv((tensor(9, h, 11, seed), Read::Direct), None, 40, true, 11, h, seed + 100);
+    }
+    check_conv((tensor(6, 6, 22, 65), Read::Pool), Some((tensor(5, 3, 11, 66), Read::Direct)), 13, false, 11, 3, 165);
 }
 
 #[test]

@@ -14,7 +14,7 @@ pub const SHADERS: &[(&str, &str)] = &[
     ("output", include_str!("../../../shaders/output.wgsl")),
 ];
 
-/// Output rows per conv invocation (`ROWS` in conv3x3.wgsl).
+/// Most output rows per conv invocation (the tile of conv3x3.wgsl; `ROWS` picks up to it).
 pub const CONV_ROWS: u32 = 16;
 /// vec4s in one weight chunk (`CHUNK` in conv3x3.wgsl): a 64 KiB uniform binding, the limit
 /// every WebGPU device guarantees.
@@ -230,6 +230,8 @@ pub struct ConvVariant {
     pub leaky: bool,
     /// Output blocks per invocation ([`blocks_per_invocation`]).
     pub ob: u32,
+    /// Output rows per invocation ([`rows_per_invocation`]).
+    pub rows: u32,
 }
 
 /// Shader modules, layouts and pipelines of one device; conv pipelines are cached by variant.
@@ -343,6 +345,7 @@ impl Kernels {
                     ("MODE_B", v.read_b as u32 as f64),
                     ("LEAKY", if v.leaky { 1.0 } else { 0.0 }),
                     ("OB", v.ob as f64),
+                    ("ROWS", v.rows as f64),
                     ("STORE_MAX", precision.store_max() as f64),
                 ];
                 device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
@@ -359,6 +362,13 @@ impl Kernels {
             })
             .clone()
     }
+}
+
+/// Output rows per invocation for a conv `height` pixels high: 16 ([`CONV_ROWS`]), or the
+/// smallest of 2, 4, 8 that covers a lower level whole, so levels a few pixels high (the deepest
+/// ones of small frames) do not compute 16 rows to keep 2.
+pub fn rows_per_invocation(height: u32) -> u32 {
+    [2, 4, 8].into_iter().find(|&r| height <= r).unwrap_or(CONV_ROWS)
 }
 
 /// Output blocks per invocation for a conv reading `cin4` input blocks: the most of 2, 1
@@ -490,7 +500,8 @@ impl ConvPlan {
             // A conv with one output block (the 3-channel output convs) would compute a second,
             // discarded tile with OB = 2.
             let ob = ob.min(cout4);
-            let variant = ConvVariant { read_a: s.read_a, read_b: s.read_b, leaky: s.leaky, ob };
+            let rows = rows_per_invocation(s.height);
+            let variant = ConvVariant { read_a: s.read_a, read_b: s.read_b, leaky: s.leaky, ob, rows };
             // Groups of `ob` output blocks, as many per dispatch as fit one chunk (workgroup z).
             let stride = (cin4 * 36 + 1) * ob;
             let group_count = cout4.div_ceil(ob);
@@ -527,7 +538,7 @@ impl ConvPlan {
             }
             convs.push(Planned {
                 pipeline: kernels.conv(device, variant),
-                workgroups: (s.width.div_ceil(WORKGROUP), s.height.div_ceil(CONV_ROWS).div_ceil(WORKGROUP)),
+                workgroups: (s.width.div_ceil(WORKGROUP), s.height.div_ceil(rows).div_ceil(WORKGROUP)),
                 groups,
             });
         }
