@@ -134,8 +134,9 @@ fn bench(path: &Path, sizes: &[String], frames: usize, layers: bool, precisions:
     let flop_px = 2.0 * Graph::new(&weights.arch).macs_per_pixel();
     println!("adapter: {}; weights: {}; {frames} timed frames after 2 warm-up", gpu.describe(), path.display());
     // Both precisions run everywhere: f16 is rgba16float storage (core WebGPU), arithmetic f32.
+    println!("peak MiB: the buffers and textures the denoiser holds (frames allocate nothing); alloc MiB: the device allocator's live total, wgpu's own included, where the backend reports it");
     println!("precisions: f32, f16 (f16 = rgba16float activations, f32 arithmetic; SHADER_F16 {})", gpu.device.features().contains(wgpu::Features::SHADER_F16));
-    println!("{:>10} {:>9} {:>10} {:>10} {:>10} {:>10} {:>10} {:>8} {:>10}", "size", "precision", "total ms", "upload", "gpu", "download", "GFLOP/s", "of peak", "peak MiB");
+    println!("{:>10} {:>9} {:>10} {:>10} {:>10} {:>10} {:>10} {:>8} {:>10} {:>10}", "size", "precision", "total ms", "upload", "gpu", "download", "GFLOP/s", "of peak", "peak MiB", "alloc MiB");
     for (s, &p) in sizes.iter().flat_map(|s| precisions.iter().map(move |p| (s, p))) {
         let (w, h) = parse_size(s)?;
         let precision = Precision::from(p);
@@ -162,9 +163,12 @@ fn bench(path: &Path, sizes: &[String], frames: usize, layers: bool, precisions:
         let (pw, ph) = d.padded_size();
         let g = median(&mut gpu_t);
         let gflops = flop_px * (pw * ph) as f64 / (g * 1e-3) / 1e9;
+        // What the denoiser holds (frames allocate nothing, so it is the peak); where the backend
+        // keeps an allocator report, the driver-side reservation of the whole device as well.
         let mib = d.gpu_bytes() as f64 / (1 << 20) as f64;
+        let alloc = gpu.device.generate_allocator_report().map_or("-".to_string(), |r| format!("{:.1}", r.total_allocated_bytes as f64 / (1 << 20) as f64));
         let share = peak.map_or("-".to_string(), |p| format!("{:.1}%", 100.0 * gflops / p));
-        println!("{s:>10} {:>9} {:>10.1} {:>10.2} {g:>10.1} {:>10.2} {gflops:>10.2} {share:>8} {mib:>10.1}", precision.name(), median(&mut total), median(&mut up), median(&mut down));
+        println!("{s:>10} {:>9} {:>10.1} {:>10.2} {g:>10.1} {:>10.2} {gflops:>10.2} {share:>8} {mib:>10.1} {alloc:>10}", precision.name(), median(&mut total), median(&mut up), median(&mut down));
         if layers {
             stage_table(&mut d, &frame, &mut out, frames.max(1))?;
         }
