@@ -25,7 +25,8 @@ class Arch:
     #: Divide color by (albedo + albedo_eps) before the network and multiply back after.
     demodulate: bool = True
     albedo_eps: float = 1e-3
-    #: HDR transfer function on the (demodulated) color: "log1p" or "none".
+    #: HDR transfer function on the (demodulated) color: "log1p" or "none" (what rae-core runs);
+    #: "pow0.2" and "pu21" for the training comparison only (``transfer``).
     transfer: str = "log1p"
     #: Widths of the encoder blocks d1..dN; the bottleneck runs at 1/2^N resolution.
     encoder: list[int] = field(default_factory=lambda: [32, 43, 57, 76, 101])
@@ -70,7 +71,7 @@ class Arch:
             raise ValueError("inputs must start with 'color'")
         if len(set(self.inputs)) != len(self.inputs):
             raise ValueError(f"duplicate input buffer in {self.inputs}")
-        if self.transfer not in ("log1p", "none"):
+        if self.transfer not in ("log1p", "none", "pow0.2", "pu21"):
             raise ValueError(f"unknown transfer {self.transfer!r}")
         if self.skip not in ("pooled", "prepool"):
             raise ValueError(f"unknown skip variant {self.skip!r}")

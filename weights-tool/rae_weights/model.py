@@ -12,6 +12,7 @@ import torch
 import torch.nn as nn
 import torch.nn.functional as F
 
+from . import transfer
 from .arch import INPUT_CHANNELS, Arch
 
 #: Bounds applied to input buffers before they reach the network (see docs in rae-core `frame`).
@@ -141,8 +142,7 @@ def prepare_input(arch: Arch, frame: dict[str, torch.Tensor]) -> torch.Tensor:
         if name == "color":
             if arch.demodulate:
                 t = t / (b["albedo"] + arch.albedo_eps)
-            if arch.transfer == "log1p":
-                t = torch.log1p(t)
+            t = transfer.encode(arch.transfer, t)
         elif name == "depth":
             t = torch.log1p(t)
         assert t.shape[1] == INPUT_CHANNELS[name]
@@ -156,15 +156,13 @@ def prepared_color(arch: Arch, frame: dict[str, torch.Tensor]) -> torch.Tensor:
     t = b["color"]
     if arch.demodulate:
         t = t / (b["albedo"] + arch.albedo_eps)
-    return torch.log1p(t) if arch.transfer == "log1p" else t
+    return transfer.encode(arch.transfer, t)
 
 
 def output_limit(arch: Arch, in_max: torch.Tensor) -> torch.Tensor:
     """Upper clamp of the network output given each frame's largest prepared color (rae-core
     ``cpu::output_limit``): output radiance <= OUT_GAIN x the brightest input, and finite."""
-    if arch.transfer == "log1p":
-        return torch.log1p(OUT_GAIN * torch.expm1(in_max)).clamp(max=OUT_LOG_MAX)
-    return (OUT_GAIN * in_max).clamp(max=RADIANCE_MAX)
+    return transfer.limit(arch.transfer, in_max, OUT_GAIN, RADIANCE_MAX, OUT_LOG_MAX)
 
 
 def finish_output(arch: Arch, y: torch.Tensor, frame: dict[str, torch.Tensor]) -> torch.Tensor:
@@ -172,7 +170,7 @@ def finish_output(arch: Arch, y: torch.Tensor, frame: dict[str, torch.Tensor]) -
     transfer, remodulation."""
     in_max = prepared_color(arch, frame).to(y.dtype).amax(dim=(1, 2, 3), keepdim=True)
     y = torch.minimum(y.clamp(min=0.0), output_limit(arch, in_max))
-    r = torch.expm1(y) if arch.transfer == "log1p" else y
+    r = transfer.decode(arch.transfer, y)
     if arch.demodulate:
         albedo = sanitize_buffers({"albedo": frame["albedo"]})["albedo"]
         r = r * (albedo + arch.albedo_eps)

@@ -22,6 +22,7 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 
+from . import transfer
 from .arch import INPUT_CHANNELS, Arch
 from .data import Sequence, load_sequences, sample
 from .export import load_checkpoint, write_weights
@@ -38,7 +39,7 @@ def target_space(arch: Arch, clip: dict[str, torch.Tensor]) -> torch.Tensor:
     r = b["color"]
     if arch.demodulate:
         r = r / (b["albedo"] + arch.albedo_eps)
-    return torch.log1p(r) if arch.transfer == "log1p" else r
+    return transfer.encode(arch.transfer, r)
 
 
 def log_kernel(size: int = 5, sigma: float = 1.0) -> torch.Tensor:
@@ -153,6 +154,7 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--frames", type=int, default=7)
     p.add_argument("--inputs", default="color,normal,depth,roughness")
     p.add_argument("--no-demodulate", action="store_true", help="feed color as is (no albedo needed)")
+    p.add_argument("--transfer", choices=transfer.TRANSFERS, default="log1p", help="HDR transfer on color (rae-core runs log1p and none; the others are for comparison)")
     p.add_argument("--init", type=Path, help="warm start from a checkpoint of another architecture (see warm_start)")
     p.add_argument("--frame-weights", choices=["paper", "equal"], default="paper")
     p.add_argument(
@@ -173,7 +175,7 @@ def main(argv: list[str] | None = None) -> int:
     torch.manual_seed(a.seed)
     rng = np.random.default_rng(a.seed)
     a.out.mkdir(parents=True, exist_ok=True)
-    arch = Arch(inputs=a.inputs.split(","), demodulate=not a.no_demodulate)
+    arch = Arch(inputs=a.inputs.split(","), demodulate=not a.no_demodulate, transfer=a.transfer)
     model = RecurrentAE(arch)
     ckpt = a.out / "checkpoint.pt"
     if a.init and not ckpt.exists():

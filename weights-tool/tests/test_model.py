@@ -54,3 +54,18 @@ def test_input_policy_makes_everything_finite() -> None:
     assert torch.isfinite(x).all()
     out = finish_output(arch, torch.full((1, 3, 1, 5), 1e6), frame)
     assert torch.isfinite(out).all() and (out >= 0).all()
+
+
+def test_transfer_functions_invert_and_bound() -> None:
+    from rae_weights import transfer
+
+    x = torch.tensor([0.0, 1e-4, 0.01, 0.5, 1.0, 7.0, 300.0, 1e5], dtype=torch.float64)
+    for name in transfer.TRANSFERS:
+        y = transfer.encode(name, x)
+        assert torch.all(y[1:] > y[:-1]), f"{name} is increasing"
+        assert y[0].abs() < 1e-9, f"{name} maps black to 0"
+        back = transfer.decode(name, y)
+        assert torch.allclose(back, x, rtol=1e-6, atol=1e-9), (name, back)
+        lim = transfer.limit(name, y, 2.0, 1e8, 80.0)
+        assert torch.allclose(transfer.decode(name, lim), 2 * x, rtol=1e-6, atol=1e-9), name
+    assert abs(float(transfer.encode("pu21", torch.tensor(1.0, dtype=torch.float64))) - 1.0) < 1e-12
