@@ -271,6 +271,32 @@ def bench_text(cli: Path, weights: Path, sizes: str, frames: int, peak: float | 
     return shlex.join(cmd), r.stdout
 
 
+def bench_rows(text: str) -> dict[tuple[str, str], tuple[float, float]]:
+    """(size, precision) -> (total ms, GFLOP/s) from rae-cli bench's summary rows."""
+    rows = {}
+    for line in text.splitlines():
+        f = line.split()
+        if len(f) >= 8 and "x" in f[0] and f[1] in ("f32", "f16"):
+            rows[(f[0], f[1])] = (float(f[2]), float(f[6]))
+    return rows
+
+
+def pytorch_at_sizes(weights: Path, sizes: list[str], frames: int) -> dict[str, float]:
+    """Median ms per frame of the PyTorch peer at each bench size (``bench.time_frames``)."""
+    from .bench import time_frames
+
+    arch, state = read_weights(weights)
+    model = RecurrentAE(arch)
+    model.load_state_dict(state)
+    model = model.eval().to(memory_format=torch.channels_last)
+    out = {}
+    for s in sizes:
+        w, h = (int(v) for v in s.lower().split("x"))
+        m = 1 << arch.levels
+        out[s] = statistics.median(time_frames(model, -(-w // m) * m, -(-h // m) * m, frames)) * 1e3
+    return out
+
+
 def rel(p: Path, to: Path) -> str:
     """p relative to `to` where it lies below it (for links and commands), else as is."""
     try:
@@ -349,6 +375,8 @@ def main(argv: list[str] | None = None) -> int:
     if a.bench_sizes:
         print("rae-cli bench ...", flush=True)
         bench = bench_text(cli, a.models[0], a.bench_sizes, a.bench_frames, a.peak_gflops)
+        print("PyTorch at the bench sizes ...", flush=True)
+        peer = pytorch_at_sizes(a.models[0], a.bench_sizes.split(","), a.bench_frames)
 
     # The report.
     L = ["# rae: error against run time", ""]
@@ -375,7 +403,15 @@ def main(argv: list[str] | None = None) -> int:
     L += ["## Crops", "", f"Set `{label}`, sequence `{name}`, frame {k}: where rae's error is largest and where the reference has the most detail.", "", f"![crops]({rel(figures / 'crops.png', a.out.parent)})", "", f"Made by {stamp}.", ""]
     if bench:
         bcmd, btext = bench
-        L += ["## rae-cli bench", "", f"`{bcmd}` on {host} (run by the report, after the runs above):", "", "```", btext.rstrip(), "```", ""]
+        rows = bench_rows(btext)
+        L += ["## Speed at larger frames: rae against PyTorch", ""]
+        L += [f"`{bcmd}` and, right after it, PyTorch (same weights, CPU, {a.threads} threads, channels_last, frames padded as rae pads them, median of {a.bench_frames} after 2 warm-up; `rae_weights.bench.time_frames`), on {host}:", ""]
+        L += ["| size | rae f32 ms | rae f32 GFLOP/s | rae f16 ms | PyTorch ms | rae f32 / PyTorch |", "|---|---:|---:|---:|---:|---:|"]
+        for size, torch_ms in peer.items():
+            f32 = rows.get((size, "f32"), (float("nan"), float("nan")))
+            f16 = rows.get((size, "f16"), (float("nan"), float("nan")))
+            L.append(f"| {size} | {f32[0]:.1f} | {f32[1]:.2f} | {f16[0]:.1f} | {torch_ms:.1f} | {f32[0] / torch_ms:.2f} |")
+        L += ["", "The full `rae-cli bench` output (per-stage GPU times from timestamp queries, GFLOP/s, share of the stated peak, GPU memory):", "", "```", btext.rstrip(), "```", ""]
     atomic_save(a.out, lambda path: path.write_text("\n".join(L)))
     print(f"wrote {a.out}, {figures / 'error-vs-time.png'}, {figures / 'crops.png'}")
     return 0

@@ -40,5 +40,7 @@ def test_report_puts_every_method_side_by_side(tmp_path: Path) -> None:
     for png in ("error-vs-time.png", "crops.png"):
         data = (out.parent / "report" / png).read_bytes()
         assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 5000
-    assert "rae-cli bench" in text and "32x32" in text
+    assert "rae-cli bench" in text
+    speed = [l for l in text.splitlines() if l.startswith("| 32x32 |")]
+    assert len(speed) == 1 and float(speed[0].split("|")[5]) > 0, "rae and PyTorch side by side at the bench size"
     assert not list(out.parent.rglob("*.partial*")), "no partial files left"
