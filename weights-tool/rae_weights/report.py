@@ -199,23 +199,26 @@ def plot(methods: list[Method], labels: list[str], path: Path, caption: str) -> 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(2, len(labels), figsize=(6.5 * len(labels), 8), squeeze=False)
+    import textwrap
+
+    fig, axes = plt.subplots(2, len(labels), figsize=(6.5 * len(labels), 9), squeeze=False)
     markers = {"input": "x", "rae": "o", "pytorch": "s", "oidn": "^"}
+    colors = plt.get_cmap("tab20")
     for col, label in enumerate(labels):
         for row, key in enumerate(("relmse", "flip")):
             ax = axes[row][col]
-            for m in methods:
+            for i, m in enumerate(methods):
                 t = m.ms if m.kind != "input" else 0.1
-                ax.scatter(t, m.metrics[label][key], marker=markers[m.kind], s=40)
-                ax.annotate(m.name, (t, m.metrics[label][key]), fontsize=7, xytext=(4, 2), textcoords="offset points")
+                ax.scatter(t, m.metrics[label][key], marker=markers[m.kind], s=45, color=colors(i % 20), label=m.name if (row, col) == (0, 0) else None)
             ax.set_xscale("log")
             ax.set_yscale("log")
-            ax.set_xlabel("time per frame (ms; the input at 0.1)")
-            ax.set_ylabel(key if key != "relmse" else "relMSE")
-            ax.set_title(f"{label}: {'relMSE' if key == 'relmse' else 'FLIP'} against time")
+            ax.set_xlabel("time per frame, ms (the noisy input placed at 0.1)")
+            ax.set_ylabel("relMSE" if key == "relmse" else "mean HDR-FLIP")
+            ax.set_title(f"held-out {label}: {'relMSE' if key == 'relmse' else 'FLIP'} against time")
             ax.grid(True, which="both", alpha=0.3)
-    fig.suptitle(caption, fontsize=8)
-    fig.tight_layout(rect=(0, 0, 1, 0.96))
+    fig.legend(loc="lower center", ncol=3, fontsize=8, frameon=False)
+    fig.suptitle(textwrap.fill(caption, int(20 * 6.5 * len(labels))), fontsize=6)
+    fig.tight_layout(rect=(0, 0.12, 1, 0.93))
     atomic_save(path, lambda p: fig.savefig(p, dpi=110, format="png"))
     plt.close(fig)
 
@@ -254,8 +257,10 @@ def crop_sheet(columns: list[tuple[str, np.ndarray]], ref: np.ndarray, path: Pat
                 ax.set_title(name, fontsize=8)
             if k == 0:
                 ax.set_ylabel(f"{why}\n({x},{y}) {c}x{c}", fontsize=7)
-    fig.suptitle(caption, fontsize=7)
-    fig.tight_layout(rect=(0, 0, 1, 0.93))
+    import textwrap
+
+    fig.suptitle(textwrap.fill(caption, 110), fontsize=6)
+    fig.tight_layout(rect=(0, 0, 1, 0.88))
     atomic_save(path, lambda p: fig.savefig(p, dpi=110, format="png"))
     plt.close(fig)
 
