@@ -235,16 +235,24 @@ def crop_sheet(columns: list[tuple[str, np.ndarray]], ref: np.ndarray, path: Pat
     c = min(size, h, w)
     t_ref = tonemap(ref)
 
-    def best(v: np.ndarray) -> tuple[int, int]:
-        # Window sums from an integral image; the window with the largest sum.
+    def best(v: np.ndarray, avoid: tuple[int, int] | None = None) -> tuple[int, int]:
+        # Window sums from an integral image; the window with the largest sum (not overlapping
+        # `avoid`'s window where the frame leaves room).
         s = np.pad(v.cumsum(0).cumsum(1), ((1, 0), (1, 0)))
         win = s[c:, c:] - s[:-c, c:] - s[c:, :-c] + s[:-c, :-c]
+        if avoid is not None:
+            masked = win.copy()
+            ay, ax = avoid
+            masked[max(0, ay - c + 1) : ay + c, max(0, ax - c + 1) : ax + c] = -np.inf
+            if np.isfinite(masked).any():
+                win = masked
         y, x = np.unravel_index(int(np.argmax(win)), win.shape)
         return int(y), int(x)
 
     err = np.abs(tonemap(columns[1][1]) - t_ref).mean(-1)
     detail = np.abs(np.diff(t_ref, axis=0, prepend=t_ref[:1])).mean(-1) + np.abs(np.diff(t_ref, axis=1, prepend=t_ref[:, :1])).mean(-1)
-    spots = [("largest rae error", best(err)), ("most detail", best(detail))]
+    worst = best(err)
+    spots = [("largest rae error", worst), ("most detail elsewhere", best(detail, worst))]
     cols = columns + [("reference", ref)]
     fig, axes = plt.subplots(len(spots), len(cols), figsize=(2.2 * len(cols), 2.4 * len(spots) + 0.5), squeeze=False)
     for r, (why, (y, x)) in enumerate(spots):
@@ -372,9 +380,10 @@ def main(argv: list[str] | None = None) -> int:
     figures = a.out.parent / "report"
     stamp = f"`{command}` on {host}; rae on {device}"
     plot(methods, list(sets), figures / "error-vs-time.png", f"{command}\n{host}; rae: {device}")
-    label, name, k = first
-    crop_cols = [("noisy input", noisy.outputs[label][name][k]), (raes[(a.models[0], precisions[0])].name, raes[(a.models[0], precisions[0])].outputs[label][name][k]), ("OIDN high", oidns["high"].outputs[label][name][k])]
-    crop_sheet(crop_cols, refs[label][name][k], figures / "crops.png", f"{label}/{name} frame {k}: {command}\n{host}")
+    crop_set, crop_seq, k = first
+    shown = raes[(a.models[0], precisions[0])]
+    crop_cols = [("noisy input", noisy.outputs[crop_set][crop_seq][k]), (shown.name, shown.outputs[crop_set][crop_seq][k]), ("OIDN high", oidns["high"].outputs[crop_set][crop_seq][k])]
+    crop_sheet(crop_cols, refs[crop_set][crop_seq][k], figures / "crops.png", f"{crop_set}/{crop_seq} frame {k}: {command}\n{host}")
 
     bench = None
     if a.bench_sizes:
@@ -405,7 +414,7 @@ def main(argv: list[str] | None = None) -> int:
         L.append(f"| {m.stem} | {pr} | {mx:.3e} | {mean:.3e} | {relmax:.3e} |")
     L.append("")
     L += ["## Error against time", "", f"![error against time]({rel(figures / 'error-vs-time.png', a.out.parent)})", "", f"Made by {stamp}.", ""]
-    L += ["## Crops", "", f"Set `{label}`, sequence `{name}`, frame {k}: where rae's error is largest and where the reference has the most detail.", "", f"![crops]({rel(figures / 'crops.png', a.out.parent)})", "", f"Made by {stamp}.", ""]
+    L += ["## Crops", "", f"Set `{crop_set}`, sequence `{crop_seq}`, frame {k}: where rae's error is largest and where the reference has the most detail.", "", f"![crops]({rel(figures / 'crops.png', a.out.parent)})", "", f"Made by {stamp}.", ""]
     if bench:
         bcmd, btext = bench
         rows = bench_rows(btext)
