@@ -13,6 +13,7 @@ frames of each sequence, then over sequences. Prints a Markdown table.
 from __future__ import annotations
 
 import argparse
+import time
 from pathlib import Path
 
 import numpy as np
@@ -29,28 +30,42 @@ def hwc(t: torch.Tensor) -> np.ndarray:
     return t.reshape(t.shape[-3:]).permute(1, 2, 0).contiguous().numpy().astype(np.float32)
 
 
-def run_rae(path: Path, seq: Sequence) -> list[np.ndarray]:
-    """Denoised frames of a sequence by a rae weights file (hidden state carried)."""
+def run_rae(path: Path, seq: Sequence, times: list[float] | None = None) -> list[np.ndarray]:
+    """Denoised frames of a sequence by a rae weights file (hidden state carried; CPU, float32,
+    channels_last). With `times`, appends the ms of every frame after the first (input stage,
+    network, output stage)."""
     arch, state = read_weights(path)
     model = RecurrentAE(arch).eval()
     model.load_state_dict(state)
+    model = model.to(memory_format=torch.channels_last)
     model.reset()
     outs = []
     with torch.inference_mode():
         for i in range(seq.frames):
+            t = time.perf_counter()
             frame = {k: v[i : i + 1] for k, v in seq.buffers.items()}
-            outs.append(hwc(finish_output(arch, model(prepare_input(arch, frame)), frame)))
+            x = prepare_input(arch, frame).contiguous(memory_format=torch.channels_last)
+            outs.append(hwc(finish_output(arch, model(x), frame)))
+            if times is not None and i > 0:
+                times.append((time.perf_counter() - t) * 1e3)
     return outs
 
 
-def run_oidn(seq: Sequence, quality: str) -> list[np.ndarray]:
-    """OIDN's RT filter on each frame alone (it has no temporal mode): HDR color+albedo+normal."""
+def run_oidn(seq: Sequence, quality: str, times: list[float] | None = None) -> list[np.ndarray]:
+    """OIDN's RT filter on each frame alone (it has no temporal mode): HDR color+albedo+normal.
+    With `times`, one untimed call first (the filter is committed on a change of quality) and the
+    ms of every frame after the first appended."""
     import pyoidn
 
     outs = []
     for i in range(seq.frames):
-        b = {k: np.nan_to_num(hwc(seq.buffers[k][i])) for k in ("color", "albedo", "normal")}
+        b = {k: np.ascontiguousarray(np.nan_to_num(hwc(seq.buffers[k][i]))) for k in ("color", "albedo", "normal")}
+        if times is not None and i == 0:
+            pyoidn.denoise(b["color"], b["albedo"], b["normal"], hdr=True, quality=quality)
+        t = time.perf_counter()
         outs.append(np.asarray(pyoidn.denoise(b["color"], b["albedo"], b["normal"], hdr=True, quality=quality), dtype=np.float32))
+        if times is not None and i > 0:
+            times.append((time.perf_counter() - t) * 1e3)
     return outs
 
 

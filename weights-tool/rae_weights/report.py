@@ -26,17 +26,17 @@ import statistics
 import subprocess
 import sys
 import tempfile
-import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 import torch
 
-from .data import Sequence, load_sequences, read_exr
+from .data import load_sequences, read_exr
+from .evaluate import hwc, run_oidn, run_rae
 from .export import read_weights
 from .metrics import sequence_metrics, tonemap
-from .model import RecurrentAE, finish_output, prepare_input
+from .model import RecurrentAE
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -59,11 +59,6 @@ class Method:
         return statistics.median(self.times_ms) if self.times_ms else float("nan")
 
 
-def hwc(t: torch.Tensor) -> np.ndarray:
-    """[1, C, H, W] or [C, H, W] tensor -> HxWxC float32 array."""
-    return t.reshape(t.shape[-3:]).permute(1, 2, 0).contiguous().numpy().astype(np.float32)
-
-
 def find_rae_cli() -> Path | None:
     """The workspace's rae-cli binary, if built: the newer of release and debug."""
     built = [p for p in (REPO / "target" / prof / "rae-cli" for prof in ("release", "debug")) if p.exists()]
@@ -83,46 +78,6 @@ def machine() -> str:
     except (OSError, StopIteration):
         memory = ""
     return f"{cpu}, {os.cpu_count()} logical cores{memory}, {platform.system()} {platform.release()}"
-
-
-def run_pytorch(path: Path, seq: Sequence, times: list[float]) -> list[np.ndarray]:
-    """rae's network in PyTorch (float32, CPU, channels_last), hidden state carried; appends the
-    time of every frame after the first to `times`."""
-    arch, state = read_weights(path)
-    model = RecurrentAE(arch).eval()
-    model.load_state_dict(state)
-    model = model.to(memory_format=torch.channels_last)
-    model.reset()
-    outs = []
-    with torch.inference_mode():
-        for i in range(seq.frames):
-            t = time.perf_counter()
-            frame = {k: v[i : i + 1] for k, v in seq.buffers.items()}
-            x = prepare_input(arch, frame).contiguous(memory_format=torch.channels_last)
-            y = finish_output(arch, model(x), frame)
-            out = hwc(y)
-            if i > 0:
-                times.append((time.perf_counter() - t) * 1e3)
-            outs.append(out)
-    return outs
-
-
-def run_oidn(seq: Sequence, quality: str, times: list[float]) -> list[np.ndarray]:
-    """OIDN's RT filter on each frame alone (it has no temporal mode), HDR color+albedo+normal.
-    One untimed call first: the filter is committed on a change of quality."""
-    import pyoidn
-
-    outs = []
-    for i in range(seq.frames):
-        b = {k: np.ascontiguousarray(np.nan_to_num(hwc(seq.buffers[k][i]))) for k in ("color", "albedo", "normal")}
-        if i == 0:
-            pyoidn.denoise(b["color"], b["albedo"], b["normal"], hdr=True, quality=quality)
-        t = time.perf_counter()
-        out = np.asarray(pyoidn.denoise(b["color"], b["albedo"], b["normal"], hdr=True, quality=quality), dtype=np.float32)
-        if i > 0:
-            times.append((time.perf_counter() - t) * 1e3)
-        outs.append(out)
-    return outs
 
 
 def run_rae_cli(cli: Path, weights: Path, precision: str, folder: Path, frames: int, times: list[float], log: list[str]) -> list[np.ndarray]:
@@ -363,7 +318,7 @@ def main(argv: list[str] | None = None) -> int:
             for (m, pr), meth in raes.items():
                 meth.add(label, seq.name, run_rae_cli(cli, m, pr, seq_folder, seq.frames, meth.times_ms, devices))
             for m, meth in torches.items():
-                meth.add(label, seq.name, run_pytorch(m, seq, meth.times_ms))
+                meth.add(label, seq.name, run_rae(m, seq, meth.times_ms))
             for q, meth in oidns.items():
                 meth.add(label, seq.name, run_oidn(seq, q, meth.times_ms))
             first = first or (label, seq.name, seq.frames - 1)
