@@ -28,12 +28,14 @@ override OB: u32 = 2u;
 // Largest magnitude stored: f32::MAX for f32 activations, 65504 for f16 (no infinities).
 override STORE_MAX: f32 = 3.4028234e38;
 
-// Register tile: each invocation computes ROWS output rows (at most 16) x OB output blocks at one
-// x, in named accumulators: no indexable local arrays, which lavapipe would keep in per-lane
+// Register tile: each invocation computes ROWS output rows (at most 16) x OB output blocks at TW
+// adjacent columns (1 or 2), in named accumulators: no indexable local arrays, which lavapipe would keep in per-lane
 // scratch memory. Rows and input rows past ROWS sit behind `if ROWS > k` on the override, which
 // the compiler removes: levels only a few pixels high (the deepest, on small frames) do not pay
 // for 16 rows (kernels::rows_per_invocation).
 override ROWS: u32 = 16u;
+// Output columns per invocation: 1 or 2 (a 2-wide tile fetches 4 input columns for 2 outputs).
+override TW: u32 = 1u;
 // vec4s in one weight chunk (64 KiB, the uniform binding limit).
 const CHUNK: u32 = 4096u;
 
@@ -104,35 +106,48 @@ fn tap(i: u32, j: u32) -> mat4x4<f32> {
     return mat4x4<f32>(weights[i + j], weights[i + OB + j], weights[i + 2u * OB + j], weights[i + 3u * OB + j]);
 }
 
-// Add the 3 taps of column kx, for output block j, to a tile (input column v0..v9).
+// acc + m * v as four fused multiply-adds: the sum `acc + m0 * v0 + m1 * v1 + ...` would cost
+// a multiply and an add per matrix product on top of its FMAs (the compiler may not reassociate).
+fn mac(acc: vec4<f32>, m: mat4x4<f32>, v: vec4<f32>) -> vec4<f32> {
+    return fma(m[3], vec4<f32>(v.w), fma(m[2], vec4<f32>(v.z), fma(m[1], vec4<f32>(v.y), fma(m[0], vec4<f32>(v.x), acc))));
+}
+
+// One output row of one column: the taps m0, m1, m2 (ky = 0, 1, 2) over three input rows.
+fn mac3(acc: vec4<f32>, m0: mat4x4<f32>, m1: mat4x4<f32>, m2: mat4x4<f32>, a: vec4<f32>, b: vec4<f32>, c: vec4<f32>) -> vec4<f32> {
+    return mac(mac(mac(acc, m0, a), m1, b), m2, c);
+}
+
+// Add the 3 taps of column kx, for output block j, to a tile (input column v0..v17).
 fn add_column(acc: ptr<function, Tile>, base: u32, j: u32, v0: vec4<f32>, v1: vec4<f32>, v2: vec4<f32>, v3: vec4<f32>, v4: vec4<f32>, v5: vec4<f32>, v6: vec4<f32>, v7: vec4<f32>, v8: vec4<f32>, v9: vec4<f32>, v10: vec4<f32>, v11: vec4<f32>, v12: vec4<f32>, v13: vec4<f32>, v14: vec4<f32>, v15: vec4<f32>, v16: vec4<f32>, v17: vec4<f32>) {
     let m0 = tap(base, j);
     let m1 = tap(base + 12u * OB, j);
     let m2 = tap(base + 24u * OB, j);
-    (*acc).r0 += m0 * v0 + m1 * v1 + m2 * v2;
-    if ROWS > 1u { (*acc).r1 += m0 * v1 + m1 * v2 + m2 * v3; }
-    if ROWS > 2u { (*acc).r2 += m0 * v2 + m1 * v3 + m2 * v4; }
-    if ROWS > 3u { (*acc).r3 += m0 * v3 + m1 * v4 + m2 * v5; }
-    if ROWS > 4u { (*acc).r4 += m0 * v4 + m1 * v5 + m2 * v6; }
-    if ROWS > 5u { (*acc).r5 += m0 * v5 + m1 * v6 + m2 * v7; }
-    if ROWS > 6u { (*acc).r6 += m0 * v6 + m1 * v7 + m2 * v8; }
-    if ROWS > 7u { (*acc).r7 += m0 * v7 + m1 * v8 + m2 * v9; }
-    if ROWS > 8u { (*acc).r8 += m0 * v8 + m1 * v9 + m2 * v10; }
-    if ROWS > 9u { (*acc).r9 += m0 * v9 + m1 * v10 + m2 * v11; }
-    if ROWS > 10u { (*acc).r10 += m0 * v10 + m1 * v11 + m2 * v12; }
-    if ROWS > 11u { (*acc).r11 += m0 * v11 + m1 * v12 + m2 * v13; }
-    if ROWS > 12u { (*acc).r12 += m0 * v12 + m1 * v13 + m2 * v14; }
-    if ROWS > 13u { (*acc).r13 += m0 * v13 + m1 * v14 + m2 * v15; }
-    if ROWS > 14u { (*acc).r14 += m0 * v14 + m1 * v15 + m2 * v16; }
-    if ROWS > 15u { (*acc).r15 += m0 * v15 + m1 * v16 + m2 * v17; }
+    (*acc).r0 = mac3((*acc).r0, m0, m1, m2, v0, v1, v2);
+    if ROWS > 1u { (*acc).r1 = mac3((*acc).r1, m0, m1, m2, v1, v2, v3); }
+    if ROWS > 2u { (*acc).r2 = mac3((*acc).r2, m0, m1, m2, v2, v3, v4); }
+    if ROWS > 3u { (*acc).r3 = mac3((*acc).r3, m0, m1, m2, v3, v4, v5); }
+    if ROWS > 4u { (*acc).r4 = mac3((*acc).r4, m0, m1, m2, v4, v5, v6); }
+    if ROWS > 5u { (*acc).r5 = mac3((*acc).r5, m0, m1, m2, v5, v6, v7); }
+    if ROWS > 6u { (*acc).r6 = mac3((*acc).r6, m0, m1, m2, v6, v7, v8); }
+    if ROWS > 7u { (*acc).r7 = mac3((*acc).r7, m0, m1, m2, v7, v8, v9); }
+    if ROWS > 8u { (*acc).r8 = mac3((*acc).r8, m0, m1, m2, v8, v9, v10); }
+    if ROWS > 9u { (*acc).r9 = mac3((*acc).r9, m0, m1, m2, v9, v10, v11); }
+    if ROWS > 10u { (*acc).r10 = mac3((*acc).r10, m0, m1, m2, v10, v11, v12); }
+    if ROWS > 11u { (*acc).r11 = mac3((*acc).r11, m0, m1, m2, v11, v12, v13); }
+    if ROWS > 12u { (*acc).r12 = mac3((*acc).r12, m0, m1, m2, v12, v13, v14); }
+    if ROWS > 13u { (*acc).r13 = mac3((*acc).r13, m0, m1, m2, v13, v14, v15); }
+    if ROWS > 14u { (*acc).r14 = mac3((*acc).r14, m0, m1, m2, v14, v15, v16); }
+    if ROWS > 15u { (*acc).r15 = mac3((*acc).r15, m0, m1, m2, v15, v16, v17); }
 }
 
 // Add input block `layer` of `t` (read with `mode`) at weight block `cb` to the tiles whose
-// top-left output is (x, y0).
-fn accumulate(acc0: ptr<function, Tile>, acc1: ptr<function, Tile>, t: texture_2d_array<f32>, mode: u32, layer: u32, cb: u32, w: u32, x: i32, y0: i32) {
-    for (var kx = 0u; kx < 3u; kx++) {
-        let sx = x + i32(kx) - 1;
-        // Column kx of the (ROWS + 2)-row input window.
+// top-left output is (x, y0): output column 0 in acc0/acc1 (blocks 0, 1), column 1 in acc2/acc3
+// when TW = 2. Input column ic (x - 1 + ic) feeds output column 0 through tap kx = ic and output
+// column 1 through kx = ic - 1, so a 2-wide tile fetches 4 columns for 2 outputs instead of 6.
+fn accumulate(acc0: ptr<function, Tile>, acc1: ptr<function, Tile>, acc2: ptr<function, Tile>, acc3: ptr<function, Tile>, t: texture_2d_array<f32>, mode: u32, layer: u32, cb: u32, w: u32, x: i32, y0: i32) {
+    for (var ic = 0u; ic < TW + 2u; ic++) {
+        let sx = x + i32(ic) - 1;
+        // Column ic of the (ROWS + 2)-row input window.
         let zero = vec4<f32>(0.0);
         let v0 = fetch(t, mode, sx, y0 + -1, layer);
         let v1 = fetch(t, mode, sx, y0 + 0, layer);
@@ -168,10 +183,19 @@ fn accumulate(acc0: ptr<function, Tile>, acc1: ptr<function, Tile>, t: texture_2
         var v17 = zero;
         if ROWS > 15u { v17 = fetch(t, mode, sx, y0 + 16, layer); }
         // Tap (ky, kx) starts at w + ((cb * 9 + ky * 3 + kx) * 4) * OB.
-        let base = w + (cb * 36u + kx * 4u) * OB;
-        add_column(acc0, base, 0u, v0, v1, v2, v3, v4, v5, v6, v7, v8, v9, v10, v11, v12, v13, v14, v15, v16, v17);
-        if OB > 1u {
-            add_column(acc1, base, 1u, v0, v1, v2, v3, v4, v5, v6, v7, v8, v9, v10, v11, v12, v13, v14, v15, v16, v17);
+        if ic < 3u {
+            let base = w + (cb * 36u + ic * 4u) * OB;
+            add_column(acc0, base, 0u, v0, v1, v2, v3, v4, v5, v6, v7, v8, v9, v10, v11, v12, v13, v14, v15, v16, v17);
+            if OB > 1u {
+                add_column(acc1, base, 1u, v0, v1, v2, v3, v4, v5, v6, v7, v8, v9, v10, v11, v12, v13, v14, v15, v16, v17);
+            }
+        }
+        if TW > 1u && ic > 0u {
+            let base = w + (cb * 36u + (ic - 1u) * 4u) * OB;
+            add_column(acc2, base, 0u, v0, v1, v2, v3, v4, v5, v6, v7, v8, v9, v10, v11, v12, v13, v14, v15, v16, v17);
+            if OB > 1u {
+                add_column(acc3, base, 1u, v0, v1, v2, v3, v4, v5, v6, v7, v8, v9, v10, v11, v12, v13, v14, v15, v16, v17);
+            }
         }
     }
 }
@@ -207,7 +231,7 @@ fn store(acc: Tile, x: u32, y0: u32, layer: u32) {
 
 @compute @workgroup_size(8, 8, 1)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let x = gid.x;
+    let x = gid.x * TW;
     let y0 = gid.y * ROWS;
     // This workgroup's group: its first output block and its weights (uniform over the group).
     let ob0 = params.ob0 + gid.z * OB;
@@ -223,17 +247,27 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         let b1 = weights[bias_at + 1u];
         acc1 = Tile(b1, b1, b1, b1, b1, b1, b1, b1, b1, b1, b1, b1, b1, b1, b1, b1);
     }
+    var acc2 = acc0;
+    var acc3 = acc1;
     let xi = i32(x);
     let yi = i32(y0);
     // Source a: input blocks 0 .. cin4_a; then source b: blocks cin4_a .. cin4_a + cin4_b.
     for (var c = 0u; c < params.cin4_a; c++) {
-        accumulate(&acc0, &acc1, src_a, MODE_A, c, c, w, xi, yi);
+        accumulate(&acc0, &acc1, &acc2, &acc3, src_a, MODE_A, c, c, w, xi, yi);
     }
     for (var c = 0u; c < params.cin4_b; c++) {
-        accumulate(&acc0, &acc1, src_b, MODE_B, c, params.cin4_a + c, w, xi, yi);
+        accumulate(&acc0, &acc1, &acc2, &acc3, src_b, MODE_B, c, params.cin4_a + c, w, xi, yi);
     }
+    let second = OB > 1u && ob0 + 1u < params.cout4;
     store(acc0, x, y0, ob0);
-    if OB > 1u && ob0 + 1u < params.cout4 {
+    if second {
         store(acc1, x, y0, ob0 + 1u);
+    }
+    // The second column, unless it is past the right edge.
+    if TW > 1u && x + 1u < params.width {
+        store(acc2, x + 1u, y0, ob0);
+        if second {
+            store(acc3, x + 1u, y0, ob0 + 1u);
+        }
     }
 }

@@ -1,11 +1,18 @@
 //! Every WGSL file parses and validates with naga: no GPU needed, a broken shader fails here.
 
-use rae_core::kernels::SHADERS;
+use rae_core::kernels::{SHADERS, STORAGE_WEIGHTS, UNIFORM_WEIGHTS, shader_source};
 
 #[test]
 fn every_shader_validates_with_naga() {
     assert!(SHADERS.len() >= 3);
-    for (name, source) in SHADERS {
+    // The sources as written, and the two rewrites kernels::Kernels::new makes (f16 storage
+    // textures, storage-buffer weights).
+    let conv = shader_source("conv3x3");
+    assert!(conv.contains(UNIFORM_WEIGHTS), "the weight declaration Kernels::new rewrites");
+    let rewritten = [("conv3x3 (f16, storage weights)", conv.replace("rgba32float", "rgba16float").replace(UNIFORM_WEIGHTS, STORAGE_WEIGHTS))];
+    let all = SHADERS.iter().map(|&(n, s)| (n, s.to_string())).chain(rewritten.into_iter().map(|(n, s)| (n, s)));
+    for (name, source) in all {
+        let source = source.as_str();
         let module = naga::front::wgsl::parse_str(source).unwrap_or_else(|e| panic!("{name}.wgsl: {}", e.emit_to_string(source)));
         naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all())
             .validate(&module)

@@ -1,6 +1,7 @@
 //! Recurrence, reset, determinism, odd sizes, the caller-buffer path and input errors.
 
-use rae_core::{Denoiser, Error, FrameInputs, GpuFrameIo, Weights};
+use rae_core::denoiser::TUNE_TILES;
+use rae_core::{Denoiser, Error, FrameInputs, GpuFrameIo, Options, Tile, TileChoice, WeightMemory, Weights};
 use wgpu::util::DeviceExt;
 
 use crate::{Golden, fixture, gpu};
@@ -143,4 +144,30 @@ fn missing_or_wrong_sized_buffers_are_named() {
     assert!(matches!(err, Error::InputSize { buffer: "normal", found: 100, .. }), "{err}");
     let g = gpu();
     assert!(matches!(Denoiser::new(&g.device, &g.queue, &weights, 0, 10), Err(Error::FrameSize { .. })));
+}
+
+#[test]
+fn tuned_tiles_and_storage_weights_give_the_frames_of_the_default_plan() {
+    // The GPU path (weights in one storage buffer, each conv's tile timed on the device) against
+    // lavapipe's default (uniform chunks, 16 x 2 everywhere): every tile sums each output's
+    // products in the same order (input block, kx, ky, lane), so frames are bit-identical.
+    let golden = crate::golden("golden_paper_tiny_40x24.safetensors");
+    let weights = Weights::load(fixture(&golden.weights)).unwrap();
+    let g = gpu();
+    let fixed = Options { tiles: TileChoice::Fixed(Tile::default()), weights: Some(WeightMemory::Uniform), ..Default::default() };
+    // Three candidates of TUNE_TILES (a tall, a 2-column and a short one): each is compiled on
+    // lavapipe, which takes seconds per pipeline.
+    const CANDIDATES: [Tile; 3] = [TUNE_TILES[0], TUNE_TILES[10], TUNE_TILES[6]];
+    let tuned = Options { tiles: TileChoice::TunedAmong(&CANDIDATES), weights: Some(WeightMemory::Storage), ..Default::default() };
+    let mut a = Denoiser::with_options(&g.device, &g.queue, &weights, golden.width, golden.height, fixed).unwrap();
+    let mut b = Denoiser::with_options(&g.device, &g.queue, &weights, golden.width, golden.height, tuned).unwrap();
+    assert_eq!(b.weight_memory(), WeightMemory::Storage);
+    assert_eq!(b.conv_tiles().len(), b.graph().nodes.len());
+    for t in b.conv_tiles() {
+        assert!(CANDIDATES.iter().any(|c| c.rows >= t.rows && c.blocks >= t.blocks && c.cols >= t.cols), "tile {t} comes from a candidate");
+    }
+    for i in 0..golden.frames.len() {
+        let (x, y) = (a.denoise(&golden.inputs(i)).unwrap(), b.denoise(&golden.inputs(i)).unwrap());
+        assert_eq!(bits(&x), bits(&y), "frame {i}: tuned/storage differs from fixed/uniform");
+    }
 }

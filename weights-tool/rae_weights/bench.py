@@ -33,14 +33,21 @@ def macs_per_pixel(model: RecurrentAE) -> float:
 
 
 def time_frames(model: RecurrentAE, width: int, height: int, frames: int) -> list[float]:
-    """Seconds per frame for `frames` timed frames after 2 warm-up frames."""
-    x = torch.rand(1, model.arch.in_channels, height, width).contiguous(memory_format=torch.channels_last)
+    """Seconds per frame for `frames` timed frames after 2 warm-up frames, on the model's device
+    and dtype (a CUDA frame is timed to its completion)."""
+    p = next(model.parameters())
+    x = torch.rand(1, model.arch.in_channels, height, width, device=p.device, dtype=p.dtype).contiguous(memory_format=torch.channels_last)
+    cuda = p.device.type == "cuda"
     model.reset()
     times = []
     with torch.inference_mode():
         for i in range(frames + 2):
+            if cuda:
+                torch.cuda.synchronize()
             t = time.perf_counter()
             model(x)
+            if cuda:
+                torch.cuda.synchronize()
             if i >= 2:
                 times.append(time.perf_counter() - t)
     return times
@@ -52,17 +59,25 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--sizes", default="256x256", help="comma-separated WxH (multiples of 2^levels)")
     p.add_argument("--frames", type=int, default=10)
     p.add_argument("--threads", type=int, default=min(2, os.cpu_count() or 1))
+    p.add_argument("--device", default="cpu", help="cpu or cuda (cuDNN; TF32 off so float32 is IEEE float32)")
+    p.add_argument("--dtypes", default="float32", help="comma-separated: float32, float16 (float16 on cuda only)")
     a = p.parse_args(argv)
     torch.set_num_threads(a.threads)
+    torch.backends.cudnn.allow_tf32 = False
+    torch.backends.cuda.matmul.allow_tf32 = False
+    torch.backends.cudnn.benchmark = True
     arch, state = read_weights(a.weights)
     model = RecurrentAE(arch)
     model.load_state_dict(state)
     model = model.eval().to(memory_format=torch.channels_last)
     flop_px = 2 * macs_per_pixel(model)
-    print(f"PyTorch {torch.__version__} CPU, {a.threads} threads, channels_last; weights: {a.weights}; {a.frames} timed frames after 2 warm-up")
-    print(f"{'size':>10} {'ms':>10} {'GFLOP/s':>10}")
-    for s in a.sizes.split(","):
-        w, h = (int(v) for v in s.lower().split("x"))
-        ms = statistics.median(time_frames(model, w, h, a.frames)) * 1e3
-        print(f"{s:>10} {ms:>10.1f} {flop_px * w * h / (ms * 1e-3) / 1e9:>10.2f}")
+    where = f"CPU, {a.threads} threads" if a.device == "cpu" else f"{torch.cuda.get_device_name()} (cuDNN {torch.backends.cudnn.version()}, TF32 off)"
+    print(f"PyTorch {torch.__version__} {where}, channels_last; weights: {a.weights}; {a.frames} timed frames after 2 warm-up")
+    print(f"{'size':>10} {'dtype':>8} {'ms':>10} {'GFLOP/s':>10}")
+    for dtype in a.dtypes.split(","):
+        m = model.to(device=a.device, dtype=getattr(torch, dtype))
+        for s in a.sizes.split(","):
+            w, h = (int(v) for v in s.lower().split("x"))
+            ms = statistics.median(time_frames(m, w, h, a.frames)) * 1e3
+            print(f"{s:>10} {dtype:>8} {ms:>10.2f} {flop_px * w * h / (ms * 1e-3) / 1e9:>10.2f}")
     return 0

@@ -240,12 +240,16 @@ def bench_text(cli: Path, weights: Path, sizes: str, frames: int, peak: float | 
 
 
 def bench_rows(text: str) -> dict[tuple[str, str], tuple[float, float]]:
-    """(size, precision) -> (total ms, GFLOP/s) from rae-cli bench's summary rows."""
+    """(size, precision) -> (total ms, GFLOP/s) from rae-cli bench's summary rows (by header)."""
     rows = {}
+    col: dict[str, int] = {}
     for line in text.splitlines():
         f = line.split()
-        if len(f) >= 8 and "x" in f[0] and f[1] in ("f32", "f16"):
-            rows[(f[0], f[1])] = (float(f[2]), float(f[6]))
+        if f[:2] == ["size", "precision"]:
+            # Header names, "total ms" as one column.
+            col = {name: i for i, name in enumerate(line.replace("total ms", "total").replace("peak MiB", "peak_mib").replace("alloc MiB", "alloc_mib").replace("of peak", "of_peak").split())}
+        elif col and len(f) == len(col) and "x" in f[0] and f[1] in ("f32", "f16"):
+            rows[(f[0], f[1])] = (float(f[col["total"]]), float(f[col["GFLOP/s"]]))
     return rows
 
 

@@ -9,7 +9,7 @@ use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand};
 use rae_core::golden::{Golden, Tolerance};
 use rae_core::graph::Graph;
-use rae_core::{Denoiser, Gpu, Precision, Weights};
+use rae_core::{Denoiser, Gpu, GpuFrameIo, Options, Precision, Tile, TileChoice, WeightMemory, Weights};
 
 #[derive(Parser)]
 #[command(name = "rae-cli", version, about = "Recurrent denoising autoencoder for path-traced sequences, on wgpu")]
@@ -97,6 +97,15 @@ enum Command {
         /// project's 2-core lavapipe machine; NVIDIA H100 SXM: 67,000).
         #[arg(long)]
         peak_gflops: Option<f64>,
+        /// Conv register tiles to time: ROWSxBLOCKS[wCOLS] (rows 1, 2, 4, 8, 16; blocks 1, 2;
+        /// columns 1, 2) for one tile everywhere, `tuned` (each conv timed with every candidate on this device while
+        /// building), or `auto` (tuned on GPUs, 16x2 on CPU drivers: what `denoise` uses).
+        #[arg(long, value_delimiter = ',', default_value = "auto")]
+        tile: Vec<String>,
+        /// Where the convs read weights: `uniform` (64 KiB chunks), `storage` (one buffer, a
+        /// dispatch per conv) or `auto` (uniform on CPU drivers, storage on GPUs).
+        #[arg(long, value_delimiter = ',', default_value = "auto")]
+        weights_memory: Vec<String>,
     },
 }
 
@@ -118,6 +127,37 @@ impl From<PrecisionArg> for Precision {
     }
 }
 
+fn parse_tile(s: &str) -> Result<TileChoice> {
+    match s {
+        "auto" => return Ok(TileChoice::Auto),
+        "tuned" => return Ok(TileChoice::Tuned),
+        _ => {}
+    }
+    let bad = || format!("tile `{s}` is not ROWSxBLOCKS[wCOLS], tuned or auto");
+    let (shape, cols) = s.split_once('w').map_or((s, "1"), |(a, c)| (a, c));
+    let (r, b) = shape.split_once('x').with_context(bad)?;
+    let (r, b, c) = (r.parse().with_context(bad)?, b.parse().with_context(bad)?, cols.parse().with_context(bad)?);
+    Tile::with_cols(r, b, c).map(TileChoice::Fixed).with_context(|| format!("tile `{s}`: the kernel has 1, 2, 4, 8 or 16 rows, 1 or 2 blocks and 1 or 2 columns"))
+}
+
+fn parse_memory(s: &str) -> Result<Option<WeightMemory>> {
+    match s {
+        "auto" => Ok(None),
+        "uniform" => Ok(Some(WeightMemory::Uniform)),
+        "storage" => Ok(Some(WeightMemory::Storage)),
+        _ => bail!("weights memory `{s}`: uniform, storage or auto"),
+    }
+}
+
+/// A tile choice for tables.
+fn tile_name(t: TileChoice) -> String {
+    match t {
+        TileChoice::Auto => "auto".into(),
+        TileChoice::Tuned | TileChoice::TunedAmong(_) => "tuned".into(),
+        TileChoice::Fixed(t) => t.to_string(),
+    }
+}
+
 fn parse_size(s: &str) -> Result<(u32, u32)> {
     let (w, h) = s.split_once('x').with_context(|| format!("size `{s}` is not WxH"))?;
     Ok((w.parse().with_context(|| format!("width in `{s}`"))?, h.parse().with_context(|| format!("height in `{s}`"))?))
@@ -128,52 +168,123 @@ fn median(v: &mut [f64]) -> f64 {
     v[v.len() / 2]
 }
 
-fn bench(path: &Path, sizes: &[String], frames: usize, layers: bool, precisions: &[PrecisionArg], peak: Option<f64>) -> Result<()> {
+#[allow(clippy::too_many_arguments)]
+fn bench(path: &Path, sizes: &[String], frames: usize, layers: bool, precisions: &[PrecisionArg], tiles: &[TileChoice], memories: &[Option<WeightMemory>], peak: Option<f64>) -> Result<()> {
     let weights = Weights::load(path)?;
     let gpu = Gpu::new()?;
     let flop_px = 2.0 * Graph::new(&weights.arch).macs_per_pixel();
+    let resident = gpu.device.features().contains(wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS);
     println!("adapter: {}; weights: {}; {frames} timed frames after 2 warm-up", gpu.describe(), path.display());
     // Both precisions run everywhere: f16 is rgba16float storage (core WebGPU), arithmetic f32.
+    println!("total = upload + gpu + download: a frame from host slices to host slices (gpu: submit to done, the host<->device copies included)");
+    println!("resident: GPU timestamps around a frame on GPU buffers (the path of a renderer that records rae into its own encoder), frames submitted back to back; pipelined: wall time per frame of that run; GFLOP/s from resident where the device has encoder timestamps, else from gpu");
     println!("peak MiB: the buffers and textures the denoiser holds (frames allocate nothing); alloc MiB: the device allocator's live total, wgpu's own included, where the backend reports it");
     println!("precisions: f32, f16 (f16 = rgba16float activations, f32 arithmetic; SHADER_F16 {})", gpu.device.features().contains(wgpu::Features::SHADER_F16));
-    println!("{:>10} {:>9} {:>10} {:>10} {:>10} {:>10} {:>10} {:>8} {:>10} {:>10}", "size", "precision", "total ms", "upload", "gpu", "download", "GFLOP/s", "of peak", "peak MiB", "alloc MiB");
-    for (s, &p) in sizes.iter().flat_map(|s| precisions.iter().map(move |p| (s, p))) {
+    println!("tile: the conv tile (rows x output blocks per invocation), `tuned` per conv on this device; weights: uniform chunks or one storage buffer; build: seconds to build the denoiser (compiling, tuning)");
+    println!(
+        "{:>10} {:>9} {:>5} {:>7} {:>6} {:>10} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>7} {:>9} {:>9}",
+        "size", "precision", "tile", "weights", "build", "total ms", "upload", "gpu", "download", "resident", "pipelined", "GFLOP/s", "of peak", "peak MiB", "alloc MiB"
+    );
+    for s in sizes {
         let (w, h) = parse_size(s)?;
-        let precision = Precision::from(p);
-        let mut d = Denoiser::with_precision(&gpu.device, &gpu.queue, &weights, w, h, precision)
-            .with_context(|| format!("building the {} denoiser at {s}", precision.name()))?;
         let n = (w * h) as usize;
         // Smooth, noisy, deterministic buffers: the timing does not depend on values.
         let wave: Vec<f32> = (0..3 * n).map(|i| 0.5 + 0.5 * ((i as f32) * 0.37).sin()).collect();
         let one: Vec<f32> = wave[..n].to_vec();
         let frame = rae_core::FrameInputs { color: &wave, albedo: Some(&wave), normal: Some(&wave), depth: Some(&one), roughness: Some(&one) };
-        let mut out = vec![0.0; 3 * n];
-        for _ in 0..2 {
-            d.denoise_into(&frame, &mut out)?;
-        }
-        let (mut total, mut up, mut gpu_t, mut down) = (vec![], vec![], vec![], vec![]);
-        for _ in 0..frames.max(1) {
-            let t = Instant::now();
-            let f = d.denoise_into(&frame, &mut out)?;
-            total.push(t.elapsed().as_secs_f64() * 1e3);
-            up.push(f.upload.as_secs_f64() * 1e3);
-            gpu_t.push(f.gpu.as_secs_f64() * 1e3);
-            down.push(f.download.as_secs_f64() * 1e3);
-        }
-        let (pw, ph) = d.padded_size();
-        let g = median(&mut gpu_t);
-        let gflops = flop_px * (pw * ph) as f64 / (g * 1e-3) / 1e9;
-        // What the denoiser holds (frames allocate nothing, so it is the peak); where the backend
-        // keeps an allocator report, the driver-side reservation of the whole device as well.
-        let mib = d.gpu_bytes() as f64 / (1 << 20) as f64;
-        let alloc = gpu.device.generate_allocator_report().map_or("-".to_string(), |r| format!("{:.1}", r.total_allocated_bytes as f64 / (1 << 20) as f64));
-        let share = peak.map_or("-".to_string(), |p| format!("{:.1}%", 100.0 * gflops / p));
-        println!("{s:>10} {:>9} {:>10.1} {:>10.2} {g:>10.1} {:>10.2} {gflops:>10.2} {share:>8} {mib:>10.1} {alloc:>10}", precision.name(), median(&mut total), median(&mut up), median(&mut down));
-        if layers {
-            stage_table(&mut d, &frame, &mut out, frames.max(1))?;
+        let combos = precisions.iter().flat_map(|p| memories.iter().flat_map(move |m| tiles.iter().map(move |t| (*p, *m, *t))));
+        for (p, memory, tiles) in combos {
+            let precision = Precision::from(p);
+            let built = Instant::now();
+            let mut d = Denoiser::with_options(&gpu.device, &gpu.queue, &weights, w, h, Options { precision, tiles, weights: memory })
+                .with_context(|| format!("building the {} denoiser at {s}", precision.name()))?;
+            let build_s = built.elapsed().as_secs_f64();
+            let mut out = vec![0.0; 3 * n];
+            for _ in 0..2 {
+                d.denoise_into(&frame, &mut out)?;
+            }
+            let (mut total, mut up, mut gpu_t, mut down) = (vec![], vec![], vec![], vec![]);
+            for _ in 0..frames.max(1) {
+                let t = Instant::now();
+                let f = d.denoise_into(&frame, &mut out)?;
+                total.push(t.elapsed().as_secs_f64() * 1e3);
+                up.push(f.upload.as_secs_f64() * 1e3);
+                gpu_t.push(f.gpu.as_secs_f64() * 1e3);
+                down.push(f.download.as_secs_f64() * 1e3);
+            }
+            let (pw, ph) = d.padded_size();
+            let g = median(&mut gpu_t);
+            let timed = if resident { Some(resident_frames(&gpu, &mut d, &frame, frames.max(1))?) } else { None };
+            let rate_ms = timed.map_or(g, |(r, _)| r);
+            let gflops = flop_px * (pw * ph) as f64 / (rate_ms * 1e-3) / 1e9;
+            // What the denoiser holds (frames allocate nothing, so it is the peak); where the
+            // backend keeps an allocator report, the driver-side reservation of the whole
+            // device as well.
+            let mib = d.gpu_bytes() as f64 / (1 << 20) as f64;
+            let alloc = gpu.device.generate_allocator_report().map_or("-".to_string(), |r| format!("{:.1}", r.total_allocated_bytes as f64 / (1 << 20) as f64));
+            let share = peak.map_or("-".to_string(), |p| format!("{:.1}%", 100.0 * gflops / p));
+            let (res, pipe) = timed.map_or(("-".to_string(), "-".to_string()), |(r, p)| (format!("{r:.2}"), format!("{p:.2}")));
+            println!(
+                "{s:>10} {:>9} {:>5} {:>7} {build_s:>6.1} {:>10.2} {:>9.2} {g:>9.2} {:>9.2} {res:>9} {pipe:>9} {gflops:>9.1} {share:>7} {mib:>9.1} {alloc:>9}",
+                precision.name(),
+                tile_name(tiles),
+                d.weight_memory().name(),
+                median(&mut total),
+                median(&mut up),
+                median(&mut down)
+            );
+            if layers {
+                stage_table(&mut d, &frame, &mut out, frames.max(1))?;
+            }
         }
     }
     Ok(())
+}
+
+/// Time `frames` frames on GPU-resident buffers (after 2 warm-up frames), each in its own encoder
+/// and submit, back to back: the median GPU time between timestamps written before and after
+/// each frame, and the wall time per frame of the whole run (what a renderer feeding rae every
+/// frame would see, CPU encoding included).
+fn resident_frames(gpu: &Gpu, d: &mut Denoiser, frame: &rae_core::FrameInputs, frames: usize) -> Result<(f64, f64)> {
+    use wgpu::util::DeviceExt;
+    let dev = &gpu.device;
+    let storage = |label, data: &[f32]| dev.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some(label), contents: bytemuck::cast_slice(data), usage: wgpu::BufferUsages::STORAGE });
+    let buf = |data: Option<&[f32]>, label| data.map(|v| storage(label, v));
+    let (color, albedo, normal, depth, roughness) = (storage("color", frame.color), buf(frame.albedo, "albedo"), buf(frame.normal, "normal"), buf(frame.depth, "depth"), buf(frame.roughness, "roughness"));
+    let output = dev.create_buffer(&wgpu::BufferDescriptor { label: Some("output"), size: (frame.color.len() * 4) as u64, usage: wgpu::BufferUsages::STORAGE, mapped_at_creation: false });
+    let io = d.bind_io(&GpuFrameIo { color: &color, albedo: albedo.as_ref(), normal: normal.as_ref(), depth: depth.as_ref(), roughness: roughness.as_ref(), output: &output })?;
+    let total = frames + 2;
+    let count = 2 * total as u32;
+    let queries = dev.create_query_set(&wgpu::QuerySetDescriptor { label: Some("frames"), ty: wgpu::QueryType::Timestamp, count });
+    let resolved = dev.create_buffer(&wgpu::BufferDescriptor { label: Some("timestamps"), size: count as u64 * 8, usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC, mapped_at_creation: false });
+    let readback = dev.create_buffer(&wgpu::BufferDescriptor { label: Some("timestamps readback"), size: count as u64 * 8, usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST, mapped_at_creation: false });
+    let mut start = Instant::now();
+    for i in 0..total as u32 {
+        if i == 2 {
+            dev.poll(wgpu::PollType::wait_indefinitely()).context("waiting for warm-up frames")?;
+            start = Instant::now();
+        }
+        let mut enc = dev.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("resident frame") });
+        enc.write_timestamp(&queries, 2 * i);
+        d.record(&mut enc, &io)?;
+        enc.write_timestamp(&queries, 2 * i + 1);
+        gpu.queue.submit(Some(enc.finish()));
+    }
+    dev.poll(wgpu::PollType::wait_indefinitely()).context("waiting for timed frames")?;
+    let pipelined = start.elapsed().as_secs_f64() * 1e3 / frames as f64;
+    let mut enc = dev.create_command_encoder(&Default::default());
+    enc.resolve_query_set(&queries, 0..count, &resolved, 0);
+    enc.copy_buffer_to_buffer(&resolved, 0, &readback, 0, count as u64 * 8);
+    gpu.queue.submit(Some(enc.finish()));
+    readback.slice(..).map_async(wgpu::MapMode::Read, |_| {});
+    dev.poll(wgpu::PollType::wait_indefinitely()).context("reading timestamps")?;
+    let ticks: Vec<u64> = {
+        let view = readback.slice(..).get_mapped_range().map_err(|e| anyhow::anyhow!("mapping timestamps: {e:?}"))?;
+        bytemuck::pod_collect_to_vec(&view[..])
+    };
+    let period = gpu.queue.get_timestamp_period() as f64 * 1e-6;
+    let mut ms: Vec<f64> = ticks.chunks(2).skip(2).map(|p| p[1].saturating_sub(p[0]) as f64 * period).collect();
+    Ok((median(&mut ms), pipelined))
 }
 
 /// Median GPU time of every stage over `frames` profiled frames, with its share and GFLOP/s.
@@ -181,7 +292,8 @@ fn stage_table(d: &mut Denoiser, frame: &rae_core::FrameInputs, out: &mut [f32],
     let runs: Vec<Vec<(String, f64)>> = (0..frames).map(|_| d.denoise_profiled(frame, out)).collect::<rae_core::Result<_>>()?;
     let (pw, ph) = d.padded_size();
     let nodes = &d.graph().nodes;
-    let mut rows: Vec<(String, f64, String, f64)> = Vec::new();
+    let tiles = d.conv_tiles();
+    let mut rows: Vec<(String, f64, String, f64, String)> = Vec::new();
     for (k, (name, _)) in runs[0].iter().enumerate() {
         let mut t: Vec<f64> = runs.iter().map(|r| r[k].1).collect();
         let ms = median(&mut t);
@@ -190,13 +302,14 @@ fn stage_table(d: &mut Denoiser, frame: &rae_core::FrameInputs, out: &mut [f32],
             let px = (pw >> n.level) as f64 * (ph >> n.level) as f64;
             (format!("L{} {}->{}", n.level, n.cin(), n.cout), 2.0 * 9.0 * (n.cin() * n.cout) as f64 * px)
         });
-        rows.push((name.clone(), ms, shape, flop));
+        let tile = k.checked_sub(1).and_then(|i| tiles.get(i)).map_or(String::new(), |t| t.to_string());
+        rows.push((name.clone(), ms, shape, flop, tile));
     }
     let total: f64 = rows.iter().map(|r| r.1).sum();
-    println!("    {:<16} {:<16} {:>9} {:>7} {:>9}", "stage", "level cin->cout", "GPU ms", "share", "GFLOP/s");
-    for (name, ms, shape, flop) in &rows {
+    println!("    {:<16} {:<16} {:>5} {:>9} {:>7} {:>9}", "stage", "level cin->cout", "tile", "GPU ms", "share", "GFLOP/s");
+    for (name, ms, shape, flop, tile) in &rows {
         let rate = if *flop > 0.0 { format!("{:.2}", flop / (ms * 1e-3) / 1e9) } else { String::new() };
-        println!("    {name:<16} {shape:<16} {ms:>9.2} {:>6.1}% {rate:>9}", 100.0 * ms / total);
+        println!("    {name:<16} {shape:<16} {tile:>5} {ms:>9.2} {:>6.1}% {rate:>9}", 100.0 * ms / total);
     }
     println!("    {:<16} {:<16} {total:>9.2}", "sum", "");
     Ok(())
@@ -244,6 +357,10 @@ fn devices() -> Result<()> {
         let f16 = a.features().contains(wgpu::Features::SHADER_F16);
         let ts = a.features().contains(wgpu::Features::TIMESTAMP_QUERY);
         println!("{} | {:?} | {:?} | driver {} {} | f16 {f16} | timestamps {ts}", i.name, i.backend, i.device_type, i.driver, i.driver_info);
+        // Matrix units the adapter exposes to shaders (wgpu's experimental cooperative matrices).
+        for m in a.cooperative_matrix_properties() {
+            println!("    cooperative matrix {}x{}x{} {:?} -> {:?}", m.m_size, m.n_size, m.k_size, m.ab_type, m.cr_type);
+        }
     }
     Ok(())
 }
@@ -285,6 +402,10 @@ fn main() -> Result<()> {
         Command::Info { file, size } => info(&file, &size),
         Command::Devices => devices(),
         Command::Verify { golden } => verify(&golden),
-        Command::Bench { weights, sizes, frames, layers, precision, peak_gflops } => bench(&weights, &sizes, frames, layers, &precision, peak_gflops),
+        Command::Bench { weights, sizes, frames, layers, precision, peak_gflops, tile, weights_memory } => {
+            let tiles = tile.iter().map(|t| parse_tile(t)).collect::<Result<Vec<_>>>()?;
+            let memories = weights_memory.iter().map(|m| parse_memory(m)).collect::<Result<Vec<_>>>()?;
+            bench(&weights, &sizes, frames, layers, &precision, &tiles, &memories, peak_gflops)
+        }
     }
 }

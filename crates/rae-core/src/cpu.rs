@@ -135,6 +135,7 @@ impl<'w> CpuNetwork<'w> {
                     Value::Input => input.clone(),
                     Value::Temp(t) => temps[t].clone().expect("defined before use"),
                     Value::HiddenNew(k) => new_hidden[k].clone().expect("defined before use"),
+                    Value::Pooled(k) => max_pool2(new_hidden[k].as_ref().expect("defined before use")),
                     Value::HiddenPrev(k) => self.hidden[k].clone().unwrap_or_else(|| Chw::zeros(c, h, w)),
                 }
             };

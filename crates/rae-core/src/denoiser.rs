@@ -29,7 +29,7 @@ use std::time::Instant;
 use crate::error::{Error, Result};
 use crate::frame::{FrameInputs, FrameTimings};
 use crate::graph::{Graph, Read, Value};
-use crate::kernels::{ConvPlan, ConvSpec, Kernels, OutputParams, PrepParams, Precision, WORKGROUP, blocks};
+use crate::kernels::{ConvPlan, ConvSpec, Kernels, OutputParams, PrepParams, Precision, Tile, WORKGROUP, WeightMemory, blocks};
 use crate::model::{Arch, InputBuffer, Transfer};
 use crate::weights::Weights;
 
@@ -106,6 +106,52 @@ struct Profiler {
     count: u32,
 }
 
+/// How a [`Denoiser`] picks the conv kernel's register tile.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum TileChoice {
+    /// [`TileChoice::Tuned`] on GPUs that have timestamps inside passes; the default tile on
+    /// CPU drivers (lavapipe compiles each variant for seconds, and 16 x 2 is its fastest
+    /// everywhere).
+    #[default]
+    Auto,
+    /// One tile for every conv (smaller where a level or a conv is smaller).
+    Fixed(Tile),
+    /// Time every conv with each of [`TUNE_TILES`] on this device while building, and keep the
+    /// fastest per conv: big levels want tall tiles (fewer weight loads), deep levels want
+    /// small ones (enough invocations to fill the GPU).
+    Tuned,
+    /// [`TileChoice::Tuned`] among these candidates only (fewer pipelines to compile).
+    TunedAmong(&'static [Tile]),
+}
+
+/// The tiles [`TileChoice::Tuned`] times.
+pub const TUNE_TILES: [Tile; 13] = [
+    Tile { rows: 16, blocks: 2, cols: 1 },
+    Tile { rows: 8, blocks: 2, cols: 1 },
+    Tile { rows: 4, blocks: 2, cols: 1 },
+    Tile { rows: 2, blocks: 2, cols: 1 },
+    Tile { rows: 1, blocks: 2, cols: 1 },
+    Tile { rows: 8, blocks: 1, cols: 1 },
+    Tile { rows: 4, blocks: 1, cols: 1 },
+    Tile { rows: 1, blocks: 1, cols: 1 },
+    Tile { rows: 16, blocks: 1, cols: 2 },
+    Tile { rows: 8, blocks: 2, cols: 2 },
+    Tile { rows: 8, blocks: 1, cols: 2 },
+    Tile { rows: 4, blocks: 2, cols: 2 },
+    Tile { rows: 4, blocks: 1, cols: 2 },
+];
+
+/// How a [`Denoiser`] stores activations, reads weights and tiles its convolutions.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Options {
+    /// Storage precision of activations and hidden state.
+    pub precision: Precision,
+    /// Register tile of the conv kernel.
+    pub tiles: TileChoice,
+    /// Where the conv reads weights; `None`: by adapter type ([`WeightMemory::for_device_type`]).
+    pub weights: Option<WeightMemory>,
+}
+
 /// Runs one model at one frame size, frame after frame, keeping the hidden state on the GPU.
 pub struct Denoiser {
     id: u64,
@@ -121,6 +167,8 @@ pub struct Denoiser {
     convs: ConvPlan,
     /// `[parity][node]`.
     conv_groups: [Vec<wgpu::BindGroup>; 2],
+    /// `[parity][pool]` (a pool reads the state written this frame, whose texture alternates).
+    pool_groups: [Vec<wgpu::BindGroup>; 2],
     prep_params: wgpu::Buffer,
     output_params: wgpu::Buffer,
     input_texture: wgpu::Texture,
@@ -167,6 +215,14 @@ impl Denoiser {
 
     /// [`Self::new`] with activations and hidden state stored in `precision`.
     pub fn with_precision(device: &wgpu::Device, queue: &wgpu::Queue, weights: &Weights, width: u32, height: u32, precision: Precision) -> Result<Self> {
+        Self::with_options(device, queue, weights, width, height, Options { precision, ..Default::default() })
+    }
+
+    /// [`Self::new`] with every choice spelled out: storage precision and the conv tile.
+    pub fn with_options(device: &wgpu::Device, queue: &wgpu::Queue, weights: &Weights, width: u32, height: u32, options: Options) -> Result<Self> {
+        let Options { precision, tiles, weights: memory } = options;
+        let device_type = device.adapter_info().device_type;
+        let memory = memory.unwrap_or(WeightMemory::for_device_type(device_type));
         let arch = weights.arch.clone();
         let multiple = 1u32 << arch.levels();
         let limits = device.limits();
@@ -179,7 +235,7 @@ impl Denoiser {
             return Err(size_err(format!("exceeds the device's texture limit {}", limits.max_texture_dimension_2d)));
         }
         let graph = Graph::new(&arch);
-        let mut kernels = Kernels::new(device, precision);
+        let mut kernels = Kernels::new(device, precision, memory);
         let format = precision.format();
         let mut textures = Vec::new();
         let mut bytes = 0u64;
@@ -199,6 +255,7 @@ impl Denoiser {
         let hidden_textures: Vec<[wgpu::Texture; 2]> = hidden_pairs.iter().map(|[a, b]| [a.0.clone(), b.0.clone()]).collect();
         let (assign, slots) = graph.allocate_temps();
         let slot_views: Vec<wgpu::TextureView> = slots.iter().map(|&(level, c)| make("temp", level, c).1).collect();
+        let pooled_views: Vec<wgpu::TextureView> = graph.pools.iter().map(|p| make("pooled", p.level, p.channels).1).collect();
         let (_, dummy_view) = texture(device, "unused source", 1, 1, 1, format);
         let view = |v: Value, parity: usize| -> &wgpu::TextureView {
             match v {
@@ -206,6 +263,7 @@ impl Denoiser {
                 Value::HiddenPrev(k) => &hidden[k][parity],
                 Value::HiddenNew(k) => &hidden[k][1 - parity],
                 Value::Temp(t) => &slot_views[assign[t]],
+                Value::Pooled(k) => &pooled_views[k],
             }
         };
         let Value::Temp(out_temp) = graph.output else { unreachable!("the output is a temporary") };
@@ -241,7 +299,21 @@ impl Denoiser {
                 b_is_hidden: n.b.is_some_and(|b| matches!(b.value, Value::HiddenPrev(_))),
             })
             .collect();
-        let convs = ConvPlan::new(device, &mut kernels, &specs)?;
+        // Sources and destination of every conv at parity 0 (for tuning).
+        let node_views: Vec<[wgpu::TextureView; 3]> = graph
+            .nodes
+            .iter()
+            .map(|n| [view(n.a.value, 0).clone(), n.b.map_or(&dummy_view, |b| view(b.value, 0)).clone(), view(n.out, 0).clone()])
+            .collect();
+        let timestamps = device.features().contains(wgpu::Features::TIMESTAMP_QUERY_INSIDE_PASSES);
+        let tiles = match tiles {
+            TileChoice::Fixed(t) => vec![t],
+            TileChoice::Auto if device_type == wgpu::DeviceType::Cpu => vec![Tile::default()],
+            TileChoice::Auto | TileChoice::Tuned if timestamps => tune(device, queue, &mut kernels, &specs, &node_views, &TUNE_TILES)?,
+            TileChoice::TunedAmong(candidates) if timestamps && !candidates.is_empty() => tune(device, queue, &mut kernels, &specs, &node_views, candidates)?,
+            TileChoice::Auto | TileChoice::Tuned | TileChoice::TunedAmong(_) => vec![Tile::default()],
+        };
+        let convs = ConvPlan::new(device, &mut kernels, &specs, &tiles)?;
         debug_assert_eq!(bytes, activation_bytes(&graph, pwidth, pheight, precision));
         bytes += convs.bytes();
         // Bind groups of both parities (the reset variant only changes the dynamic offset).
@@ -252,6 +324,24 @@ impl Denoiser {
                 .map(|node| {
                     let src_b = node.b.map_or(&dummy_view, |b| view(b.value, parity));
                     convs.bind_group(device, &kernels, view(node.a.value, parity), src_b, view(node.out, parity))
+                })
+                .collect()
+        });
+
+        let pool_groups: [Vec<wgpu::BindGroup>; 2] = std::array::from_fn(|parity| {
+            graph
+                .pools
+                .iter()
+                .enumerate()
+                .map(|(i, p)| {
+                    device.create_bind_group(&wgpu::BindGroupDescriptor {
+                        label: Some("pool"),
+                        layout: &kernels.pool_layout,
+                        entries: &[
+                            wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(view(Value::HiddenNew(p.hidden), parity)) },
+                            wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&pooled_views[i]) },
+                        ],
+                    })
                 })
                 .collect()
         });
@@ -298,6 +388,7 @@ impl Denoiser {
             kernels,
             convs,
             conv_groups,
+            pool_groups,
             prep_params,
             output_params,
             input_texture,
@@ -434,8 +525,17 @@ impl Denoiser {
             pass.set_bind_group(0, &io.prep, &[]);
             pass.dispatch_workgroups(self.pwidth.div_ceil(WORKGROUP), self.pheight.div_ceil(WORKGROUP), 1);
             stamp(&mut pass, 1);
+            let mut pools = self.graph.pools.iter().zip(&self.pool_groups[parity]).peekable();
             for (i, group) in self.conv_groups[parity].iter().enumerate() {
                 self.convs.record(&mut pass, i, reset, group);
+                // The pool of a block's new state runs right after the conv that writes it (its
+                // time is counted with that conv's stage).
+                if let Some((p, g)) = pools.next_if(|(p, _)| p.after == i) {
+                    let (w, h) = (self.pwidth >> p.level, self.pheight >> p.level);
+                    pass.set_pipeline(&self.kernels.pool);
+                    pass.set_bind_group(0, g, &[]);
+                    pass.dispatch_workgroups(w.div_ceil(WORKGROUP), h.div_ceil(WORKGROUP), blocks(p.channels));
+                }
                 stamp(&mut pass, 2 + i as u32);
             }
             pass.set_pipeline(&self.kernels.output);
@@ -549,9 +649,11 @@ impl Denoiser {
         let read = result.and_then(|_| read_buffer(&self.device, &prof.readback, &mut ticks));
         self.profiler = Some(prof);
         read?;
-        let ticks: &[u64] = bytemuck::cast_slice(&ticks);
+        let ticks: Vec<u64> = bytemuck::pod_collect_to_vec(&ticks);
         let period = self.queue.get_timestamp_period() as f64;
-        let names = std::iter::once("prep".to_string()).chain(self.graph.nodes.iter().map(|n| n.name.clone())).chain(std::iter::once("output".to_string()));
+        let pooled = |i: usize| self.graph.pools.iter().any(|p| p.after == i);
+        let conv_names = self.graph.nodes.iter().enumerate().map(|(i, n)| if pooled(i) { format!("{}+pool", n.name) } else { n.name.clone() });
+        let names = std::iter::once("prep".to_string()).chain(conv_names).chain(std::iter::once("output".to_string()));
         Ok(names.zip(ticks.windows(2)).map(|(n, w)| (n, w[1].saturating_sub(w[0]) as f64 * period * 1e-6)).collect())
     }
 
@@ -622,6 +724,16 @@ impl Denoiser {
             .collect()
     }
 
+    /// The tile each conv runs with, in [`Graph::nodes`] order.
+    pub fn conv_tiles(&self) -> &[Tile] {
+        self.convs.tiles()
+    }
+
+    /// Where the convs read their weights.
+    pub fn weight_memory(&self) -> WeightMemory {
+        self.kernels.weight_memory()
+    }
+
     /// Textures held (for memory reports and tests).
     pub fn texture_count(&self) -> usize {
         self.textures.len()
@@ -629,8 +741,8 @@ impl Denoiser {
 }
 
 /// Bytes of the activation and hidden-state textures a [`Denoiser`] allocates for `graph` at
-/// the padded size `pwidth` x `pheight`: the input, two textures per recurrent block, and the
-/// temporaries as shared by liveness. Weights and uniforms are not included. Needs no device,
+/// the padded size `pwidth` x `pheight`: the input, two textures per recurrent block, the
+/// temporaries as shared by liveness, and the pooled copies of the encoder blocks' outputs. Weights and uniforms are not included. Needs no device,
 /// so memory at any size can be reported (`rae-cli info --size`).
 pub fn activation_bytes(graph: &Graph, pwidth: u32, pheight: u32, precision: Precision) -> u64 {
     let tex = |level: usize, channels: usize| {
@@ -639,7 +751,8 @@ pub fn activation_bytes(graph: &Graph, pwidth: u32, pheight: u32, precision: Pre
     let input = tex(0, graph.in_channels);
     let hidden: u64 = graph.hidden.iter().map(|&(c, level)| 2 * tex(level, c)).sum();
     let temps: u64 = graph.allocate_temps().1.iter().map(|&(level, c)| tex(level, c)).sum();
-    input + hidden + temps
+    let pooled: u64 = graph.pools.iter().map(|p| tex(p.level, p.channels)).sum();
+    input + hidden + temps + pooled
 }
 
 fn create_init(device: &wgpu::Device, label: &str, contents: &[u8], usage: wgpu::BufferUsages) -> wgpu::Buffer {
@@ -672,6 +785,52 @@ fn finish_host_frame(device: &wgpu::Device, host: &HostIo, out: &mut [f32]) -> R
 }
 
 /// Map a MAP_READ buffer and copy its f32s into `out`.
+/// The fastest of `candidates` for each conv on this device: every candidate plan runs the
+/// convs `ROUNDS` times in one pass with a timestamp after each dispatch group, and each conv
+/// keeps the tile of its lowest median. The activations hold whatever they hold (zeros on a
+/// fresh denoiser): the kernel's time does not depend on values (no data-dependent branches).
+fn tune(device: &wgpu::Device, queue: &wgpu::Queue, kernels: &mut Kernels, specs: &[ConvSpec], views: &[[wgpu::TextureView; 3]], candidates: &[Tile]) -> Result<Vec<Tile>> {
+    const ROUNDS: usize = 5;
+    let n = specs.len();
+    let count = ((n + 1) * ROUNDS) as u32;
+    let queries = device.create_query_set(&wgpu::QuerySetDescriptor { label: Some("tile tuning"), ty: wgpu::QueryType::Timestamp, count });
+    let buffer = |usage| device.create_buffer(&wgpu::BufferDescriptor { label: Some("tile tuning"), size: count as u64 * 8, usage, mapped_at_creation: false });
+    let resolved = buffer(wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC);
+    let readback = buffer(wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST);
+    let period = queue.get_timestamp_period() as f64;
+    let mut best = vec![(f64::INFINITY, Tile::default()); n];
+    for &tile in candidates {
+        let plan = ConvPlan::new(device, kernels, specs, &[tile])?;
+        let groups: Vec<wgpu::BindGroup> = views.iter().map(|[a, b, o]| plan.bind_group(device, kernels, a, b, o)).collect();
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("tile tuning") });
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("tile tuning"), timestamp_writes: None });
+            for r in 0..ROUNDS {
+                let base = (r * (n + 1)) as u32;
+                pass.write_timestamp(&queries, base);
+                for (i, group) in groups.iter().enumerate() {
+                    plan.record(&mut pass, i, false, group);
+                    pass.write_timestamp(&queries, base + 1 + i as u32);
+                }
+            }
+        }
+        encoder.resolve_query_set(&queries, 0..count, &resolved, 0);
+        encoder.copy_buffer_to_buffer(&resolved, 0, &readback, 0, count as u64 * 8);
+        queue.submit(Some(encoder.finish()));
+        let mut raw = vec![0f32; 2 * count as usize];
+        read_buffer(device, &readback, &mut raw)?;
+        let ticks: Vec<u64> = bytemuck::pod_collect_to_vec(&raw);
+        for (i, b) in best.iter_mut().enumerate() {
+            let mut t: Vec<f64> = (0..ROUNDS).map(|r| ticks[r * (n + 1) + i + 1].saturating_sub(ticks[r * (n + 1) + i]) as f64 * period).collect();
+            t.sort_by(f64::total_cmp);
+            if t[ROUNDS / 2] < b.0 {
+                *b = (t[ROUNDS / 2], tile);
+            }
+        }
+    }
+    Ok(best.into_iter().map(|(_, t)| t).collect())
+}
+
 fn read_buffer(device: &wgpu::Device, buffer: &wgpu::Buffer, out: &mut [f32]) -> Result<()> {
     let (tx, rx) = std::sync::mpsc::channel();
     buffer.map_async(wgpu::MapMode::Read, .., move |r| {

@@ -1,7 +1,11 @@
 //! The network as a list of convolutions over named values, built from an [`Arch`].
 //!
-//! Pooling, upsampling and concatenation are not nodes: they are how a convolution reads its
-//! sources ([`Read`]), so every node is one fused kernel dispatch. Node names are the PyTorch
+//! Upsampling and concatenation are not nodes: they are how a convolution reads its sources
+//! ([`Read`]), so every node is one fused kernel dispatch. Max-pooling is read the same way in
+//! principle ([`Read::Pool`]), but each encoder block's output is read pooled by two convs (the
+//! next block's first, and the decoder's skip in the reference network), at 9 taps x 4 texels
+//! per value; so the graph pools it once per frame into a value of its own ([`Pool`],
+//! [`Value::Pooled`]) and those convs read one texel per value. Node names are the PyTorch
 //! module names, so a node finds its weights as `"{name}.weight"` and `"{name}.bias"`.
 
 use crate::model::{Arch, OutputActivation, Skip};
@@ -30,6 +34,8 @@ pub enum Value {
     HiddenNew(usize),
     /// An intermediate, live from the node that writes it to the last node that reads it.
     Temp(usize),
+    /// `HiddenNew(i)` max-pooled 2x2, at level `i + 1` ([`Graph::pools`]).
+    Pooled(usize),
 }
 
 /// One source of a convolution.
@@ -69,6 +75,20 @@ impl ConvNode {
     }
 }
 
+/// A 2x2 max-pool of encoder block `hidden`'s new state into [`Value::Pooled`]`(hidden)`, run
+/// right after node `after` (the conv that writes that state).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Pool {
+    /// Encoder block (index into [`Graph::hidden`]).
+    pub hidden: usize,
+    /// Level of the pooled value (the block's level + 1).
+    pub level: usize,
+    /// Channels.
+    pub channels: usize,
+    /// Index of the node after which it runs.
+    pub after: usize,
+}
+
 /// Shape of a temporary value.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct TempInfo {
@@ -91,6 +111,8 @@ pub struct Graph {
     pub temps: Vec<TempInfo>,
     /// Channels of each hidden state (encoder blocks, bottleneck last) and its level.
     pub hidden: Vec<(usize, usize)>,
+    /// Pool passes, in execution order; `pools[i]` writes `Value::Pooled(i)`.
+    pub pools: Vec<Pool>,
     /// The value holding the network output (level 0).
     pub output: Value,
     /// Channels of the packed input.
@@ -103,6 +125,7 @@ impl Graph {
         let mut b = Builder { nodes: Vec::new(), temps: Vec::new() };
         let levels = arch.levels();
         let mut hidden = Vec::new();
+        let mut pools = Vec::new();
 
         // Encoder: d1..dN, then the bottleneck (hidden index N), each recurrent.
         let mut src = Source { value: Value::Input, read: Read::Direct, channels: arch.in_channels() };
@@ -116,7 +139,10 @@ impl Graph {
             b.conv_into(format!("{name}.l2.2"), i, direct(mid, w), None, w, true, Value::HiddenNew(i));
             hidden.push((w, i));
             // The next block reads this one's output max-pooled (the bottleneck is not pooled).
-            src = Source { value: Value::HiddenNew(i), read: Read::Pool, channels: w };
+            if i < levels {
+                pools.push(Pool { hidden: i, level: i + 1, channels: w, after: b.nodes.len() - 1 });
+                src = Source { value: Value::Pooled(i), read: Read::Direct, channels: w };
+            }
         }
 
         // Decoder: uN..u1, each over cat(upsampled previous, skip of d_k).
@@ -124,11 +150,12 @@ impl Graph {
         let mut out = Value::Input;
         for k in (1..=levels).rev() {
             let level = k - 1;
-            let skip_read = match arch.skip {
-                Skip::Pooled => Read::PoolUpsample,
-                Skip::Prepool => Read::Direct,
+            // The reference network's skip is upsample(pool(d_k)): the pooled value, upsampled.
+            let (skip_value, skip_read) = match arch.skip {
+                Skip::Pooled => (Value::Pooled(k - 1), Read::Upsample),
+                Skip::Prepool => (Value::HiddenNew(k - 1), Read::Direct),
             };
-            let skip = Source { value: Value::HiddenNew(k - 1), read: skip_read, channels: arch.encoder[k - 1] };
+            let skip = Source { value: skip_value, read: skip_read, channels: arch.encoder[k - 1] };
             let w = arch.decoder_width(k);
             let t = b.conv(format!("u{k}.l1.1"), level, prev, Some(skip), w, true);
             let leaky = !(k == 1 && arch.output_activation == OutputActivation::Linear);
@@ -148,7 +175,7 @@ impl Graph {
         if let Value::Temp(t) = out {
             b.temps[t].last_use = n;
         }
-        Graph { nodes: b.nodes, temps: b.temps, hidden, output: out, in_channels: arch.in_channels() }
+        Graph { nodes: b.nodes, temps: b.temps, hidden, pools, output: out, in_channels: arch.in_channels() }
     }
 
     /// Multiply-adds per full-resolution pixel.

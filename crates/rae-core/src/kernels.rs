@@ -12,6 +12,7 @@ pub const SHADERS: &[(&str, &str)] = &[
     ("conv3x3", include_str!("../../../shaders/conv3x3.wgsl")),
     ("prep", include_str!("../../../shaders/prep.wgsl")),
     ("output", include_str!("../../../shaders/output.wgsl")),
+    ("pool", include_str!("../../../shaders/pool.wgsl")),
 ];
 
 /// Most output rows per conv invocation (the tile of conv3x3.wgsl; `ROWS` picks up to it).
@@ -70,6 +71,38 @@ impl Precision {
         }
     }
 }
+
+/// Where the conv kernel reads its weights from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum WeightMemory {
+    /// 64 KiB uniform chunks, bound by dynamic offset: as many output-block groups per dispatch
+    /// as fit one chunk. On lavapipe a uniform load is one load and a broadcast, 2.5x faster
+    /// than the storage version (docs/PERF.md), so CPU adapters use this.
+    Uniform,
+    /// One read-only storage buffer: every group of a conv in one dispatch. Discrete GPUs,
+    /// whose deep levels are too small to fill the machine one 64 KiB group at a time.
+    Storage,
+}
+
+impl WeightMemory {
+    /// The kind that suits an adapter: uniform chunks on CPU drivers, storage elsewhere.
+    pub fn for_device_type(t: wgpu::DeviceType) -> Self {
+        if t == wgpu::DeviceType::Cpu { WeightMemory::Uniform } else { WeightMemory::Storage }
+    }
+
+    /// Name for tables and command lines.
+    pub fn name(self) -> &'static str {
+        match self {
+            WeightMemory::Uniform => "uniform",
+            WeightMemory::Storage => "storage",
+        }
+    }
+}
+
+/// The weight declaration of conv3x3.wgsl (uniform chunks).
+pub const UNIFORM_WEIGHTS: &str = "var<uniform> weights: array<vec4<f32>, CHUNK>;";
+/// What [`UNIFORM_WEIGHTS`] becomes for [`WeightMemory::Storage`].
+pub const STORAGE_WEIGHTS: &str = "var<storage, read> weights: array<vec4<f32>>;";
 
 /// Texture format of activations at f32 (weights-independent tests upload in it).
 pub const ACTIVATION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
@@ -167,15 +200,11 @@ fn uniform_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
     }
 }
 
-fn dynamic_uniform_entry(binding: u32, size: u64) -> wgpu::BindGroupLayoutEntry {
+fn dynamic_entry(binding: u32, ty: wgpu::BufferBindingType, size: u64) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
         visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Uniform,
-            has_dynamic_offset: true,
-            min_binding_size: wgpu::BufferSize::new(size),
-        },
+        ty: wgpu::BindingType::Buffer { ty, has_dynamic_offset: true, min_binding_size: wgpu::BufferSize::new(size) },
         count: None,
     }
 }
@@ -232,6 +261,8 @@ pub struct ConvVariant {
     pub ob: u32,
     /// Output rows per invocation ([`rows_per_invocation`]).
     pub rows: u32,
+    /// Output columns per invocation (1 or 2).
+    pub cols: u32,
 }
 
 /// Shader modules, layouts and pipelines of one device; conv pipelines are cached by variant.
@@ -242,6 +273,10 @@ pub struct Kernels {
     pub prep_layout: wgpu::BindGroupLayout,
     /// Layout of output.wgsl's group 0.
     pub output_layout: wgpu::BindGroupLayout,
+    /// Layout of pool.wgsl's group 0.
+    pub pool_layout: wgpu::BindGroupLayout,
+    /// The 2x2 max-pool pipeline (one pass per encoder block, [`crate::graph::Pool`]).
+    pub pool: wgpu::ComputePipeline,
     /// The input-preparation pipeline.
     pub prep: wgpu::ComputePipeline,
     /// The output pipeline.
@@ -250,24 +285,31 @@ pub struct Kernels {
     conv_pipeline_layout: wgpu::PipelineLayout,
     conv: HashMap<ConvVariant, wgpu::ComputePipeline>,
     precision: Precision,
+    memory: WeightMemory,
 }
 
 impl Kernels {
-    /// Compile the modules and the fixed pipelines for activations stored in `precision`.
+    /// Compile the modules and the fixed pipelines for activations stored in `precision` and
+    /// conv weights read from `memory`.
     ///
-    /// The storage texel format is the one thing WGSL cannot take as an override constant, so
-    /// for f16 the kernels' `rgba32float` storage declarations are rewritten to `rgba16float`;
-    /// everything else (the clamp to the f16 range) is the `STORE_MAX` override.
-    pub fn new(device: &wgpu::Device, precision: Precision) -> Self {
+    /// The storage texel format and a binding's address space are the two things WGSL cannot
+    /// take as override constants, so for f16 the kernels' `rgba32float` storage declarations
+    /// are rewritten to `rgba16float`, and for storage weights the conv's one uniform weight
+    /// declaration ([`UNIFORM_WEIGHTS`]) to [`STORAGE_WEIGHTS`]; everything else (the clamp to
+    /// the f16 range) is an override.
+    pub fn new(device: &wgpu::Device, precision: Precision, memory: WeightMemory) -> Self {
         let module = |name: &str| {
-            let src = shader_source(name);
-            let src = match precision {
-                Precision::F32 => std::borrow::Cow::Borrowed(src),
-                Precision::F16 => std::borrow::Cow::Owned(src.replace("rgba32float", "rgba16float")),
-            };
+            let mut src = shader_source(name).to_string();
+            if precision == Precision::F16 {
+                src = src.replace("rgba32float", "rgba16float");
+            }
+            if memory == WeightMemory::Storage && name == "conv3x3" {
+                assert!(src.contains(UNIFORM_WEIGHTS), "conv3x3.wgsl declares its weights as kernels::UNIFORM_WEIGHTS");
+                src = src.replace(UNIFORM_WEIGHTS, STORAGE_WEIGHTS);
+            }
             device.create_shader_module(wgpu::ShaderModuleDescriptor {
                 label: Some(name),
-                source: wgpu::ShaderSource::Wgsl(src),
+                source: wgpu::ShaderSource::Wgsl(src.into()),
             })
         };
         let layout = |label, entries: &[wgpu::BindGroupLayoutEntry]| {
@@ -276,10 +318,13 @@ impl Kernels {
         let conv_layout = layout(
             "conv3x3",
             &[
-                dynamic_uniform_entry(0, std::mem::size_of::<ConvParams>() as u64),
+                dynamic_entry(0, wgpu::BufferBindingType::Uniform, std::mem::size_of::<ConvParams>() as u64),
                 texture_entry(1),
                 texture_entry(2),
-                dynamic_uniform_entry(3, WEIGHT_CHUNK_BYTES),
+                match memory {
+                    WeightMemory::Uniform => dynamic_entry(3, wgpu::BufferBindingType::Uniform, WEIGHT_CHUNK_BYTES),
+                    WeightMemory::Storage => dynamic_entry(3, wgpu::BufferBindingType::Storage { read_only: true }, 16),
+                },
                 storage_texture_entry(4, precision.format()),
             ],
         );
@@ -321,17 +366,27 @@ impl Kernels {
         let store_max = [("STORE_MAX", precision.store_max() as f64)];
         let prep = pipeline("prep", &pipeline_layout(&prep_layout), &module("prep"), &store_max);
         let output = pipeline("output", &pipeline_layout(&output_layout), &module("output"), &[]);
+        let pool_layout = layout("pool", &[texture_entry(0), storage_texture_entry(1, precision.format())]);
+        let pool = pipeline("pool", &pipeline_layout(&pool_layout), &module("pool"), &[]);
         Self {
             conv_pipeline_layout: pipeline_layout(&conv_layout),
             conv_module: module("conv3x3"),
             conv_layout,
             prep_layout,
             output_layout,
+            pool_layout,
+            pool,
             prep,
             output,
             conv: HashMap::new(),
             precision,
+            memory,
         }
+    }
+
+    /// Where the conv reads its weights.
+    pub fn weight_memory(&self) -> WeightMemory {
+        self.memory
     }
 
     /// The conv pipeline for a variant, created on first use.
@@ -346,6 +401,7 @@ impl Kernels {
                     ("LEAKY", if v.leaky { 1.0 } else { 0.0 }),
                     ("OB", v.ob as f64),
                     ("ROWS", v.rows as f64),
+                    ("TW", v.cols as f64),
                     ("STORE_MAX", precision.store_max() as f64),
                 ];
                 device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
@@ -364,11 +420,60 @@ impl Kernels {
     }
 }
 
-/// Output rows per invocation for a conv `height` pixels high: 16 ([`CONV_ROWS`]), or the
-/// smallest of 2, 4, 8 that covers a lower level whole, so levels a few pixels high (the deepest
-/// ones of small frames) do not compute 16 rows to keep 2.
-pub fn rows_per_invocation(height: u32) -> u32 {
-    [2, 4, 8].into_iter().find(|&r| height <= r).unwrap_or(CONV_ROWS)
+/// The conv kernel's register tile: at most `rows` output rows x `blocks` output blocks (4
+/// channels each) x `cols` adjacent columns per invocation. Levels lower than `rows` and convs
+/// with fewer output blocks (or too many input blocks for `blocks` in one weight chunk) get a
+/// smaller tile.
+///
+/// Taller tiles share each weight load among more outputs; wider ones share each input fetch
+/// (a 2-column tile fetches 4 input columns for 2 outputs, a 1-column tile 3 for 1). The default
+/// (16 x 2, one column) is the fastest measured on lavapipe (docs/PERF.md); `rae-cli bench
+/// --tile` sweeps others and GPUs tune per conv ([`crate::TileChoice`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct Tile {
+    /// Output rows per invocation: 1, 2, 4, 8 or 16 ([`CONV_ROWS`]).
+    pub rows: u32,
+    /// Output blocks per invocation: 1 or 2.
+    pub blocks: u32,
+    /// Output columns per invocation: 1 or 2.
+    pub cols: u32,
+}
+
+impl Default for Tile {
+    fn default() -> Self {
+        Tile { rows: CONV_ROWS, blocks: 2, cols: 1 }
+    }
+}
+
+impl Tile {
+    /// A one-column tile, if the kernel has one of this shape.
+    pub fn new(rows: u32, blocks: u32) -> Option<Self> {
+        Self::with_cols(rows, blocks, 1)
+    }
+
+    /// A tile, if the kernel has one of this shape.
+    pub fn with_cols(rows: u32, blocks: u32, cols: u32) -> Option<Self> {
+        ([1, 2, 4, 8, 16].contains(&rows) && (1..=2).contains(&blocks) && (1..=2).contains(&cols)).then_some(Tile { rows, blocks, cols })
+    }
+}
+
+impl std::fmt::Display for Tile {
+    /// `ROWSxBLOCKS`, with `wCOLS` appended for a 2-column tile (`8x1w2`).
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}x{}", self.rows, self.blocks)?;
+        if self.cols > 1 {
+            write!(f, "w{}", self.cols)?;
+        }
+        Ok(())
+    }
+}
+
+/// Output rows per invocation for a conv `height` pixels high with at most `max_rows`
+/// (a power of two up to [`CONV_ROWS`]): the smallest of 2, 4, 8 that covers a lower level
+/// whole, so levels a few pixels high (the deepest ones of small frames) do not compute 16 rows
+/// to keep 2, else `max_rows`.
+pub fn rows_per_invocation(height: u32, max_rows: u32) -> u32 {
+    [2, 4, 8].into_iter().find(|&r| height <= r).unwrap_or(CONV_ROWS).min(max_rows)
 }
 
 /// Output blocks per invocation for a conv reading `cin4` input blocks: the most of 2, 1
@@ -472,40 +577,62 @@ struct Planned {
 }
 
 /// Every convolution of a network, ready to dispatch: one uniform buffer of parameter blocks
-/// and one of weight chunks (each group's chunk at an aligned offset, bound by dynamic offset),
-/// and the pipeline and dispatches of each conv. Built once per [`crate::Denoiser`].
+/// and one buffer of weights (each dispatch's groups at an aligned offset, bound by dynamic
+/// offset), and the pipeline and dispatches of each conv. Built once per [`crate::Denoiser`].
 pub struct ConvPlan {
     params: wgpu::Buffer,
     weights: wgpu::Buffer,
+    /// Bytes of the weight binding (one chunk, or the largest conv for storage weights).
+    weight_binding: u64,
     convs: Vec<Planned>,
+    tiles: Vec<Tile>,
 }
 
 impl ConvPlan {
-    /// Pack and upload every conv's weights and parameters; fails when a conv is too wide for
-    /// one weight chunk.
-    pub fn new(device: &wgpu::Device, kernels: &mut Kernels, specs: &[ConvSpec]) -> crate::Result<Self> {
+    /// Pack and upload every conv's weights and parameters, conv `i` with at most `tiles[i]`
+    /// (one tile for all when `tiles` has one entry); fails when a conv is too wide for one
+    /// uniform weight chunk.
+    pub fn new(device: &wgpu::Device, kernels: &mut Kernels, specs: &[ConvSpec], tiles: &[Tile]) -> crate::Result<Self> {
         use wgpu::util::DeviceExt;
-        let align = device.limits().min_uniform_buffer_offset_alignment as usize;
+        assert!(tiles.len() == 1 || tiles.len() == specs.len(), "one tile, or one per conv");
+        let memory = kernels.memory;
+        let limits = device.limits();
+        let align = match memory {
+            WeightMemory::Uniform => limits.min_uniform_buffer_offset_alignment,
+            WeightMemory::Storage => limits.min_uniform_buffer_offset_alignment.max(limits.min_storage_buffer_offset_alignment),
+        } as usize;
         let mut params: Vec<u8> = Vec::new();
         let mut weights: Vec<u8> = Vec::new();
         let mut convs = Vec::with_capacity(specs.len());
-        for s in specs {
+        let mut used = Vec::with_capacity(specs.len());
+        let mut binding = 0u64;
+        for (i, s) in specs.iter().enumerate() {
+            let tile = tiles[if tiles.len() == 1 { 0 } else { i }];
             let (cin4_a, cin4_b) = (blocks(s.ca), blocks(s.cb));
             let cin4 = cin4_a + cin4_b;
-            let ob = blocks_per_invocation(cin4).ok_or_else(|| crate::Error::Arch {
-                origin: s.name.to_string(),
-                reason: format!("{} input channels exceed one 64 KiB weight chunk (at most 452)", s.ca + s.cb),
-            })?;
+            let ob = match memory {
+                WeightMemory::Uniform => blocks_per_invocation(cin4).ok_or_else(|| crate::Error::Arch {
+                    origin: s.name.to_string(),
+                    reason: format!("{} input channels exceed one 64 KiB weight chunk (at most 452)", s.ca + s.cb),
+                })?,
+                WeightMemory::Storage => 2,
+            };
             let cout4 = blocks(s.cout);
             // A conv with one output block (the 3-channel output convs) would compute a second,
             // discarded tile with OB = 2.
-            let ob = ob.min(cout4);
-            let rows = rows_per_invocation(s.height);
-            let variant = ConvVariant { read_a: s.read_a, read_b: s.read_b, leaky: s.leaky, ob, rows };
+            let ob = ob.min(cout4).min(tile.blocks);
+            let rows = rows_per_invocation(s.height, tile.rows);
+            // Two columns only where the level is wider than one.
+            let cols = if s.width > 1 { tile.cols } else { 1 };
+            let variant = ConvVariant { read_a: s.read_a, read_b: s.read_b, leaky: s.leaky, ob, rows, cols };
             // Groups of `ob` output blocks, as many per dispatch as fit one chunk (workgroup z).
             let stride = (cin4 * 36 + 1) * ob;
             let group_count = cout4.div_ceil(ob);
-            let per_dispatch = (WEIGHT_CHUNK / stride).min(group_count);
+            let per_dispatch = match memory {
+                WeightMemory::Uniform => (WEIGHT_CHUNK / stride).min(group_count),
+                WeightMemory::Storage => group_count,
+            };
+            binding = binding.max(per_dispatch as u64 * stride as u64 * 16);
             let mut groups = Vec::new();
             for first in (0..group_count).step_by(per_dispatch as usize) {
                 let count = per_dispatch.min(group_count - first);
@@ -538,18 +665,36 @@ impl ConvPlan {
             }
             convs.push(Planned {
                 pipeline: kernels.conv(device, variant),
-                workgroups: (s.width.div_ceil(WORKGROUP), s.height.div_ceil(rows).div_ceil(WORKGROUP)),
+                workgroups: (s.width.div_ceil(cols).div_ceil(WORKGROUP), s.height.div_ceil(rows).div_ceil(WORKGROUP)),
                 groups,
             });
+            used.push(Tile { rows, blocks: ob, cols });
         }
-        // Every binding spans a whole chunk (and a whole parameter block) past its offset.
-        let last = convs.iter().flat_map(|c| &c.groups).map(|g| g.weights as u64).max().unwrap_or(0);
-        weights.resize((last + WEIGHT_CHUNK_BYTES) as usize, 0);
-        params.resize(params.len().next_multiple_of(16), 0);
-        let init = |label, contents: &[u8]| {
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some(label), contents, usage: wgpu::BufferUsages::UNIFORM })
+        // Every binding spans a whole chunk (or the largest conv) past its offset.
+        let weight_binding = match memory {
+            WeightMemory::Uniform => WEIGHT_CHUNK_BYTES,
+            WeightMemory::Storage => binding.next_multiple_of(16),
         };
-        Ok(Self { params: init("conv params", &params), weights: init("conv weights", &weights), convs })
+        let last = convs.iter().flat_map(|c| &c.groups).map(|g| g.weights as u64).max().unwrap_or(0);
+        weights.resize((last + weight_binding) as usize, 0);
+        params.resize(params.len().next_multiple_of(16), 0);
+        let init = |label, contents: &[u8], usage| device.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some(label), contents, usage });
+        let weight_usage = match memory {
+            WeightMemory::Uniform => wgpu::BufferUsages::UNIFORM,
+            WeightMemory::Storage => wgpu::BufferUsages::STORAGE,
+        };
+        Ok(Self {
+            params: init("conv params", &params, wgpu::BufferUsages::UNIFORM),
+            weights: init("conv weights", &weights, weight_usage),
+            weight_binding,
+            convs,
+            tiles: used,
+        })
+    }
+
+    /// The tile each conv runs with (after the level-height and weight-chunk limits).
+    pub fn tiles(&self) -> &[Tile] {
+        &self.tiles
     }
 
     /// Bytes of the weight and parameter buffers.
@@ -574,7 +719,7 @@ impl ConvPlan {
                 wgpu::BindGroupEntry { binding: 0, resource: buffer(&self.params, std::mem::size_of::<ConvParams>() as u64) },
                 wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(a) },
                 wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::TextureView(b) },
-                wgpu::BindGroupEntry { binding: 3, resource: buffer(&self.weights, WEIGHT_CHUNK_BYTES) },
+                wgpu::BindGroupEntry { binding: 3, resource: buffer(&self.weights, self.weight_binding) },
                 wgpu::BindGroupEntry { binding: 4, resource: wgpu::BindingResource::TextureView(dst) },
             ],
         })

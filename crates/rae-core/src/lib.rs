@@ -18,8 +18,8 @@ pub mod kernels;
 pub mod model;
 pub mod weights;
 
-pub use denoiser::{Denoiser, GpuFrameIo, IoBinding};
-pub use kernels::Precision;
+pub use denoiser::{Denoiser, GpuFrameIo, IoBinding, Options, TileChoice};
+pub use kernels::{Precision, Tile, WeightMemory};
 pub use error::{Error, Result};
 pub use frame::{FrameInputs, FrameTimings};
 pub use gpu::Gpu;

@@ -1,0 +1,49 @@
+#!/usr/bin/env bash
+# Issue 8's GPU measurements in one run, for a lent NVIDIA machine (see docs/PERF.md):
+#   build here:   cargo build --release -p rae-cli && mkdir -p .devbin && cp target/release/rae-cli .devbin/
+#   run there:    bash scripts/gpu-bench.sh "$OUT" .devbin/rae-cli [OTHER-BUILD ...]   (carrying .devbin and .gl)
+# Checks the goldens on the GPU, times 1080p and 720p in f32 and f16 over conv tiles x weight
+# memories (GPU-resident frames by timestamps, and host round trips), per-stage times, the sample
+# sequence end to end, and PyTorch/cuDNN on the same weights. Everything goes to $2/log.txt.
+# TILES, MEMORIES, STAGE_TILES override the sweep; SKIP_TORCH=1 leaves PyTorch out. With several
+# builds the sweep runs ROUNDS (default 2) interleaved rounds of each, for side-by-side ratios;
+# everything else uses the first.
+set -uo pipefail
+out=${1:?output folder}
+shift
+cli=${1:?rae-cli binary}
+builds=("$@")
+rounds=${ROUNDS:-1}
+[ ${#builds[@]} -gt 1 ] && rounds=${ROUNDS:-2}
+tiles=${TILES:-tuned,16x2,4x1}
+memories=${MEMORIES:-storage,uniform}
+mkdir -p "$out"
+log="$out/log.txt"
+# Vulkan loader: the image has the NVIDIA driver's ICD but no libvulkan (device README).
+if ! ldconfig -p | grep -q libvulkan.so.1; then
+    for f in .gl/*.deb; do dpkg -x "$f" /; done
+    ldconfig
+fi
+export VK_DRIVER_FILES=${VK_DRIVER_FILES:-/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json}
+export WGPU_BACKEND=vulkan
+w=models/rae-default.safetensors
+{
+    echo "== $(date -u +%FT%TZ) $(nvidia-smi --query-gpu=name,driver_version,clocks.sm,clocks.max.sm --format=csv,noheader)"
+    "$cli" devices
+    echo "== goldens"
+    "$cli" verify tests/fixtures/golden_*.safetensors
+    for r in $(seq "$rounds"); do
+        for b in "${builds[@]}"; do
+            echo "== tiles x weight memory: $b, round $r"
+            "$b" bench "$w" --sizes 1920x1080,1280x720 --frames 20 --precision f32,f16 --tile "$tiles" --weights-memory "$memories" --peak-gflops 66900 | grep -E "^ +(size|[0-9]+x[0-9]+) "
+        done
+    done
+    echo "== stages"
+    "$cli" bench "$w" --sizes 1920x1080 --frames 10 --precision f32 --tile "${STAGE_TILES:-tuned}" --weights-memory storage --layers
+    echo "== sample"
+    "$cli" denoise samples/random2026 --weights "$w" -o "$out/sample" --csv "$out/sample.csv"
+    [ -n "${SKIP_TORCH:-}" ] && exit 0
+    echo "== PyTorch"
+    (cd weights-tool && python3 -m rae_weights bench ../"$w" --sizes 1920x1088,1280x736 --frames 20 --device cuda --dtypes float32,float16)
+} 2>&1 | tee "$log"
+rm -rf "$out/sample"

@@ -1,0 +1,21 @@
+// 2x2 max-pool of every channel block of an encoder block's output into the next level, once per
+// frame, so the convs that read it pooled (the next block's first conv, and the decoder's skip
+// in the reference network, which upsamples it back) load one texel per value instead of four.
+// A thread per output texel and layer (workgroup z = layer); sizes come from the textures.
+
+@group(0) @binding(0) var src: texture_2d_array<f32>;
+@group(0) @binding(1) var dst: texture_storage_2d_array<rgba32float, write>;
+
+@compute @workgroup_size(8, 8, 1)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let size = textureDimensions(dst);
+    if gid.x >= size.x || gid.y >= size.y {
+        return;
+    }
+    let p = vec2<i32>(gid.xy) * 2;
+    let a = textureLoad(src, p, gid.z, 0);
+    let b = textureLoad(src, p + vec2<i32>(1, 0), gid.z, 0);
+    let c = textureLoad(src, p + vec2<i32>(0, 1), gid.z, 0);
+    let d = textureLoad(src, p + vec2<i32>(1, 1), gid.z, 0);
+    textureStore(dst, gid.xy, gid.z, max(max(a, b), max(c, d)));
+}
