@@ -229,7 +229,12 @@ fn store(acc: Tile, x: u32, y0: u32, layer: u32) {
     if ROWS > 15u && y0 + 15u < h { textureStore(dst, vec2<u32>(x, y0 + 15u), layer, activate(acc.r15)); }
 }
 
-@compute @workgroup_size(8, 8, 1)
+// Workgroup shape (64 invocations: 8 x 8, 16 x 4, 32 x 2 or 64 x 1; kernels::Tile::group_x):
+// on the H100 the wider shapes win for most convs (tuned per conv on GPUs).
+override WG_X: u32 = 8u;
+override WG_Y: u32 = 8u;
+
+@compute @workgroup_size(WG_X, WG_Y, 1)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let x = gid.x * TW;
     let y0 = gid.y * ROWS;

@@ -181,18 +181,19 @@ fn conv_on_low_levels_uses_short_tiles_and_matches_cpu() {
 
 #[test]
 fn conv_every_tile_shape_matches_cpu() {
-    // Each row, block and column count the kernel compiles, on a level 19 rows high and 13
-    // wide (partial last tiles in both directions) with 3 output blocks (a partial last group
-    // for 2-block tiles).
-    let shapes = [(1, 1, 1), (1, 2, 1), (2, 2, 1), (4, 1, 1), (4, 2, 1), (8, 2, 1), (16, 1, 1), (1, 2, 2), (4, 1, 2), (8, 2, 2), (16, 1, 2)];
-    for (i, (rows, blocks, cols)) in shapes.into_iter().enumerate() {
-        let tile = Tile::with_cols(rows, blocks, cols).expect("a kernel tile");
+    // Each row, block and column count and workgroup shape the kernel compiles, on a level 19
+    // rows high and 13 wide (partial last tiles in both directions) with 3 output blocks (a
+    // partial last group for 2-block tiles).
+    let shapes = [(1, 1, 1, 8), (1, 2, 1, 8), (2, 2, 1, 8), (4, 1, 1, 8), (4, 2, 1, 8), (8, 2, 1, 8), (16, 1, 1, 8), (1, 2, 2, 8), (4, 1, 2, 8), (8, 2, 2, 8), (16, 1, 2, 8), (8, 1, 1, 32), (4, 2, 2, 16), (2, 1, 2, 64)];
+    for (i, (rows, blocks, cols, group)) in shapes.into_iter().enumerate() {
+        let tile = Tile::with_cols(rows, blocks, cols).and_then(|t| t.with_group(group)).expect("a kernel tile");
         let seed = 70 + 3 * i as u64;
         check_conv_tile((tensor(6, 38, 26, seed), Read::Pool), Some((tensor(5, 19, 13, seed + 1), Read::Direct)), 11, true, 13, 19, seed + 2, tile, WeightMemory::Uniform);
     }
     assert_eq!(Tile::new(3, 1), None);
     assert_eq!(Tile::new(16, 3), None);
     assert_eq!(Tile::with_cols(8, 1, 3), None);
+    assert_eq!(Tile::default().with_group(128), None);
 }
 
 #[test]

@@ -10,7 +10,7 @@ fn every_shader_validates_with_naga() {
     let conv = shader_source("conv3x3");
     assert!(conv.contains(UNIFORM_WEIGHTS), "the weight declaration Kernels::new rewrites");
     let rewritten = [("conv3x3 (f16, storage weights)", conv.replace("rgba32float", "rgba16float").replace(UNIFORM_WEIGHTS, STORAGE_WEIGHTS))];
-    let all = SHADERS.iter().map(|&(n, s)| (n, s.to_string())).chain(rewritten.into_iter().map(|(n, s)| (n, s)));
+    let all = SHADERS.iter().map(|&(n, s)| (n, s.to_string())).chain(rewritten);
     for (name, source) in all {
         let source = source.as_str();
         let module = naga::front::wgsl::parse_str(source).unwrap_or_else(|e| panic!("{name}.wgsl: {}", e.emit_to_string(source)));

@@ -133,11 +133,13 @@ fn parse_tile(s: &str) -> Result<TileChoice> {
         "tuned" => return Ok(TileChoice::Tuned),
         _ => {}
     }
-    let bad = || format!("tile `{s}` is not ROWSxBLOCKS[wCOLS], tuned or auto");
-    let (shape, cols) = s.split_once('w').map_or((s, "1"), |(a, c)| (a, c));
+    let bad = || format!("tile `{s}` is not ROWSxBLOCKS[wCOLS][gGROUPX], tuned or auto");
+    let (rest, group) = s.split_once('g').map_or((s, "8"), |(a, g)| (a, g));
+    let group: u32 = group.parse().with_context(bad)?;
+    let (shape, cols) = rest.split_once('w').map_or((rest, "1"), |(a, c)| (a, c));
     let (r, b) = shape.split_once('x').with_context(bad)?;
     let (r, b, c) = (r.parse().with_context(bad)?, b.parse().with_context(bad)?, cols.parse().with_context(bad)?);
-    Tile::with_cols(r, b, c).map(TileChoice::Fixed).with_context(|| format!("tile `{s}`: the kernel has 1, 2, 4, 8 or 16 rows, 1 or 2 blocks and 1 or 2 columns"))
+    Tile::with_cols(r, b, c).and_then(|t| t.with_group(group)).map(TileChoice::Fixed).with_context(|| format!("tile `{s}`: the kernel has 1, 2, 4, 8 or 16 rows, 1 or 2 blocks, 1 or 2 columns and workgroups 8, 16, 32 or 64 wide"))
 }
 
 fn parse_memory(s: &str) -> Result<Option<WeightMemory>> {

@@ -342,3 +342,13 @@ fn the_shipped_model_that_fits_is_chosen() {
     write_rgb(&only_color.join("color_0000.exr"), W, H, &wave(W * H * 3, 0.01));
     assert!(chosen(&only_color).contains("rae-color.safetensors"));
 }
+
+#[test]
+fn bench_refuses_a_tile_the_kernel_does_not_have() {
+    for (tile, shown) in [("3x1", "3x1"), ("8x1w3", "8x1w3"), ("8x1g128", "8x1g128"), ("big", "big")] {
+        let out = rae().args(["bench", &fixture("weights_full.safetensors"), "--sizes", "32x32", "--tile", tile]).output().unwrap();
+        assert!(!out.status.success(), "--tile {tile} must fail");
+        let err = String::from_utf8(out.stderr).unwrap();
+        assert!(err.contains(&format!("tile `{shown}`")), "{err}");
+    }
+}

@@ -7,17 +7,23 @@
 //!   ranges do not overlap at a resolution use the same texture.
 //! - **Hidden state**: each recurrent block owns two textures, `hidden[k][0]` and
 //!   `hidden[k][1]`, and they ping-pong. On a frame of parity `p`, block `k` reads last frame's
-//!   state from `hidden[k][p]` and writes the new one (its output, which the next block pools
-//!   and the decoder reads as a skip) into `hidden[k][1 - p]`; the next frame has parity
-//!   `1 - p`. Nothing is copied. Bind groups for both parities are built up front.
+//!   state from `hidden[k][p]` and writes the new one (its output) into `hidden[k][1 - p]`; the
+//!   next frame has parity `1 - p`. Nothing is copied. Bind groups for both parities are built
+//!   up front (the pool pass's too: it reads the state written this frame).
+//! - **Pooled copies**: right after block `k` writes its state, a pool pass writes it max-pooled
+//!   into a texture of its own at the next level ([`crate::graph::Pool`]), which the next block
+//!   and the decoder's skip read; it lives for the rest of the frame.
 //! - **Reset** (first frame, scene cut) does not clear anything: for that frame the recurrent
 //!   convs run with a uniform block that reads zero channels from the hidden state, which is
 //!   exactly a zero hidden state (the skipped terms are the last summed), so frame 0 after
 //!   `reset()` is bit-identical to frame 0 of a fresh denoiser.
-//! - **Weights** sit in one uniform buffer of 64 KiB chunks, one per dispatch (as many of a
-//!   conv's output-block groups as fit), bound by dynamic offset ([`ConvPlan`]): every
-//!   invocation of a workgroup reads the same weight at once,
-//!   which lavapipe broadcasts from one load and a discrete GPU serves from its constant cache.
+//! - **Weights**: on CPU adapters, one uniform buffer of 64 KiB chunks, one per dispatch (as
+//!   many of a conv's output-block groups as fit), bound by dynamic offset ([`ConvPlan`]):
+//!   every invocation of a workgroup reads the same weight at once, which lavapipe broadcasts
+//!   from one load. On GPUs, one read-only storage buffer and one dispatch per conv, so the
+//!   deep levels' few pixels still fill the machine ([`WeightMemory`]).
+//! - **Tiles**: on GPUs each conv's register tile is chosen while building, by timing every
+//!   candidate on the device ([`TileChoice::Tuned`]); the candidates' plans are dropped after.
 //!
 //! Frames are `width x height`; the network runs at the size padded to a multiple of
 //! `2^levels` (the prep kernel replicates edge pixels into the padding) and the output kernel
@@ -125,20 +131,29 @@ pub enum TileChoice {
 }
 
 /// The tiles [`TileChoice::Tuned`] times.
-pub const TUNE_TILES: [Tile; 13] = [
-    Tile { rows: 16, blocks: 2, cols: 1 },
-    Tile { rows: 8, blocks: 2, cols: 1 },
-    Tile { rows: 4, blocks: 2, cols: 1 },
-    Tile { rows: 2, blocks: 2, cols: 1 },
-    Tile { rows: 1, blocks: 2, cols: 1 },
-    Tile { rows: 8, blocks: 1, cols: 1 },
-    Tile { rows: 4, blocks: 1, cols: 1 },
-    Tile { rows: 1, blocks: 1, cols: 1 },
-    Tile { rows: 16, blocks: 1, cols: 2 },
-    Tile { rows: 8, blocks: 2, cols: 2 },
-    Tile { rows: 8, blocks: 1, cols: 2 },
-    Tile { rows: 4, blocks: 2, cols: 2 },
-    Tile { rows: 4, blocks: 1, cols: 2 },
+pub const TUNE_TILES: [Tile; 22] = [
+    Tile { rows: 16, blocks: 2, cols: 1, group_x: 8 },
+    Tile { rows: 8, blocks: 2, cols: 1, group_x: 8 },
+    Tile { rows: 4, blocks: 2, cols: 1, group_x: 8 },
+    Tile { rows: 2, blocks: 2, cols: 1, group_x: 8 },
+    Tile { rows: 1, blocks: 2, cols: 1, group_x: 8 },
+    Tile { rows: 8, blocks: 1, cols: 1, group_x: 8 },
+    Tile { rows: 4, blocks: 1, cols: 1, group_x: 8 },
+    Tile { rows: 1, blocks: 1, cols: 1, group_x: 8 },
+    Tile { rows: 16, blocks: 1, cols: 2, group_x: 8 },
+    Tile { rows: 8, blocks: 2, cols: 2, group_x: 8 },
+    Tile { rows: 8, blocks: 1, cols: 2, group_x: 8 },
+    Tile { rows: 4, blocks: 2, cols: 2, group_x: 8 },
+    Tile { rows: 4, blocks: 1, cols: 2, group_x: 8 },
+    Tile { rows: 16, blocks: 2, cols: 1, group_x: 32 },
+    Tile { rows: 8, blocks: 1, cols: 1, group_x: 32 },
+    Tile { rows: 8, blocks: 1, cols: 2, group_x: 16 },
+    Tile { rows: 4, blocks: 2, cols: 2, group_x: 16 },
+    Tile { rows: 4, blocks: 1, cols: 1, group_x: 16 },
+    Tile { rows: 8, blocks: 1, cols: 1, group_x: 16 },
+    Tile { rows: 8, blocks: 1, cols: 2, group_x: 32 },
+    Tile { rows: 8, blocks: 1, cols: 1, group_x: 64 },
+    Tile { rows: 16, blocks: 2, cols: 1, group_x: 64 },
 ];
 
 /// How a [`Denoiser`] stores activations, reads weights and tiles its convolutions.
@@ -763,19 +778,33 @@ fn create_init(device: &wgpu::Device, label: &str, contents: &[u8], usage: wgpu:
 /// After a host-path frame's submit: map the staging buffer for the next frame's writes and the
 /// readback for this frame's output in one poll, then copy the output into `out`.
 fn finish_host_frame(device: &wgpu::Device, host: &HostIo, out: &mut [f32]) -> Result<()> {
+    // Each callback says which buffer it is, so the staging buffer's flag is right even when
+    // the readback fails (a lost device): the next frame then maps it only if it is unmapped.
     let (tx, rx) = std::sync::mpsc::channel();
     let tx2 = tx.clone();
     host.upload.map_async(wgpu::MapMode::Write, .., move |r| {
-        let _ = tx2.send(r);
+        let _ = tx2.send((true, r));
     });
     host.readback.map_async(wgpu::MapMode::Read, .., move |r| {
-        let _ = tx.send(r);
+        let _ = tx.send((false, r));
     });
     device.poll(wgpu::PollType::wait_indefinitely()).map_err(|e| Error::Gpu(e.to_string()))?;
+    let (mut failed, mut readback_mapped) = (None, false);
     for _ in 0..2 {
-        rx.recv().map_err(|e| Error::Gpu(e.to_string()))?.map_err(|e| Error::Gpu(e.to_string()))?;
+        let (upload, r) = rx.recv().map_err(|e| Error::Gpu(e.to_string()))?;
+        match r {
+            Ok(()) if upload => host.upload_mapped.store(true, Ordering::Relaxed),
+            Ok(()) => readback_mapped = true,
+            Err(e) => failed = Some(Error::Gpu(e.to_string())),
+        }
     }
-    host.upload_mapped.store(true, Ordering::Relaxed);
+    if let Some(e) = failed {
+        // Leave the readback unmapped for the next frame's copy.
+        if readback_mapped {
+            host.readback.unmap();
+        }
+        return Err(e);
+    }
     {
         let view = host.readback.get_mapped_range(..).map_err(|e| Error::Gpu(format!("{e:?}")))?;
         out.copy_from_slice(&bytemuck::cast_slice::<u8, f32>(&view)[..out.len()]);
@@ -784,7 +813,6 @@ fn finish_host_frame(device: &wgpu::Device, host: &HostIo, out: &mut [f32]) -> R
     Ok(())
 }
 
-/// Map a MAP_READ buffer and copy its f32s into `out`.
 /// The fastest of `candidates` for each conv on this device: every candidate plan runs the
 /// convs `ROUNDS` times in one pass with a timestamp after each dispatch group, and each conv
 /// keeps the tile of its lowest median. The activations hold whatever they hold (zeros on a
@@ -831,6 +859,7 @@ fn tune(device: &wgpu::Device, queue: &wgpu::Queue, kernels: &mut Kernels, specs
     Ok(best.into_iter().map(|(_, t)| t).collect())
 }
 
+/// Map a MAP_READ buffer and copy its f32s into `out`.
 fn read_buffer(device: &wgpu::Device, buffer: &wgpu::Buffer, out: &mut [f32]) -> Result<()> {
     let (tx, rx) = std::sync::mpsc::channel();
     buffer.map_async(wgpu::MapMode::Read, .., move |r| {

@@ -22,7 +22,7 @@ pub const CONV_ROWS: u32 = 16;
 pub const WEIGHT_CHUNK: u32 = 4096;
 /// Bytes of one weight-chunk binding.
 pub const WEIGHT_CHUNK_BYTES: u64 = WEIGHT_CHUNK as u64 * 16;
-/// Workgroup size in x and y of every kernel.
+/// Workgroup size in x and y of every kernel (the conv's default shape; [`Tile::group_x`]).
 pub const WORKGROUP: u32 = 8;
 /// Storage precision of activations and hidden state (arithmetic is f32 in both).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
@@ -263,6 +263,8 @@ pub struct ConvVariant {
     pub rows: u32,
     /// Output columns per invocation (1 or 2).
     pub cols: u32,
+    /// Workgroup width (the height makes 64).
+    pub group_x: u32,
 }
 
 /// Shader modules, layouts and pipelines of one device; conv pipelines are cached by variant.
@@ -402,6 +404,8 @@ impl Kernels {
                     ("OB", v.ob as f64),
                     ("ROWS", v.rows as f64),
                     ("TW", v.cols as f64),
+                    ("WG_X", v.group_x as f64),
+                    ("WG_Y", (64 / v.group_x) as f64),
                     ("STORE_MAX", precision.store_max() as f64),
                 ];
                 device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
@@ -437,11 +441,13 @@ pub struct Tile {
     pub blocks: u32,
     /// Output columns per invocation: 1 or 2.
     pub cols: u32,
+    /// Workgroup width in invocations (8, 16, 32 or 64; the height makes 64 invocations).
+    pub group_x: u32,
 }
 
 impl Default for Tile {
     fn default() -> Self {
-        Tile { rows: CONV_ROWS, blocks: 2, cols: 1 }
+        Tile { rows: CONV_ROWS, blocks: 2, cols: 1, group_x: WORKGROUP }
     }
 }
 
@@ -453,7 +459,17 @@ impl Tile {
 
     /// A tile, if the kernel has one of this shape.
     pub fn with_cols(rows: u32, blocks: u32, cols: u32) -> Option<Self> {
-        ([1, 2, 4, 8, 16].contains(&rows) && (1..=2).contains(&blocks) && (1..=2).contains(&cols)).then_some(Tile { rows, blocks, cols })
+        ([1, 2, 4, 8, 16].contains(&rows) && (1..=2).contains(&blocks) && (1..=2).contains(&cols)).then_some(Tile { rows, blocks, cols, group_x: WORKGROUP })
+    }
+
+    /// This tile in workgroups `group_x` invocations wide (8, 16, 32 or 64), if the kernel has it.
+    pub fn with_group(self, group_x: u32) -> Option<Self> {
+        [8, 16, 32, 64].contains(&group_x).then_some(Tile { group_x, ..self })
+    }
+
+    /// Workgroup height in invocations.
+    pub fn group_y(&self) -> u32 {
+        64 / self.group_x
     }
 }
 
@@ -463,6 +479,9 @@ impl std::fmt::Display for Tile {
         write!(f, "{}x{}", self.rows, self.blocks)?;
         if self.cols > 1 {
             write!(f, "w{}", self.cols)?;
+        }
+        if self.group_x != WORKGROUP {
+            write!(f, "g{}", self.group_x)?;
         }
         Ok(())
     }
@@ -624,7 +643,7 @@ impl ConvPlan {
             let rows = rows_per_invocation(s.height, tile.rows);
             // Two columns only where the level is wider than one.
             let cols = if s.width > 1 { tile.cols } else { 1 };
-            let variant = ConvVariant { read_a: s.read_a, read_b: s.read_b, leaky: s.leaky, ob, rows, cols };
+            let variant = ConvVariant { read_a: s.read_a, read_b: s.read_b, leaky: s.leaky, ob, rows, cols, group_x: tile.group_x };
             // Groups of `ob` output blocks, as many per dispatch as fit one chunk (workgroup z).
             let stride = (cin4 * 36 + 1) * ob;
             let group_count = cout4.div_ceil(ob);
@@ -665,10 +684,10 @@ impl ConvPlan {
             }
             convs.push(Planned {
                 pipeline: kernels.conv(device, variant),
-                workgroups: (s.width.div_ceil(cols).div_ceil(WORKGROUP), s.height.div_ceil(rows).div_ceil(WORKGROUP)),
+                workgroups: (s.width.div_ceil(cols).div_ceil(tile.group_x), s.height.div_ceil(rows).div_ceil(tile.group_y())),
                 groups,
             });
-            used.push(Tile { rows, blocks: ob, cols });
+            used.push(Tile { rows, blocks: ob, cols, group_x: tile.group_x });
         }
         // Every binding spans a whole chunk (or the largest conv) past its offset.
         let weight_binding = match memory {
