@@ -258,8 +258,6 @@ fn resident_frames(gpu: &Gpu, d: &mut Denoiser, frame: &rae_core::FrameInputs, f
     let total = frames + 2;
     let count = 2 * total as u32;
     let queries = dev.create_query_set(&wgpu::QuerySetDescriptor { label: Some("frames"), ty: wgpu::QueryType::Timestamp, count });
-    let resolved = dev.create_buffer(&wgpu::BufferDescriptor { label: Some("timestamps"), size: count as u64 * 8, usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC, mapped_at_creation: false });
-    let readback = dev.create_buffer(&wgpu::BufferDescriptor { label: Some("timestamps readback"), size: count as u64 * 8, usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST, mapped_at_creation: false });
     let mut start = Instant::now();
     for i in 0..total as u32 {
         if i == 2 {
@@ -274,16 +272,7 @@ fn resident_frames(gpu: &Gpu, d: &mut Denoiser, frame: &rae_core::FrameInputs, f
     }
     dev.poll(wgpu::PollType::wait_indefinitely()).context("waiting for timed frames")?;
     let pipelined = start.elapsed().as_secs_f64() * 1e3 / frames as f64;
-    let mut enc = dev.create_command_encoder(&Default::default());
-    enc.resolve_query_set(&queries, 0..count, &resolved, 0);
-    enc.copy_buffer_to_buffer(&resolved, 0, &readback, 0, count as u64 * 8);
-    gpu.queue.submit(Some(enc.finish()));
-    readback.slice(..).map_async(wgpu::MapMode::Read, |_| {});
-    dev.poll(wgpu::PollType::wait_indefinitely()).context("reading timestamps")?;
-    let ticks: Vec<u64> = {
-        let view = readback.slice(..).get_mapped_range().map_err(|e| anyhow::anyhow!("mapping timestamps: {e:?}"))?;
-        bytemuck::pod_collect_to_vec(&view[..])
-    };
+    let ticks = rae_core::denoiser::read_timestamps(dev, &gpu.queue, &queries, count).context("reading timestamps")?;
     let period = gpu.queue.get_timestamp_period() as f64 * 1e-6;
     let mut ms: Vec<f64> = ticks.chunks(2).skip(2).map(|p| p[1].saturating_sub(p[0]) as f64 * period).collect();
     Ok((median(&mut ms), pipelined))

@@ -822,9 +822,6 @@ fn tune(device: &wgpu::Device, queue: &wgpu::Queue, kernels: &mut Kernels, specs
     let n = specs.len();
     let count = ((n + 1) * ROUNDS) as u32;
     let queries = device.create_query_set(&wgpu::QuerySetDescriptor { label: Some("tile tuning"), ty: wgpu::QueryType::Timestamp, count });
-    let buffer = |usage| device.create_buffer(&wgpu::BufferDescriptor { label: Some("tile tuning"), size: count as u64 * 8, usage, mapped_at_creation: false });
-    let resolved = buffer(wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC);
-    let readback = buffer(wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST);
     let period = queue.get_timestamp_period() as f64;
     let mut best = vec![(f64::INFINITY, Tile::default()); n];
     for &tile in candidates {
@@ -842,12 +839,8 @@ fn tune(device: &wgpu::Device, queue: &wgpu::Queue, kernels: &mut Kernels, specs
                 }
             }
         }
-        encoder.resolve_query_set(&queries, 0..count, &resolved, 0);
-        encoder.copy_buffer_to_buffer(&resolved, 0, &readback, 0, count as u64 * 8);
         queue.submit(Some(encoder.finish()));
-        let mut raw = vec![0f32; 2 * count as usize];
-        read_buffer(device, &readback, &mut raw)?;
-        let ticks: Vec<u64> = bytemuck::pod_collect_to_vec(&raw);
+        let ticks = read_timestamps(device, queue, &queries, count)?;
         for (i, b) in best.iter_mut().enumerate() {
             let mut t: Vec<f64> = (0..ROUNDS).map(|r| ticks[r * (n + 1) + i + 1].saturating_sub(ticks[r * (n + 1) + i]) as f64 * period).collect();
             t.sort_by(f64::total_cmp);
@@ -857,6 +850,24 @@ fn tune(device: &wgpu::Device, queue: &wgpu::Queue, kernels: &mut Kernels, specs
         }
     }
     Ok(best.into_iter().map(|(_, t)| t).collect())
+}
+
+/// Resolve the first `count` timestamps of `queries` (written by work already submitted) and
+/// read them back, in ticks: multiply differences by `queue.get_timestamp_period()` for
+/// nanoseconds. Makes its own buffers (set-up and benchmark use; `denoise_profiled` keeps
+/// persistent ones) and waits for the GPU.
+pub fn read_timestamps(device: &wgpu::Device, queue: &wgpu::Queue, queries: &wgpu::QuerySet, count: u32) -> Result<Vec<u64>> {
+    let size = count as u64 * 8;
+    let buffer = |usage| device.create_buffer(&wgpu::BufferDescriptor { label: Some("timestamps"), size, usage, mapped_at_creation: false });
+    let resolved = buffer(wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC);
+    let readback = buffer(wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST);
+    let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("timestamps") });
+    encoder.resolve_query_set(queries, 0..count, &resolved, 0);
+    encoder.copy_buffer_to_buffer(&resolved, 0, &readback, 0, size);
+    queue.submit(Some(encoder.finish()));
+    let mut raw = vec![0f32; 2 * count as usize];
+    read_buffer(device, &readback, &mut raw)?;
+    Ok(bytemuck::pod_collect_to_vec(&raw))
 }
 
 /// Map a MAP_READ buffer and copy its f32s into `out`.
