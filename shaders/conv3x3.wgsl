@@ -276,3 +276,163 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         }
     }
 }
+
+// ---- Winograd F(2x2, 3x3): entry point `winograd` ----
+//
+// The same convolution in 16 multiplies per 2x2 outputs and input channel instead of 36
+// (Lavin & Gray 2016): each 4x4 input window d becomes V = B^T d B (additions only), V is
+// multiplied element by element with the transformed taps U = G g G^T (kernels::winograd_taps,
+// 16 instead of 9 per channel pair) and summed over input channels, and the 2x2 outputs are
+// A^T M A (additions only). The transforms' coefficients are 0, +-1 (and +-1/2 in G, applied
+// to the weights in f64 on the host), so the rounding is that of a few more additions.
+//
+// An invocation computes one 2x2 tile (ROWS = 2) or two stacked (ROWS = 4, sharing two input
+// rows and every weight load) for OB output blocks; weights of input block cb and transformed
+// position p (row-major in the 4x4) for output block j sit where the direct kernel's taps do,
+// with 16 positions for its 9: w + ((cb * 16 + p) * 4 + lane) * OB + j, then OB biases.
+
+// Four vec4s along a row of a 4x4 tile (input row after d B, or a row of V or M).
+struct Quad {
+    c0: vec4<f32>,
+    c1: vec4<f32>,
+    c2: vec4<f32>,
+    c3: vec4<f32>,
+}
+
+// A 4x4 tile in the transformed domain (V of one input block, or M of one output block).
+struct Wino {
+    r0: Quad,
+    r1: Quad,
+    r2: Quad,
+    r3: Quad,
+}
+
+fn quad_add(a: Quad, b: Quad) -> Quad {
+    return Quad(a.c0 + b.c0, a.c1 + b.c1, a.c2 + b.c2, a.c3 + b.c3);
+}
+
+fn quad_sub(a: Quad, b: Quad) -> Quad {
+    return Quad(a.c0 - b.c0, a.c1 - b.c1, a.c2 - b.c2, a.c3 - b.c3);
+}
+
+// Input row y at columns x - 1 .. x + 2, times B (B^T = [1 0 -1 0; 0 1 1 0; 0 -1 1 0; 0 1 0 -1]).
+fn wino_row(t: texture_2d_array<f32>, mode: u32, x: i32, y: i32, layer: u32) -> Quad {
+    let d0 = fetch(t, mode, x - 1, y, layer);
+    let d1 = fetch(t, mode, x, y, layer);
+    let d2 = fetch(t, mode, x + 1, y, layer);
+    let d3 = fetch(t, mode, x + 2, y, layer);
+    return Quad(d0 - d2, d1 + d2, d2 - d1, d1 - d3);
+}
+
+// V = B^T (d B) from four consecutive rows of d B.
+fn wino_v(e0: Quad, e1: Quad, e2: Quad, e3: Quad) -> Wino {
+    return Wino(quad_sub(e0, e2), quad_add(e1, e2), quad_sub(e2, e1), quad_sub(e1, e3));
+}
+
+// Row i of M for tile a and (ROWS = 4) tile b.
+struct QuadPair {
+    a: Quad,
+    b: Quad,
+}
+
+// Row i of M += U * V for output block j, in tile a (V row v) and, when ROWS = 4, in tile b
+// (V row u) with the same four weight matrices; `base` is the row's first position.
+fn wino_mac(a: Quad, b: Quad, base: u32, j: u32, v: Quad, u: Quad) -> QuadPair {
+    let m0 = tap(base, j);
+    let m1 = tap(base + 4u * OB, j);
+    let m2 = tap(base + 8u * OB, j);
+    let m3 = tap(base + 12u * OB, j);
+    var r = QuadPair(Quad(mac(a.c0, m0, v.c0), mac(a.c1, m1, v.c1), mac(a.c2, m2, v.c2), mac(a.c3, m3, v.c3)), b);
+    if ROWS > 2u {
+        r.b = Quad(mac(b.c0, m0, u.c0), mac(b.c1, m1, u.c1), mac(b.c2, m2, u.c2), mac(b.c3, m3, u.c3));
+    }
+    return r;
+}
+
+// M += U * V over the whole 4x4 for output block j (tiles a and b as in wino_mac).
+fn wino_tile(a: ptr<function, Wino>, b: ptr<function, Wino>, base: u32, j: u32, v: Wino, u: Wino) {
+    let r0 = wino_mac((*a).r0, (*b).r0, base, j, v.r0, u.r0);
+    let r1 = wino_mac((*a).r1, (*b).r1, base + 16u * OB, j, v.r1, u.r1);
+    let r2 = wino_mac((*a).r2, (*b).r2, base + 32u * OB, j, v.r2, u.r2);
+    let r3 = wino_mac((*a).r3, (*b).r3, base + 48u * OB, j, v.r3, u.r3);
+    *a = Wino(r0.a, r1.a, r2.a, r3.a);
+    *b = Wino(r0.b, r1.b, r2.b, r3.b);
+}
+
+// Add input block `layer` of `t` at weight block `cb` to the tiles whose top-left output is
+// (x, y0): the upper tile in m0 (block 0) and m1 (block 1), the lower (ROWS = 4) in m2 and m3.
+fn wino_accumulate(m0: ptr<function, Wino>, m1: ptr<function, Wino>, m2: ptr<function, Wino>, m3: ptr<function, Wino>, t: texture_2d_array<f32>, mode: u32, layer: u32, cb: u32, w: u32, x: i32, y0: i32) {
+    let base = w + cb * 64u * OB;
+    let e0 = wino_row(t, mode, x, y0 - 1, layer);
+    let e1 = wino_row(t, mode, x, y0, layer);
+    let e2 = wino_row(t, mode, x, y0 + 1, layer);
+    let e3 = wino_row(t, mode, x, y0 + 2, layer);
+    let v = wino_v(e0, e1, e2, e3);
+    var u = v;
+    if ROWS > 2u {
+        let e4 = wino_row(t, mode, x, y0 + 3, layer);
+        let e5 = wino_row(t, mode, x, y0 + 4, layer);
+        u = wino_v(e2, e3, e4, e5);
+    }
+    wino_tile(m0, m2, base, 0u, v, u);
+    if OB > 1u {
+        wino_tile(m1, m3, base, 1u, v, u);
+    }
+}
+
+// Y = A^T M A (A^T = [1 1 1 0; 0 1 -1 -1]) plus the bias, stored at (x .. x + 1, y0 .. y0 + 1)
+// where inside the output.
+fn wino_store(m: Wino, bias: vec4<f32>, x: u32, y0: u32, layer: u32) {
+    // Row i of M times A: columns 0 and 1 of the 4x2 product.
+    let s00 = m.r0.c0 + m.r0.c1 + m.r0.c2;
+    let s01 = m.r0.c1 - m.r0.c2 - m.r0.c3;
+    let s10 = m.r1.c0 + m.r1.c1 + m.r1.c2;
+    let s11 = m.r1.c1 - m.r1.c2 - m.r1.c3;
+    let s20 = m.r2.c0 + m.r2.c1 + m.r2.c2;
+    let s21 = m.r2.c1 - m.r2.c2 - m.r2.c3;
+    let s30 = m.r3.c0 + m.r3.c1 + m.r3.c2;
+    let s31 = m.r3.c1 - m.r3.c2 - m.r3.c3;
+    let right = x + 1u < params.width;
+    textureStore(dst, vec2<u32>(x, y0), layer, activate(bias + s00 + s10 + s20));
+    if right { textureStore(dst, vec2<u32>(x + 1u, y0), layer, activate(bias + s01 + s11 + s21)); }
+    if y0 + 1u < params.height {
+        textureStore(dst, vec2<u32>(x, y0 + 1u), layer, activate(bias + s10 - s20 - s30));
+        if right { textureStore(dst, vec2<u32>(x + 1u, y0 + 1u), layer, activate(bias + s11 - s21 - s31)); }
+    }
+}
+
+@compute @workgroup_size(WG_X, WG_Y, 1)
+fn winograd(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let x = gid.x * 2u;
+    let y0 = gid.y * ROWS;
+    let ob0 = params.ob0 + gid.z * OB;
+    let w = gid.z * params.group_stride;
+    if x >= params.width || y0 >= params.height || ob0 >= params.cout4 {
+        return;
+    }
+    let z = Quad(vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0));
+    var m0 = Wino(z, z, z, z);
+    var m1 = m0;
+    var m2 = m0;
+    var m3 = m0;
+    let xi = i32(x);
+    let yi = i32(y0);
+    for (var c = 0u; c < params.cin4_a; c++) {
+        wino_accumulate(&m0, &m1, &m2, &m3, src_a, MODE_A, c, c, w, xi, yi);
+    }
+    for (var c = 0u; c < params.cin4_b; c++) {
+        wino_accumulate(&m0, &m1, &m2, &m3, src_b, MODE_B, c, params.cin4_a + c, w, xi, yi);
+    }
+    let bias_at = w + params.cin4_total * 64u * OB;
+    let second = OB > 1u && ob0 + 1u < params.cout4;
+    wino_store(m0, weights[bias_at], x, y0, ob0);
+    if second {
+        wino_store(m1, weights[bias_at + 1u], x, y0, ob0 + 1u);
+    }
+    if ROWS > 2u && y0 + 2u < params.height {
+        wino_store(m2, weights[bias_at], x, y0 + 2u, ob0);
+        if second {
+            wino_store(m3, weights[bias_at + 1u], x, y0 + 2u, ob0 + 1u);
+        }
+    }
+}

@@ -162,8 +162,11 @@ fn conv_upsample_and_prepool_skip_matches_cpu() {
 #[test]
 fn conv_wide_input_uses_one_block_per_invocation_and_matches_cpu() {
     // 250 input channels (63 blocks): two output blocks' taps no longer fit a 64 KiB chunk.
-    assert_eq!(kernels::blocks_per_invocation(63), Some(1));
-    assert_eq!(kernels::blocks_per_invocation(51), Some(2), "the widest conv of the default network");
+    assert_eq!(kernels::blocks_per_invocation(63, 9), Some(1));
+    assert_eq!(kernels::blocks_per_invocation(51, 9), Some(2), "the widest conv of the default network");
+    assert_eq!(kernels::blocks_per_invocation(114, 9), None);
+    assert_eq!(kernels::blocks_per_invocation(63, 16), Some(1), "Winograd: 16 weights per pair");
+    assert_eq!(kernels::blocks_per_invocation(64, 16), None);
     check_conv((tensor(130, 45, 37, 8), Read::Direct), Some((tensor(120, 45, 37, 9), Read::Direct)), 7, true, 37, 45, 50);
 }
 
@@ -194,6 +197,50 @@ fn conv_every_tile_shape_matches_cpu() {
     assert_eq!(Tile::new(16, 3), None);
     assert_eq!(Tile::with_cols(8, 1, 3), None);
     assert_eq!(Tile::default().with_group(128), None);
+}
+
+#[test]
+fn conv_winograd_tiles_match_cpu() {
+    // Every Winograd tile (one or two stacked 2x2 output tiles, one or two output blocks), with
+    // both weight memories and every read mode, on levels of odd width and height (partial tiles
+    // on both edges); 11 outputs make a partial last group of 2-block tiles.
+    let cases = [(2, 1, WeightMemory::Uniform, 8), (2, 2, WeightMemory::Storage, 32), (4, 1, WeightMemory::Storage, 16), (4, 2, WeightMemory::Uniform, 64)];
+    for (i, (rows, blocks, memory, group)) in cases.into_iter().enumerate() {
+        let tile = Tile::winograd(rows, blocks).and_then(|t| t.with_group(group)).expect("a Winograd tile");
+        assert_eq!((tile.cols, tile.taps()), (2, 16));
+        let seed = 200 + 3 * i as u64;
+        if i % 2 == 0 {
+            check_conv_tile((tensor(6, 38, 26, seed), Read::Pool), Some((tensor(5, 19, 13, seed + 1), Read::Direct)), 11, true, 13, 19, seed + 2, tile, memory);
+        } else {
+            check_conv_tile((tensor(6, 6, 11, seed), Read::Upsample), Some((tensor(5, 12, 22, seed + 1), Read::PoolUpsample)), 11, false, 22, 12, seed + 2, tile, memory);
+        }
+    }
+    // One row: the level of a deep conv on a small frame.
+    check_conv_tile((tensor(9, 1, 11, 230), Read::Direct), None, 8, true, 11, 1, 231, Tile::winograd(4, 2).unwrap(), WeightMemory::Storage);
+    // The widest input a Winograd chunk holds (252 channels, 63 blocks, one output block).
+    check_conv_tile((tensor(128, 9, 13, 232), Read::Direct), Some((tensor(124, 9, 13, 233), Read::Direct)), 5, true, 13, 9, 234, Tile::winograd(2, 2).unwrap(), WeightMemory::Uniform);
+    assert_eq!(Tile::winograd(8, 1), None);
+    assert_eq!(Tile::winograd(2, 3), None);
+    assert_eq!(Tile::winograd(4, 1).unwrap().to_string(), "wino4x1");
+}
+
+#[test]
+fn winograd_weight_transform_reproduces_the_direct_convolution() {
+    // G g G^T on the host: for a 4x4 input patch d, A^T [(G g G^T) * (B^T d B)] A
+    // equals the 2x2 direct correlation of d with g.
+    let g: Vec<f32> = noise(9, 300);
+    let d: Vec<f64> = noise(16, 301).iter().map(|&v| v as f64).collect();
+    let u = kernels::winograd_taps(&g);
+    let bt = [[1.0, 0.0, -1.0, 0.0], [0.0, 1.0, 1.0, 0.0], [0.0, -1.0, 1.0, 0.0], [0.0, 1.0, 0.0, -1.0]];
+    let at = [[1.0, 1.0, 1.0, 0.0], [0.0, 1.0, -1.0, -1.0]];
+    let v = |i: usize, j: usize| -> f64 { (0..4).flat_map(|r| (0..4).map(move |c| (r, c))).map(|(r, c)| bt[i][r] * d[r * 4 + c] * bt[j][c]).sum() };
+    for y in 0..2 {
+        for x in 0..2 {
+            let wino: f64 = (0..16).map(|p| at[y][p / 4] * u[p] as f64 * v(p / 4, p % 4) * at[x][p % 4]).sum();
+            let direct: f64 = (0..9).map(|t| g[t] as f64 * d[(y + t / 3) * 4 + x + t % 3]).sum();
+            assert!((wino - direct).abs() < 1e-6 * (1.0 + direct.abs()), "output ({x}, {y}): {wino} vs {direct}");
+        }
+    }
 }
 
 #[test]

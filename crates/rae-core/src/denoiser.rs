@@ -35,7 +35,7 @@ use std::time::Instant;
 use crate::error::{Error, Result};
 use crate::frame::{FrameInputs, FrameTimings};
 use crate::graph::{Graph, Read, Value};
-use crate::kernels::{ConvPlan, ConvSpec, Kernels, OutputParams, PrepParams, Precision, Tile, WORKGROUP, WeightMemory, blocks};
+use crate::kernels::{ConvPlan, ConvSpec, Kernels, Method, OutputParams, PrepParams, Precision, Tile, WORKGROUP, WeightMemory, blocks};
 use crate::model::{Arch, InputBuffer, Transfer};
 use crate::weights::Weights;
 
@@ -131,29 +131,33 @@ pub enum TileChoice {
 }
 
 /// The tiles [`TileChoice::Tuned`] times.
-pub const TUNE_TILES: [Tile; 22] = [
-    Tile { rows: 16, blocks: 2, cols: 1, group_x: 8 },
-    Tile { rows: 8, blocks: 2, cols: 1, group_x: 8 },
-    Tile { rows: 4, blocks: 2, cols: 1, group_x: 8 },
-    Tile { rows: 2, blocks: 2, cols: 1, group_x: 8 },
-    Tile { rows: 1, blocks: 2, cols: 1, group_x: 8 },
-    Tile { rows: 8, blocks: 1, cols: 1, group_x: 8 },
-    Tile { rows: 4, blocks: 1, cols: 1, group_x: 8 },
-    Tile { rows: 1, blocks: 1, cols: 1, group_x: 8 },
-    Tile { rows: 16, blocks: 1, cols: 2, group_x: 8 },
-    Tile { rows: 8, blocks: 2, cols: 2, group_x: 8 },
-    Tile { rows: 8, blocks: 1, cols: 2, group_x: 8 },
-    Tile { rows: 4, blocks: 2, cols: 2, group_x: 8 },
-    Tile { rows: 4, blocks: 1, cols: 2, group_x: 8 },
-    Tile { rows: 16, blocks: 2, cols: 1, group_x: 32 },
-    Tile { rows: 8, blocks: 1, cols: 1, group_x: 32 },
-    Tile { rows: 8, blocks: 1, cols: 2, group_x: 16 },
-    Tile { rows: 4, blocks: 2, cols: 2, group_x: 16 },
-    Tile { rows: 4, blocks: 1, cols: 1, group_x: 16 },
-    Tile { rows: 8, blocks: 1, cols: 1, group_x: 16 },
-    Tile { rows: 8, blocks: 1, cols: 2, group_x: 32 },
-    Tile { rows: 8, blocks: 1, cols: 1, group_x: 64 },
-    Tile { rows: 16, blocks: 2, cols: 1, group_x: 64 },
+pub const TUNE_TILES: [Tile; 26] = [
+    Tile { rows: 16, blocks: 2, cols: 1, group_x: 8, method: Method::Direct },
+    Tile { rows: 8, blocks: 2, cols: 1, group_x: 8, method: Method::Direct },
+    Tile { rows: 4, blocks: 2, cols: 1, group_x: 8, method: Method::Direct },
+    Tile { rows: 2, blocks: 2, cols: 1, group_x: 8, method: Method::Direct },
+    Tile { rows: 1, blocks: 2, cols: 1, group_x: 8, method: Method::Direct },
+    Tile { rows: 8, blocks: 1, cols: 1, group_x: 8, method: Method::Direct },
+    Tile { rows: 4, blocks: 1, cols: 1, group_x: 8, method: Method::Direct },
+    Tile { rows: 1, blocks: 1, cols: 1, group_x: 8, method: Method::Direct },
+    Tile { rows: 16, blocks: 1, cols: 2, group_x: 8, method: Method::Direct },
+    Tile { rows: 8, blocks: 2, cols: 2, group_x: 8, method: Method::Direct },
+    Tile { rows: 8, blocks: 1, cols: 2, group_x: 8, method: Method::Direct },
+    Tile { rows: 4, blocks: 2, cols: 2, group_x: 8, method: Method::Direct },
+    Tile { rows: 4, blocks: 1, cols: 2, group_x: 8, method: Method::Direct },
+    Tile { rows: 16, blocks: 2, cols: 1, group_x: 32, method: Method::Direct },
+    Tile { rows: 8, blocks: 1, cols: 1, group_x: 32, method: Method::Direct },
+    Tile { rows: 8, blocks: 1, cols: 2, group_x: 16, method: Method::Direct },
+    Tile { rows: 4, blocks: 2, cols: 2, group_x: 16, method: Method::Direct },
+    Tile { rows: 4, blocks: 1, cols: 1, group_x: 16, method: Method::Direct },
+    Tile { rows: 8, blocks: 1, cols: 1, group_x: 16, method: Method::Direct },
+    Tile { rows: 8, blocks: 1, cols: 2, group_x: 32, method: Method::Direct },
+    Tile { rows: 8, blocks: 1, cols: 1, group_x: 64, method: Method::Direct },
+    Tile { rows: 16, blocks: 2, cols: 1, group_x: 64, method: Method::Direct },
+    Tile { rows: 2, blocks: 1, cols: 2, group_x: 8, method: Method::Winograd },
+    Tile { rows: 2, blocks: 1, cols: 2, group_x: 32, method: Method::Winograd },
+    Tile { rows: 2, blocks: 2, cols: 2, group_x: 32, method: Method::Winograd },
+    Tile { rows: 4, blocks: 1, cols: 2, group_x: 32, method: Method::Winograd },
 ];
 
 /// How a [`Denoiser`] stores activations, reads weights and tiles its convolutions.

@@ -265,6 +265,28 @@ pub struct ConvVariant {
     pub cols: u32,
     /// Workgroup width (the height makes 64).
     pub group_x: u32,
+    /// How the kernel computes the tile: its entry point.
+    pub method: Method,
+}
+
+/// How a conv tile is computed: the entry point of conv3x3.wgsl.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum Method {
+    /// `main`: the direct sum, each invocation fetching its inputs from the textures.
+    #[default]
+    Direct,
+    /// `winograd`: Winograd F(2x2, 3x3), 16 multiplies per 2x2 outputs and channel pair for 36.
+    Winograd,
+}
+
+impl Method {
+    /// The entry point in conv3x3.wgsl.
+    pub fn entry_point(self) -> &'static str {
+        match self {
+            Method::Direct => "main",
+            Method::Winograd => "winograd",
+        }
+    }
 }
 
 /// Shader modules, layouts and pipelines of one device; conv pipelines are cached by variant.
@@ -412,7 +434,7 @@ impl Kernels {
                     label: Some("conv3x3"),
                     layout: Some(layout),
                     module,
-                    entry_point: Some("main"),
+                    entry_point: Some(v.method.entry_point()),
                     compilation_options: wgpu::PipelineCompilationOptions {
                         constants: &constants,
                         zero_initialize_workgroup_memory: false,
@@ -425,14 +447,17 @@ impl Kernels {
 }
 
 /// The conv kernel's register tile: at most `rows` output rows x `blocks` output blocks (4
-/// channels each) x `cols` adjacent columns per invocation. Levels lower than `rows` and convs
-/// with fewer output blocks (or too many input blocks for `blocks` in one weight chunk) get a
-/// smaller tile.
+/// channels each) x `cols` adjacent columns per invocation, computed directly or by Winograd's
+/// F(2x2, 3x3). Levels lower than `rows` and convs with fewer output blocks (or too many input
+/// blocks for `blocks` in one weight chunk) get a smaller tile.
 ///
 /// Taller tiles share each weight load among more outputs; wider ones share each input fetch
-/// (a 2-column tile fetches 4 input columns for 2 outputs, a 1-column tile 3 for 1). The default
-/// (16 x 2, one column) is the fastest measured on lavapipe (docs/PERF.md); `rae-cli bench
-/// --tile` sweeps others and GPUs tune per conv ([`crate::TileChoice`]).
+/// (a 2-column tile fetches 4 input columns for 2 outputs, a 1-column tile 3 for 1). A Winograd
+/// tile (2 columns, 2 or 4 rows) multiplies 16 times per 2x2 outputs and input channel where the
+/// direct one multiplies 36 times, for 16 weights per channel pair instead of 9 and a few
+/// additions. The default (16 x 2 direct, one column) is the fastest measured on lavapipe
+/// (docs/PERF.md); `rae-cli bench --tile` sweeps others and GPUs tune per conv
+/// ([`crate::TileChoice`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct Tile {
     /// Output rows per invocation: 1, 2, 4, 8 or 16 ([`CONV_ROWS`]).
@@ -443,11 +468,13 @@ pub struct Tile {
     pub cols: u32,
     /// Workgroup width in invocations (8, 16, 32 or 64; the height makes 64 invocations).
     pub group_x: u32,
+    /// How the tile is computed ([`Tile::winograd`]).
+    pub method: Method,
 }
 
 impl Default for Tile {
     fn default() -> Self {
-        Tile { rows: CONV_ROWS, blocks: 2, cols: 1, group_x: WORKGROUP }
+        Tile { rows: CONV_ROWS, blocks: 2, cols: 1, group_x: WORKGROUP, method: Method::Direct }
     }
 }
 
@@ -459,7 +486,18 @@ impl Tile {
 
     /// A tile, if the kernel has one of this shape.
     pub fn with_cols(rows: u32, blocks: u32, cols: u32) -> Option<Self> {
-        ([1, 2, 4, 8, 16].contains(&rows) && (1..=2).contains(&blocks) && (1..=2).contains(&cols)).then_some(Tile { rows, blocks, cols, group_x: WORKGROUP })
+        ([1, 2, 4, 8, 16].contains(&rows) && (1..=2).contains(&blocks) && (1..=2).contains(&cols)).then_some(Tile { rows, blocks, cols, group_x: WORKGROUP, method: Method::Direct })
+    }
+
+    /// A Winograd F(2x2, 3x3) tile of `rows` (2: one 2x2 output tile, 4: two stacked) x
+    /// `blocks` (1 or 2), if the kernel has it.
+    pub fn winograd(rows: u32, blocks: u32) -> Option<Self> {
+        ([2, 4].contains(&rows) && (1..=2).contains(&blocks)).then_some(Tile { rows, blocks, cols: 2, group_x: WORKGROUP, method: Method::Winograd })
+    }
+
+    /// Weights per input-output channel pair: 9 taps, or 16 transformed ones for Winograd.
+    pub fn taps(&self) -> u32 {
+        if self.method == Method::Winograd { 16 } else { 9 }
     }
 
     /// This tile in workgroups `group_x` invocations wide (8, 16, 32 or 64), if the kernel has it.
@@ -474,10 +512,15 @@ impl Tile {
 }
 
 impl std::fmt::Display for Tile {
-    /// `ROWSxBLOCKS`, with `wCOLS` appended for a 2-column tile (`8x1w2`).
+    /// `ROWSxBLOCKS`, with `wCOLS` appended for a 2-column tile (`8x1w2`) and `gGROUPX` for a
+    /// workgroup other than 8 x 8; Winograd tiles are `wino` and `ROWSxBLOCKS` (`wino4x1g32`).
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self.method {
+            Method::Direct => {}
+            Method::Winograd => write!(f, "wino")?,
+        }
         write!(f, "{}x{}", self.rows, self.blocks)?;
-        if self.cols > 1 {
+        if self.cols > 1 && self.method != Method::Winograd {
             write!(f, "w{}", self.cols)?;
         }
         if self.group_x != WORKGROUP {
@@ -495,21 +538,41 @@ pub fn rows_per_invocation(height: u32, max_rows: u32) -> u32 {
     [2, 4, 8].into_iter().find(|&r| height <= r).unwrap_or(CONV_ROWS).min(max_rows)
 }
 
-/// Output blocks per invocation for a conv reading `cin4` input blocks: the most of 2, 1
-/// whose taps and biases fit one weight chunk (more outputs per input fetch); `None` when not
-/// even one block fits (more than 113 input blocks, 452 channels).
-pub fn blocks_per_invocation(cin4: u32) -> Option<u32> {
-    [2, 1].into_iter().find(|&ob| (cin4 * 36 + 1) * ob <= WEIGHT_CHUNK)
+/// Output blocks per invocation for a conv reading `cin4` input blocks with `taps` weights
+/// per channel pair (9, or 16 for Winograd): the most of 2, 1 whose weights and biases fit one
+/// weight chunk (more outputs per input fetch); `None` when not even one block fits (direct:
+/// more than 113 input blocks, 452 channels; Winograd: more than 63, 252 channels).
+pub fn blocks_per_invocation(cin4: u32, taps: u32) -> Option<u32> {
+    [2, 1].into_iter().find(|&ob| (cin4 * taps * 4 + 1) * ob <= WEIGHT_CHUNK)
+}
+
+/// Winograd F(2x2, 3x3)'s weight transform G g G^T of one 3x3 kernel (row-major, `[ky][kx]`),
+/// in f64 and rounded once: the 16 weights conv3x3.wgsl's `winograd` multiplies with.
+pub fn winograd_taps(g: &[f32]) -> [f32; 16] {
+    const G: [[f64; 3]; 4] = [[1.0, 0.0, 0.0], [0.5, 0.5, 0.5], [0.5, -0.5, 0.5], [0.0, 0.0, 1.0]];
+    std::array::from_fn(|p| {
+        let (i, j) = (p / 4, p % 4);
+        let mut u = 0.0;
+        for a in 0..3 {
+            for b in 0..3 {
+                u += G[i][a] * g[a * 3 + b] as f64 * G[j][b];
+            }
+        }
+        u as f32
+    })
 }
 
 /// The weight chunk of output blocks `ob0 .. ob0 + ob` of a conv over `cat(a, b)`, laid out as
 /// conv3x3.wgsl reads it: taps `[in block][ky*3+kx][in lane][j]` -> vec4 over block `ob0 + j`'s
-/// 4 output channels, then `ob` bias vec4s.
+/// 4 output channels, then `ob` bias vec4s. With [`Method::Winograd`] the 9 taps of each pair
+/// are the 16 of [`winograd_taps`] (`[in block][position][in lane][j]`).
 ///
 /// Input blocks follow the sources: source a's channels padded to a multiple of 4, then source
 /// b's, so the kernel reads each source's texture layers without a concat. Padding weights are
 /// zero, so padding channels (always written as zero) and padding outputs contribute nothing.
-pub fn pack_group(weight: &[f32], bias: &[f32], cout: usize, ca: usize, cb: usize, ob0: usize, ob: usize) -> Vec<[f32; 4]> {
+pub fn pack_group(spec: &ConvSpec, ob0: usize, ob: usize, method: Method) -> Vec<[f32; 4]> {
+    let (weight, bias, cout, ca, cb) = (spec.weight, spec.bias, spec.cout, spec.ca, spec.cb);
+    let winograd = method == Method::Winograd;
     let cin = ca + cb;
     debug_assert_eq!(weight.len(), cout * cin * 9);
     let (ba, bb) = (blocks(ca) as usize, blocks(cb) as usize);
@@ -523,20 +586,29 @@ pub fn pack_group(weight: &[f32], bias: &[f32], cout: usize, ca: usize, cb: usiz
             (c < cb).then_some(ca + c)
         }
     };
-    let mut out = Vec::with_capacity((ba + bb) * 36 * ob + ob);
+    let taps = if winograd { 16 } else { 9 };
+    // The weights of one channel pair as the kernel multiplies them.
+    let pair = |o: usize, i: usize| -> [f32; 16] {
+        let g = &weight[(o * cin + i) * 9..][..9];
+        if winograd { winograd_taps(g) } else { std::array::from_fn(|t| g.get(t).copied().unwrap_or(0.0)) }
+    };
+    let mut out = Vec::with_capacity((ba + bb) * taps * 4 * ob + ob);
     for ib in 0..ba + bb {
-        for tap in 0..9 {
-            for lane in 0..4 {
-                for j in 0..ob {
-                    out.push(std::array::from_fn(|l| {
-                        let o = 4 * (ob0 + j) + l;
-                        match channel(ib, lane) {
-                            Some(i) if o < cout => weight[(o * cin + i) * 9 + tap],
-                            _ => 0.0,
-                        }
-                    }));
-                }
-            }
+        // [lane][j][l] -> the pair's weights, zero for padding.
+        let pairs: Vec<[[f32; 16]; 4]> = (0..4 * ob)
+            .map(|k| {
+                let (lane, j) = (k / ob, k % ob);
+                std::array::from_fn(|l| {
+                    let o = 4 * (ob0 + j) + l;
+                    match channel(ib, lane) {
+                        Some(i) if o < cout => pair(o, i),
+                        _ => [0.0; 16],
+                    }
+                })
+            })
+            .collect();
+        for tap in 0..taps {
+            out.extend(pairs.iter().map(|p| std::array::from_fn(|l| p[l][tap])));
         }
     }
     for j in 0..ob {
@@ -629,10 +701,16 @@ impl ConvPlan {
             let tile = tiles[if tiles.len() == 1 { 0 } else { i }];
             let (cin4_a, cin4_b) = (blocks(s.ca), blocks(s.cb));
             let cin4 = cin4_a + cin4_b;
+            let taps = tile.taps();
             let ob = match memory {
-                WeightMemory::Uniform => blocks_per_invocation(cin4).ok_or_else(|| crate::Error::Arch {
+                WeightMemory::Uniform => blocks_per_invocation(cin4, taps).ok_or_else(|| crate::Error::Arch {
                     origin: s.name.to_string(),
-                    reason: format!("{} input channels exceed one 64 KiB weight chunk (at most 452)", s.ca + s.cb),
+                    reason: format!(
+                        "{} input channels ({cin4} blocks of 4, padded per source) exceed one 64 KiB weight chunk (at most {} blocks with {} tiles)",
+                        s.ca + s.cb,
+                        (WEIGHT_CHUNK - 1) / (taps * 4),
+                        if tile.method == Method::Winograd { "Winograd" } else { "direct" }
+                    ),
                 })?,
                 WeightMemory::Storage => 2,
             };
@@ -641,11 +719,12 @@ impl ConvPlan {
             // discarded tile with OB = 2.
             let ob = ob.min(cout4).min(tile.blocks);
             let rows = rows_per_invocation(s.height, tile.rows);
-            // Two columns only where the level is wider than one.
-            let cols = if s.width > 1 { tile.cols } else { 1 };
-            let variant = ConvVariant { read_a: s.read_a, read_b: s.read_b, leaky: s.leaky, ob, rows, cols, group_x: tile.group_x };
+            // Two columns only where the level is wider than one (Winograd tiles are 2 wide).
+            let cols = if s.width > 1 || tile.method == Method::Winograd { tile.cols } else { 1 };
+            let used_tile = Tile { rows, blocks: ob, cols, group_x: tile.group_x, method: tile.method };
+            let variant = ConvVariant { read_a: s.read_a, read_b: s.read_b, leaky: s.leaky, ob, rows, cols, group_x: tile.group_x, method: tile.method };
             // Groups of `ob` output blocks, as many per dispatch as fit one chunk (workgroup z).
-            let stride = (cin4 * 36 + 1) * ob;
+            let stride = (cin4 * taps * 4 + 1) * ob;
             let group_count = cout4.div_ceil(ob);
             let per_dispatch = match memory {
                 WeightMemory::Uniform => (WEIGHT_CHUNK / stride).min(group_count),
@@ -676,7 +755,7 @@ impl ConvPlan {
                 weights.resize(weights.len().next_multiple_of(align), 0);
                 group.weights = weights.len() as u32;
                 for g in first..first + count {
-                    let chunk = pack_group(s.weight, s.bias, s.cout, s.ca, s.cb, (g * ob) as usize, ob as usize);
+                    let chunk = pack_group(s, (g * ob) as usize, ob as usize, tile.method);
                     debug_assert_eq!(chunk.len() as u32, stride);
                     weights.extend_from_slice(bytemuck::cast_slice(&chunk));
                 }
@@ -687,7 +766,7 @@ impl ConvPlan {
                 workgroups: (s.width.div_ceil(cols).div_ceil(tile.group_x), s.height.div_ceil(rows).div_ceil(tile.group_y())),
                 groups,
             });
-            used.push(Tile { rows, blocks: ob, cols, group_x: tile.group_x });
+            used.push(used_tile);
         }
         // Every binding spans a whole chunk (or the largest conv) past its offset.
         let weight_binding = match memory {
