@@ -38,6 +38,12 @@ override ROWS: u32 = 16u;
 override TW: u32 = 1u;
 // vec4s in one weight chunk (64 KiB, the uniform binding limit).
 const CHUNK: u32 = 4096u;
+// Split-K: the input blocks are divided among SPLIT invocations per output (workgroup z runs
+// over groups x SPLIT parts), each adding its share to a partial sum in `partial`, and the
+// entry point `reduce` adds the parts, the activation and the clamp. The deep levels are a few
+// thousand outputs deep in 200-channel sums: one long dependent loop per invocation and too
+// few invocations to fill a GPU; SPLIT shortens the loop and multiplies the invocations.
+override SPLIT: u32 = 1u;
 
 struct Params {
     width: u32,       // output (= convolution) resolution
@@ -59,6 +65,11 @@ struct Params {
 @group(0) @binding(2) var src_b: texture_2d_array<f32>;
 @group(0) @binding(3) var<uniform> weights: array<vec4<f32>, CHUNK>;
 @group(0) @binding(4) var dst: texture_storage_2d_array<rgba32float, write>;
+// Partial sums when SPLIT > 1: part p of output block l at ((p * cout4 + l) * height + y) * width
+// + x (kernels::ConvPlan sizes one buffer for its largest split conv; convs run one at a time).
+@group(0) @binding(5) var<storage, read_write> partial: array<vec4<f32>>;
+// The part of the input blocks this invocation sums (SPLIT > 1).
+var<private> part: u32;
 
 fn max4(t: texture_2d_array<f32>, p: vec2<i32>, layer: u32) -> vec4<f32> {
     let a = textureLoad(t, p, layer, 0);
@@ -208,25 +219,34 @@ fn activate(v: vec4<f32>) -> vec4<f32> {
     return clamp(a, vec4<f32>(-STORE_MAX), vec4<f32>(STORE_MAX));
 }
 
+// One output: activated into dst, or (SPLIT > 1) this part's raw sum into `partial`.
+fn put(x: u32, y: u32, layer: u32, v: vec4<f32>) {
+    if SPLIT > 1u {
+        partial[((part * params.cout4 + layer) * params.height + y) * params.width + x] = v;
+    } else {
+        textureStore(dst, vec2<u32>(x, y), layer, activate(v));
+    }
+}
+
 fn store(acc: Tile, x: u32, y0: u32, layer: u32) {
     // Rows past the bottom edge are dropped.
     let h = params.height;
-    textureStore(dst, vec2<u32>(x, y0), layer, activate(acc.r0));
-    if ROWS > 1u && y0 + 1u < h { textureStore(dst, vec2<u32>(x, y0 + 1u), layer, activate(acc.r1)); }
-    if ROWS > 2u && y0 + 2u < h { textureStore(dst, vec2<u32>(x, y0 + 2u), layer, activate(acc.r2)); }
-    if ROWS > 3u && y0 + 3u < h { textureStore(dst, vec2<u32>(x, y0 + 3u), layer, activate(acc.r3)); }
-    if ROWS > 4u && y0 + 4u < h { textureStore(dst, vec2<u32>(x, y0 + 4u), layer, activate(acc.r4)); }
-    if ROWS > 5u && y0 + 5u < h { textureStore(dst, vec2<u32>(x, y0 + 5u), layer, activate(acc.r5)); }
-    if ROWS > 6u && y0 + 6u < h { textureStore(dst, vec2<u32>(x, y0 + 6u), layer, activate(acc.r6)); }
-    if ROWS > 7u && y0 + 7u < h { textureStore(dst, vec2<u32>(x, y0 + 7u), layer, activate(acc.r7)); }
-    if ROWS > 8u && y0 + 8u < h { textureStore(dst, vec2<u32>(x, y0 + 8u), layer, activate(acc.r8)); }
-    if ROWS > 9u && y0 + 9u < h { textureStore(dst, vec2<u32>(x, y0 + 9u), layer, activate(acc.r9)); }
-    if ROWS > 10u && y0 + 10u < h { textureStore(dst, vec2<u32>(x, y0 + 10u), layer, activate(acc.r10)); }
-    if ROWS > 11u && y0 + 11u < h { textureStore(dst, vec2<u32>(x, y0 + 11u), layer, activate(acc.r11)); }
-    if ROWS > 12u && y0 + 12u < h { textureStore(dst, vec2<u32>(x, y0 + 12u), layer, activate(acc.r12)); }
-    if ROWS > 13u && y0 + 13u < h { textureStore(dst, vec2<u32>(x, y0 + 13u), layer, activate(acc.r13)); }
-    if ROWS > 14u && y0 + 14u < h { textureStore(dst, vec2<u32>(x, y0 + 14u), layer, activate(acc.r14)); }
-    if ROWS > 15u && y0 + 15u < h { textureStore(dst, vec2<u32>(x, y0 + 15u), layer, activate(acc.r15)); }
+    put(x, y0, layer, acc.r0);
+    if ROWS > 1u && y0 + 1u < h { put(x, y0 + 1u, layer, acc.r1); }
+    if ROWS > 2u && y0 + 2u < h { put(x, y0 + 2u, layer, acc.r2); }
+    if ROWS > 3u && y0 + 3u < h { put(x, y0 + 3u, layer, acc.r3); }
+    if ROWS > 4u && y0 + 4u < h { put(x, y0 + 4u, layer, acc.r4); }
+    if ROWS > 5u && y0 + 5u < h { put(x, y0 + 5u, layer, acc.r5); }
+    if ROWS > 6u && y0 + 6u < h { put(x, y0 + 6u, layer, acc.r6); }
+    if ROWS > 7u && y0 + 7u < h { put(x, y0 + 7u, layer, acc.r7); }
+    if ROWS > 8u && y0 + 8u < h { put(x, y0 + 8u, layer, acc.r8); }
+    if ROWS > 9u && y0 + 9u < h { put(x, y0 + 9u, layer, acc.r9); }
+    if ROWS > 10u && y0 + 10u < h { put(x, y0 + 10u, layer, acc.r10); }
+    if ROWS > 11u && y0 + 11u < h { put(x, y0 + 11u, layer, acc.r11); }
+    if ROWS > 12u && y0 + 12u < h { put(x, y0 + 12u, layer, acc.r12); }
+    if ROWS > 13u && y0 + 13u < h { put(x, y0 + 13u, layer, acc.r13); }
+    if ROWS > 14u && y0 + 14u < h { put(x, y0 + 14u, layer, acc.r14); }
+    if ROWS > 15u && y0 + 15u < h { put(x, y0 + 15u, layer, acc.r15); }
 }
 
 // Workgroup shape (64 invocations: 8 x 8, 16 x 4, 32 x 2 or 64 x 1; kernels::Tile::group_x):
@@ -238,30 +258,40 @@ override WG_Y: u32 = 8u;
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let x = gid.x * TW;
     let y0 = gid.y * ROWS;
-    // This workgroup's group: its first output block and its weights (uniform over the group).
-    let ob0 = params.ob0 + gid.z * OB;
-    let w = gid.z * params.group_stride;
+    // This workgroup's group: its first output block and its weights (uniform over the group),
+    // and its part of the input blocks.
+    let group = gid.z / SPLIT;
+    part = gid.z % SPLIT;
+    let ob0 = params.ob0 + group * OB;
+    let w = group * params.group_stride;
     if x >= params.width || y0 >= params.height || ob0 >= params.cout4 {
         return;
     }
     let bias_at = w + params.cin4_total * 36u * OB;
-    let b0 = weights[bias_at];
+    // The bias goes into part 0's sum only.
+    let with_bias = part == 0u;
+    let b0 = select(vec4<f32>(0.0), weights[bias_at], with_bias);
     var acc0 = Tile(b0, b0, b0, b0, b0, b0, b0, b0, b0, b0, b0, b0, b0, b0, b0, b0);
     var acc1 = acc0;
     if OB > 1u {
-        let b1 = weights[bias_at + 1u];
+        let b1 = select(vec4<f32>(0.0), weights[bias_at + 1u], with_bias);
         acc1 = Tile(b1, b1, b1, b1, b1, b1, b1, b1, b1, b1, b1, b1, b1, b1, b1, b1);
     }
     var acc2 = acc0;
     var acc3 = acc1;
     let xi = i32(x);
     let yi = i32(y0);
+    // This part's input blocks k0 .. k1 of cat(a, b) (all of them when SPLIT = 1).
+    let total = params.cin4_a + params.cin4_b;
+    let per = (total + SPLIT - 1u) / SPLIT;
+    let k0 = part * per;
+    let k1 = min(k0 + per, total);
     // Source a: input blocks 0 .. cin4_a; then source b: blocks cin4_a .. cin4_a + cin4_b.
-    for (var c = 0u; c < params.cin4_a; c++) {
+    for (var c = k0; c < min(k1, params.cin4_a); c++) {
         accumulate(&acc0, &acc1, &acc2, &acc3, src_a, MODE_A, c, c, w, xi, yi);
     }
-    for (var c = 0u; c < params.cin4_b; c++) {
-        accumulate(&acc0, &acc1, &acc2, &acc3, src_b, MODE_B, c, params.cin4_a + c, w, xi, yi);
+    for (var c = max(k0, params.cin4_a); c < k1; c++) {
+        accumulate(&acc0, &acc1, &acc2, &acc3, src_b, MODE_B, c - params.cin4_a, c, w, xi, yi);
     }
     let second = OB > 1u && ob0 + 1u < params.cout4;
     store(acc0, x, y0, ob0);
@@ -275,6 +305,20 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
             store(acc3, x + 1u, y0, ob0 + 1u);
         }
     }
+}
+
+// Split-K's second pass: the SPLIT partial sums of each output, activated and clamped into dst
+// (one invocation per output texel; the same bindings and parameters as the conv).
+@compute @workgroup_size(8, 8, 1)
+fn reduce(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if gid.x >= params.width || gid.y >= params.height || gid.z >= params.cout4 {
+        return;
+    }
+    var sum = vec4<f32>(0.0);
+    for (var p = 0u; p < SPLIT; p++) {
+        sum += partial[((p * params.cout4 + gid.z) * params.height + gid.y) * params.width + gid.x];
+    }
+    textureStore(dst, gid.xy, gid.z, activate(sum));
 }
 
 // ---- Winograd F(2x2, 3x3): entry point `winograd` ----

@@ -225,6 +225,26 @@ fn conv_winograd_tiles_match_cpu() {
 }
 
 #[test]
+fn conv_split_k_matches_cpu() {
+    // Input blocks split among 2, 3 and 16 parts (more parts than the 3 + 2 blocks: a part with
+    // none), the split crossing from source a to b, with both weight memories and every read
+    // mode; a second pass adds the parts.
+    let cases = [(4, 1, 2, WeightMemory::Uniform), (8, 2, 3, WeightMemory::Storage), (4, 2, 16, WeightMemory::Storage)];
+    for (i, (rows, blocks, split, memory)) in cases.into_iter().enumerate() {
+        let tile = Tile::new(rows, blocks).and_then(|t| t.with_split(split)).expect("a split tile");
+        let seed = 500 + 3 * i as u64;
+        if i % 2 == 0 {
+            check_conv_tile((tensor(10, 38, 26, seed), Read::Pool), Some((tensor(5, 19, 13, seed + 1), Read::Direct)), 11, true, 13, 19, seed + 2, tile, memory);
+        } else {
+            check_conv_tile((tensor(10, 6, 11, seed), Read::Upsample), Some((tensor(5, 12, 22, seed + 1), Read::PoolUpsample)), 11, false, 22, 12, seed + 2, tile, memory);
+        }
+    }
+    assert_eq!(Tile::winograd(2, 1).unwrap().with_split(2), None);
+    assert_eq!(Tile::new(4, 1).unwrap().with_split(17), None);
+    assert_eq!(Tile::new(4, 1).unwrap().with_group(32).unwrap().with_split(8).unwrap().to_string(), "4x1g32k8");
+}
+
+#[test]
 fn winograd_weight_transform_reproduces_the_direct_convolution() {
     // G g G^T on the host: for a 4x4 input patch d, A^T [(G g G^T) * (B^T d B)] A
     // equals the 2x2 direct correlation of d with g.

@@ -97,8 +97,9 @@ enum Command {
         /// project's 2-core lavapipe machine; NVIDIA H100 SXM: 67,000).
         #[arg(long)]
         peak_gflops: Option<f64>,
-        /// Conv register tiles to time: ROWSxBLOCKS[wCOLS][gGROUPX] (rows 1, 2, 4, 8, 16; blocks
-        /// 1, 2; columns 1, 2; workgroups 8, 16, 32, 64 wide) or winoROWSxBLOCKS[gGROUPX]
+        /// Conv register tiles to time: ROWSxBLOCKS[wCOLS][gGROUPX][kSPLIT] (rows 1, 2, 4, 8, 16;
+        /// blocks 1, 2; columns 1, 2; workgroups 8, 16, 32, 64 wide; input blocks split 1 to 16
+        /// ways) or winoROWSxBLOCKS[gGROUPX]
         /// (Winograd F(2x2, 3x3); rows 2, 4) for one tile everywhere, `tuned` (each conv timed
         /// with every candidate on this device while building), or `auto` (tuned on GPUs, 16x2
         /// on CPU drivers: what `denoise` uses).
@@ -135,8 +136,10 @@ fn parse_tile(s: &str) -> Result<TileChoice> {
         "tuned" => return Ok(TileChoice::Tuned),
         _ => {}
     }
-    let bad = || format!("tile `{s}` is not [wino]ROWSxBLOCKS[wCOLS][gGROUPX], tuned or auto");
+    let bad = || format!("tile `{s}` is not [wino]ROWSxBLOCKS[wCOLS][gGROUPX][kSPLIT], tuned or auto");
     let (winograd, s2) = s.strip_prefix("wino").map_or((false, s), |r| (true, r));
+    let (s2, split) = s2.split_once('k').map_or((s2, "1"), |(a, k)| (a, k));
+    let split: u32 = split.parse().with_context(bad)?;
     let (rest, group) = s2.split_once('g').map_or((s2, "8"), |(a, g)| (a, g));
     let group: u32 = group.parse().with_context(bad)?;
     let (shape, cols) = rest.split_once('w').map_or((rest, "1"), |(a, c)| (a, c));
@@ -144,12 +147,16 @@ fn parse_tile(s: &str) -> Result<TileChoice> {
     let (r, b, c) = (r.parse().with_context(bad)?, b.parse().with_context(bad)?, cols.parse().with_context(bad)?);
     if winograd {
         return Tile::winograd(r, b)
-            .filter(|_| c == 1)
+            .filter(|_| c == 1 && split == 1)
             .and_then(|t| t.with_group(group))
             .map(TileChoice::Fixed)
             .with_context(|| format!("tile `{s}`: Winograd tiles have 2 or 4 rows, 1 or 2 blocks and workgroups 8, 16, 32 or 64 wide"));
     }
-    Tile::with_cols(r, b, c).and_then(|t| t.with_group(group)).map(TileChoice::Fixed).with_context(|| format!("tile `{s}`: the kernel has 1, 2, 4, 8 or 16 rows, 1 or 2 blocks, 1 or 2 columns and workgroups 8, 16, 32 or 64 wide"))
+    Tile::with_cols(r, b, c)
+        .and_then(|t| t.with_group(group))
+        .and_then(|t| t.with_split(split))
+        .map(TileChoice::Fixed)
+        .with_context(|| format!("tile `{s}`: the kernel has 1, 2, 4, 8 or 16 rows, 1 or 2 blocks, 1 or 2 columns, workgroups 8, 16, 32 or 64 wide and splits of 1 to 16"))
 }
 
 fn parse_memory(s: &str) -> Result<Option<WeightMemory>> {

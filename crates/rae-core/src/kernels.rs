@@ -267,6 +267,10 @@ pub struct ConvVariant {
     pub group_x: u32,
     /// How the kernel computes the tile: its entry point.
     pub method: Method,
+    /// Parts of the input blocks (split-K; 1: none).
+    pub split: u32,
+    /// The pipeline of split-K's second pass (entry point `reduce`) rather than the conv's.
+    pub reduce: bool,
 }
 
 /// How a conv tile is computed: the entry point of conv3x3.wgsl.
@@ -350,6 +354,7 @@ impl Kernels {
                     WeightMemory::Storage => dynamic_entry(3, wgpu::BufferBindingType::Storage { read_only: true }, 16),
                 },
                 storage_texture_entry(4, precision.format()),
+                storage_entry(5, false),
             ],
         );
         let prep_layout = layout(
@@ -428,13 +433,14 @@ impl Kernels {
                     ("TW", v.cols as f64),
                     ("WG_X", v.group_x as f64),
                     ("WG_Y", (64 / v.group_x) as f64),
+                    ("SPLIT", v.split as f64),
                     ("STORE_MAX", precision.store_max() as f64),
                 ];
                 device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                     label: Some("conv3x3"),
                     layout: Some(layout),
                     module,
-                    entry_point: Some(v.method.entry_point()),
+                    entry_point: Some(if v.reduce { "reduce" } else { v.method.entry_point() }),
                     compilation_options: wgpu::PipelineCompilationOptions {
                         constants: &constants,
                         zero_initialize_workgroup_memory: false,
@@ -470,11 +476,14 @@ pub struct Tile {
     pub group_x: u32,
     /// How the tile is computed ([`Tile::winograd`]).
     pub method: Method,
+    /// Parts the input blocks are split into (split-K, direct tiles only; 1: none): each part
+    /// sums its share into a partial buffer and a second pass adds them ([`Tile::with_split`]).
+    pub split: u32,
 }
 
 impl Default for Tile {
     fn default() -> Self {
-        Tile { rows: CONV_ROWS, blocks: 2, cols: 1, group_x: WORKGROUP, method: Method::Direct }
+        Tile { rows: CONV_ROWS, blocks: 2, cols: 1, group_x: WORKGROUP, method: Method::Direct, split: 1 }
     }
 }
 
@@ -486,13 +495,13 @@ impl Tile {
 
     /// A tile, if the kernel has one of this shape.
     pub fn with_cols(rows: u32, blocks: u32, cols: u32) -> Option<Self> {
-        ([1, 2, 4, 8, 16].contains(&rows) && (1..=2).contains(&blocks) && (1..=2).contains(&cols)).then_some(Tile { rows, blocks, cols, group_x: WORKGROUP, method: Method::Direct })
+        ([1, 2, 4, 8, 16].contains(&rows) && (1..=2).contains(&blocks) && (1..=2).contains(&cols)).then_some(Tile { rows, blocks, cols, group_x: WORKGROUP, method: Method::Direct, split: 1 })
     }
 
     /// A Winograd F(2x2, 3x3) tile of `rows` (2: one 2x2 output tile, 4: two stacked) x
     /// `blocks` (1 or 2), if the kernel has it.
     pub fn winograd(rows: u32, blocks: u32) -> Option<Self> {
-        ([2, 4].contains(&rows) && (1..=2).contains(&blocks)).then_some(Tile { rows, blocks, cols: 2, group_x: WORKGROUP, method: Method::Winograd })
+        ([2, 4].contains(&rows) && (1..=2).contains(&blocks)).then_some(Tile { rows, blocks, cols: 2, group_x: WORKGROUP, method: Method::Winograd, split: 1 })
     }
 
     /// Weights per input-output channel pair: 9 taps, or 16 transformed ones for Winograd.
@@ -503,6 +512,11 @@ impl Tile {
     /// This tile in workgroups `group_x` invocations wide (8, 16, 32 or 64), if the kernel has it.
     pub fn with_group(self, group_x: u32) -> Option<Self> {
         [8, 16, 32, 64].contains(&group_x).then_some(Tile { group_x, ..self })
+    }
+
+    /// This direct tile with its input blocks split `split` ways (2 to 16), if it is direct.
+    pub fn with_split(self, split: u32) -> Option<Self> {
+        (self.method == Method::Direct && (1..=16).contains(&split)).then_some(Tile { split, ..self })
     }
 
     /// Workgroup height in invocations.
@@ -525,6 +539,9 @@ impl std::fmt::Display for Tile {
         }
         if self.group_x != WORKGROUP {
             write!(f, "g{}", self.group_x)?;
+        }
+        if self.split > 1 {
+            write!(f, "k{}", self.split)?;
         }
         Ok(())
     }
@@ -660,11 +677,15 @@ struct Group {
     count: u32,
 }
 
-/// A planned convolution: its pipeline, workgroups and groups.
+/// A planned convolution: its pipeline, workgroups and groups, and split-K's second pass.
 struct Planned {
     pipeline: wgpu::ComputePipeline,
     workgroups: (u32, u32),
+    /// Parts per group (workgroup z runs over groups x parts).
+    split: u32,
     groups: Vec<Group>,
+    /// The reduce pipeline and its workgroups, when split.
+    reduce: Option<(wgpu::ComputePipeline, [u32; 3])>,
 }
 
 /// Every convolution of a network, ready to dispatch: one uniform buffer of parameter blocks
@@ -673,6 +694,8 @@ struct Planned {
 pub struct ConvPlan {
     params: wgpu::Buffer,
     weights: wgpu::Buffer,
+    /// Split-K's partial sums (16 bytes when no conv is split).
+    partial: wgpu::Buffer,
     /// Bytes of the weight binding (one chunk, or the largest conv for storage weights).
     weight_binding: u64,
     convs: Vec<Planned>,
@@ -697,6 +720,7 @@ impl ConvPlan {
         let mut convs = Vec::with_capacity(specs.len());
         let mut used = Vec::with_capacity(specs.len());
         let mut binding = 0u64;
+        let mut partial = 0u64;
         for (i, s) in specs.iter().enumerate() {
             let tile = tiles[if tiles.len() == 1 { 0 } else { i }];
             let (cin4_a, cin4_b) = (blocks(s.ca), blocks(s.cb));
@@ -721,8 +745,15 @@ impl ConvPlan {
             let rows = rows_per_invocation(s.height, tile.rows);
             // Two columns only where the level is wider than one (Winograd tiles are 2 wide).
             let cols = if s.width > 1 || tile.method == Method::Winograd { tile.cols } else { 1 };
-            let used_tile = Tile { rows, blocks: ob, cols, group_x: tile.group_x, method: tile.method };
-            let variant = ConvVariant { read_a: s.read_a, read_b: s.read_b, leaky: s.leaky, ob, rows, cols, group_x: tile.group_x, method: tile.method };
+            // Split no further than one input block per part.
+            let split = tile.split.min(cin4).max(1);
+            let used_tile = Tile { rows, blocks: ob, cols, group_x: tile.group_x, method: tile.method, split };
+            let variant = ConvVariant { read_a: s.read_a, read_b: s.read_b, leaky: s.leaky, ob, rows, cols, group_x: tile.group_x, method: tile.method, split, reduce: false };
+            // Split-K's partial sums: one buffer for the largest split conv, which every split
+            // conv overwrites in turn (the reduce of one runs before the next conv starts).
+            if split > 1 {
+                partial = partial.max(split as u64 * cout4 as u64 * s.width as u64 * s.height as u64 * 16);
+            }
             // Groups of `ob` output blocks, as many per dispatch as fit one chunk (workgroup z).
             let stride = (cin4 * taps * 4 + 1) * ob;
             let group_count = cout4.div_ceil(ob);
@@ -761,10 +792,15 @@ impl ConvPlan {
                 }
                 groups.push(group);
             }
+            // The reduce pipeline depends on the activation and the part count only.
+            let reduce_variant = ConvVariant { read_a: Read::Direct, read_b: Read::Direct, ob: 1, rows: 1, cols: 1, group_x: WORKGROUP, method: Method::Direct, reduce: true, ..variant };
+            let reduce = (split > 1).then(|| (kernels.conv(device, reduce_variant), [s.width.div_ceil(8), s.height.div_ceil(8), cout4]));
             convs.push(Planned {
                 pipeline: kernels.conv(device, variant),
                 workgroups: (s.width.div_ceil(cols).div_ceil(tile.group_x), s.height.div_ceil(rows).div_ceil(tile.group_y())),
+                split,
                 groups,
+                reduce,
             });
             used.push(used_tile);
         }
@@ -784,6 +820,7 @@ impl ConvPlan {
         Ok(Self {
             params: init("conv params", &params, wgpu::BufferUsages::UNIFORM),
             weights: init("conv weights", &weights, weight_usage),
+            partial: device.create_buffer(&wgpu::BufferDescriptor { label: Some("conv partial sums"), size: partial.max(16), usage: wgpu::BufferUsages::STORAGE, mapped_at_creation: false }),
             weight_binding,
             convs,
             tiles: used,
@@ -795,9 +832,9 @@ impl ConvPlan {
         &self.tiles
     }
 
-    /// Bytes of the weight and parameter buffers.
+    /// Bytes of the weight, parameter and partial-sum buffers.
     pub fn bytes(&self) -> u64 {
-        self.params.size() + self.weights.size()
+        self.params.size() + self.weights.size() + self.partial.size()
     }
 
     /// Dispatches per frame.
@@ -819,6 +856,7 @@ impl ConvPlan {
                 wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::TextureView(b) },
                 wgpu::BindGroupEntry { binding: 3, resource: buffer(&self.weights, self.weight_binding) },
                 wgpu::BindGroupEntry { binding: 4, resource: wgpu::BindingResource::TextureView(dst) },
+                wgpu::BindGroupEntry { binding: 5, resource: self.partial.as_entire_binding() },
             ],
         })
     }
@@ -829,7 +867,12 @@ impl ConvPlan {
         pass.set_pipeline(&c.pipeline);
         for g in &c.groups {
             pass.set_bind_group(0, group, &[g.params[reset as usize], g.weights]);
-            pass.dispatch_workgroups(c.workgroups.0, c.workgroups.1, g.count);
+            pass.dispatch_workgroups(c.workgroups.0, c.workgroups.1, g.count * c.split);
+        }
+        // Split-K: add the parts (the parameters of any group carry the conv's size).
+        if let Some((pipeline, [x, y, z])) = &c.reduce {
+            pass.set_pipeline(pipeline);
+            pass.dispatch_workgroups(*x, *y, *z);
         }
     }
 }
