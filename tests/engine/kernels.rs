@@ -226,22 +226,51 @@ fn conv_winograd_tiles_match_cpu() {
 
 #[test]
 fn conv_split_k_matches_cpu() {
-    // Input blocks split among 2, 3 and 16 parts (more parts than the 3 + 2 blocks: a part with
-    // none), the split crossing from source a to b, with both weight memories and every read
-    // mode; a second pass adds the parts.
-    let cases = [(4, 1, 2, WeightMemory::Uniform), (8, 2, 3, WeightMemory::Storage), (4, 2, 16, WeightMemory::Storage)];
-    for (i, (rows, blocks, split, memory)) in cases.into_iter().enumerate() {
-        let tile = Tile::new(rows, blocks).and_then(|t| t.with_split(split)).expect("a split tile");
+    // Input blocks split among 2, 3 and 4 parts, the split crossing from source a to b, with
+    // both weight memories and every read mode; a second pass adds the parts. One output block:
+    // the partial sums of 4 parts fill the budget of a lone full-resolution conv.
+    let cases = [(4, 2, WeightMemory::Uniform), (8, 3, WeightMemory::Storage), (1, 4, WeightMemory::Storage)];
+    for (i, (rows, split, memory)) in cases.into_iter().enumerate() {
+        let tile = Tile::new(rows, 1).and_then(|t| t.with_split(split)).expect("a split tile");
         let seed = 500 + 3 * i as u64;
         if i % 2 == 0 {
-            check_conv_tile((tensor(10, 38, 26, seed), Read::Pool), Some((tensor(5, 19, 13, seed + 1), Read::Direct)), 11, true, 13, 19, seed + 2, tile, memory);
+            check_conv_tile((tensor(10, 38, 26, seed), Read::Pool), Some((tensor(5, 19, 13, seed + 1), Read::Direct)), 4, true, 13, 19, seed + 2, tile, memory);
         } else {
-            check_conv_tile((tensor(10, 6, 11, seed), Read::Upsample), Some((tensor(5, 12, 22, seed + 1), Read::PoolUpsample)), 11, false, 22, 12, seed + 2, tile, memory);
+            check_conv_tile((tensor(10, 6, 11, seed), Read::Upsample), Some((tensor(5, 12, 22, seed + 1), Read::PoolUpsample)), 3, false, 22, 12, seed + 2, tile, memory);
         }
     }
     assert_eq!(Tile::winograd(2, 1).unwrap().with_split(2), None);
     assert_eq!(Tile::new(4, 1).unwrap().with_split(17), None);
     assert_eq!(Tile::new(4, 1).unwrap().with_group(32).unwrap().with_split(8).unwrap().to_string(), "4x1g32k8");
+}
+
+#[test]
+fn split_k_is_capped_by_input_blocks_and_partial_memory() {
+    // A full-resolution conv and one at 1/8 resolution, both asking for 16 parts: the deep one
+    // gets one part per input block (5), the full-resolution one (3 output blocks) only what
+    // fits 4 layers of partial sums (1), and the buffer is sized for the deep one.
+    let g = gpu();
+    let mut kernels = Kernels::new(&g.device, kernels::Precision::F32, WeightMemory::Storage);
+    let (weight, bias) = (vec![0.0; 12 * 20 * 9], vec![0.0; 12]);
+    let spec = |width, height| ConvSpec {
+        name: "d1.l2.0",
+        width,
+        height,
+        ca: 20,
+        cb: 0,
+        cout: 12,
+        weight: &weight,
+        bias: &bias,
+        read_a: Read::Direct,
+        read_b: Read::Direct,
+        leaky: true,
+        slope: 0.1,
+        b_is_hidden: false,
+    };
+    let tile = Tile::new(4, 1).unwrap().with_split(16).unwrap();
+    let plan = ConvPlan::new(&g.device, &mut kernels, &[spec(64, 64), spec(8, 8)], &[tile]).unwrap();
+    assert_eq!(plan.tiles().iter().map(|t| t.split).collect::<Vec<_>>(), [1, 5]);
+    assert_eq!(kernels::PARTIAL_LAYERS, 4);
 }
 
 #[test]

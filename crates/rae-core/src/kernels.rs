@@ -634,6 +634,9 @@ pub fn pack_group(spec: &ConvSpec, ob0: usize, ob: usize, method: Method) -> Vec
     out
 }
 
+/// Full-resolution f32 texture layers split-K's partial sums may take ([`ConvPlan::new`]).
+pub const PARTIAL_LAYERS: u64 = 4;
+
 /// One convolution to plan: its size, sources, weights and kernel variant.
 #[derive(Debug, Clone, Copy)]
 pub struct ConvSpec<'a> {
@@ -704,8 +707,9 @@ pub struct ConvPlan {
 
 impl ConvPlan {
     /// Pack and upload every conv's weights and parameters, conv `i` with at most `tiles[i]`
-    /// (one tile for all when `tiles` has one entry); fails when a conv is too wide for one
-    /// uniform weight chunk.
+    /// (one tile for all when `tiles` has one entry; a split is capped so that the partial sums
+    /// fit [`PARTIAL_LAYERS`] layers at the largest conv's resolution); fails when a conv is too
+    /// wide for one uniform weight chunk.
     pub fn new(device: &wgpu::Device, kernels: &mut Kernels, specs: &[ConvSpec], tiles: &[Tile]) -> crate::Result<Self> {
         use wgpu::util::DeviceExt;
         assert!(tiles.len() == 1 || tiles.len() == specs.len(), "one tile, or one per conv");
@@ -721,6 +725,10 @@ impl ConvPlan {
         let mut used = Vec::with_capacity(specs.len());
         let mut binding = 0u64;
         let mut partial = 0u64;
+        // Split-K's partial sums may take as much memory as 16 channels at full resolution in f32
+        // (4 texture layers): enough to split the deep levels, where splitting pays, while a
+        // split full-resolution conv (gigabytes at 1080p) is split less or not at all.
+        let partial_budget = specs.iter().map(|s| s.width as u64 * s.height as u64).max().unwrap_or(0) * 16 * PARTIAL_LAYERS;
         for (i, s) in specs.iter().enumerate() {
             let tile = tiles[if tiles.len() == 1 { 0 } else { i }];
             let (cin4_a, cin4_b) = (blocks(s.ca), blocks(s.cb));
@@ -745,8 +753,9 @@ impl ConvPlan {
             let rows = rows_per_invocation(s.height, tile.rows);
             // Two columns only where the level is wider than one (Winograd tiles are 2 wide).
             let cols = if s.width > 1 || tile.method == Method::Winograd { tile.cols } else { 1 };
-            // Split no further than one input block per part.
-            let split = tile.split.min(cin4).max(1);
+            // Split no further than one input block per part, nor beyond the partial-sum budget.
+            let part_bytes = cout4 as u64 * s.width as u64 * s.height as u64 * 16;
+            let split = tile.split.min(cin4).min((partial_budget / part_bytes) as u32).max(1);
             let used_tile = Tile { rows, blocks: ob, cols, group_x: tile.group_x, method: tile.method, split };
             let variant = ConvVariant { read_a: s.read_a, read_b: s.read_b, leaky: s.leaky, ob, rows, cols, group_x: tile.group_x, method: tile.method, split, reduce: false };
             // Split-K's partial sums: one buffer for the largest split conv, which every split
