@@ -13,6 +13,8 @@
 //
 // Specialised per layer kind by override constants (read modes, activation, output blocks per
 // invocation); sizes come in the uniform, so one pipeline serves every resolution and width.
+// Entry points: `main` (the direct sum, optionally split-K), `reduce` (split-K's second pass)
+// and `winograd` (Winograd F(2x2, 3x3)); kernels::Method picks.
 
 // How a source is read at output pixel (x, y).
 const READ_DIRECT: u32 = 0u;        // src[x, y]

@@ -753,9 +753,10 @@ impl ConvPlan {
             let rows = rows_per_invocation(s.height, tile.rows);
             // Two columns only where the level is wider than one (Winograd tiles are 2 wide).
             let cols = if s.width > 1 || tile.method == Method::Winograd { tile.cols } else { 1 };
-            // Split no further than one input block per part, nor beyond the partial-sum budget.
+            // Split (direct tiles only) no further than one input block per part, nor beyond the
+            // partial-sum budget.
             let part_bytes = cout4 as u64 * s.width as u64 * s.height as u64 * 16;
-            let split = tile.split.min(cin4).min((partial_budget / part_bytes) as u32).max(1);
+            let split = if tile.method == Method::Direct { tile.split.min(cin4).min((partial_budget / part_bytes) as u32).max(1) } else { 1 };
             let used_tile = Tile { rows, blocks: ob, cols, group_x: tile.group_x, method: tile.method, split };
             let variant = ConvVariant { read_a: s.read_a, read_b: s.read_b, leaky: s.leaky, ob, rows, cols, group_x: tile.group_x, method: tile.method, split, reduce: false };
             // Split-K's partial sums: one buffer for the largest split conv, which every split
