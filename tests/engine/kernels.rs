@@ -224,6 +224,11 @@ fn conv_winograd_tiles_match_cpu() {
     assert_eq!(Tile::winograd(4, 1).unwrap().to_string(), "wino4x1");
 }
 
+/// A LeakyReLU conv reading `ca` channels of one source directly (`bias.len()` outputs).
+fn one_source_spec<'a>(name: &'a str, width: u32, height: u32, ca: usize, weight: &'a [f32], bias: &'a [f32]) -> ConvSpec<'a> {
+    ConvSpec { name, width, height, ca, cb: 0, cout: bias.len(), weight, bias, read_a: Read::Direct, read_b: Read::Direct, leaky: true, slope: 0.1, b_is_hidden: false }
+}
+
 #[test]
 fn conv_split_k_matches_cpu() {
     // Input blocks split among 2, 3 and 4 parts, the split crossing from source a to b, with
@@ -252,21 +257,7 @@ fn split_k_is_capped_by_input_blocks_and_partial_memory() {
     let g = gpu();
     let mut kernels = Kernels::new(&g.device, kernels::Precision::F32, WeightMemory::Storage);
     let (weight, bias) = (vec![0.0; 12 * 20 * 9], vec![0.0; 12]);
-    let spec = |width, height| ConvSpec {
-        name: "d1.l2.0",
-        width,
-        height,
-        ca: 20,
-        cb: 0,
-        cout: 12,
-        weight: &weight,
-        bias: &bias,
-        read_a: Read::Direct,
-        read_b: Read::Direct,
-        leaky: true,
-        slope: 0.1,
-        b_is_hidden: false,
-    };
+    let spec = |width, height| one_source_spec("d1.l2.0", width, height, 20, &weight, &bias);
     let tile = Tile::new(4, 1).unwrap().with_split(16).unwrap();
     let plan = ConvPlan::new(&g.device, &mut kernels, &[spec(64, 64), spec(8, 8)], &[tile]).unwrap();
     assert_eq!(plan.tiles().iter().map(|t| t.split).collect::<Vec<_>>(), [1, 5]);
@@ -309,21 +300,7 @@ fn conv_too_wide_for_a_weight_chunk_is_an_error() {
     let g = gpu();
     let mut kernels = Kernels::new(&g.device, kernels::Precision::F32, kernels::WeightMemory::Uniform);
     let (weight, bias) = (vec![0.0; 4 * 460 * 9], vec![0.0; 4]);
-    let spec = ConvSpec {
-        name: "d1.l1.0",
-        width: 8,
-        height: 8,
-        ca: 460,
-        cb: 0,
-        cout: 4,
-        weight: &weight,
-        bias: &bias,
-        read_a: Read::Direct,
-        read_b: Read::Direct,
-        leaky: true,
-        slope: 0.1,
-        b_is_hidden: false,
-    };
+    let spec = one_source_spec("d1.l1.0", 8, 8, 460, &weight, &bias);
     let err = ConvPlan::new(&g.device, &mut kernels, &[spec], &[Tile::default()]).err().expect("460 channels do not fit").to_string();
     assert!(err.contains("d1.l1.0") && err.contains("460"), "{err}");
 }
