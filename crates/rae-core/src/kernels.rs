@@ -514,7 +514,8 @@ impl Tile {
         [8, 16, 32, 64].contains(&group_x).then_some(Tile { group_x, ..self })
     }
 
-    /// This direct tile with its input blocks split `split` ways (2 to 16), if it is direct.
+    /// This direct tile with its input blocks split `split` ways (1 to 16; 1: no split), if it
+    /// is direct.
     pub fn with_split(self, split: u32) -> Option<Self> {
         (self.method == Method::Direct && (1..=16).contains(&split)).then_some(Tile { split, ..self })
     }
@@ -527,7 +528,8 @@ impl Tile {
 
 impl std::fmt::Display for Tile {
     /// `ROWSxBLOCKS`, with `wCOLS` appended for a 2-column tile (`8x1w2`) and `gGROUPX` for a
-    /// workgroup other than 8 x 8; Winograd tiles are `wino` and `ROWSxBLOCKS` (`wino4x1g32`).
+    /// workgroup other than 8 x 8 and `kSPLIT` for a split tile (`8x1g32k4`); Winograd tiles are
+    /// `wino` and `ROWSxBLOCKS` (`wino4x1g32`).
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self.method {
             Method::Direct => {}
