@@ -284,6 +284,14 @@ pub enum Method {
 }
 
 impl Method {
+    /// Weights per input-output channel pair: 9 taps, or 16 transformed ones for Winograd.
+    pub fn taps(self) -> u32 {
+        match self {
+            Method::Direct => 9,
+            Method::Winograd => 16,
+        }
+    }
+
     /// The entry point in conv3x3.wgsl.
     pub fn entry_point(self) -> &'static str {
         match self {
@@ -504,9 +512,9 @@ impl Tile {
         ([2, 4].contains(&rows) && (1..=2).contains(&blocks)).then_some(Tile { rows, blocks, cols: 2, group_x: WORKGROUP, method: Method::Winograd, split: 1 })
     }
 
-    /// Weights per input-output channel pair: 9 taps, or 16 transformed ones for Winograd.
+    /// Weights per input-output channel pair ([`Method::taps`]).
     pub fn taps(&self) -> u32 {
-        if self.method == Method::Winograd { 16 } else { 9 }
+        self.method.taps()
     }
 
     /// This tile in workgroups `group_x` invocations wide (8, 16, 32 or 64), if the kernel has it.
@@ -605,7 +613,7 @@ pub fn pack_group(spec: &ConvSpec, ob0: usize, ob: usize, method: Method) -> Vec
             (c < cb).then_some(ca + c)
         }
     };
-    let taps = if winograd { 16 } else { 9 };
+    let taps = method.taps() as usize;
     // The weights of one channel pair as the kernel multiplies them.
     let pair = |o: usize, i: usize| -> [f32; 16] {
         let g = &weight[(o * cin + i) * 9..][..9];
