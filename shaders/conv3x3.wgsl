@@ -25,7 +25,9 @@ const READ_POOL_UPSAMPLE: u32 = 3u; // upsample(pool(src)): max of the 2x2 block
 override MODE_A: u32 = 0u;
 override MODE_B: u32 = 0u;
 override LEAKY: bool = true;
-// Output blocks (4 channels each) per invocation: 1 or 2 (kernels::blocks_per_invocation).
+// Output blocks (4 channels each) per invocation: 1, 2, or 4 with TW = 1 (kernels::Tile,
+// kernels::blocks_per_invocation). Every fetched input texel feeds 4 * OB output channels: on
+// lavapipe each fetch is a call into the driver's texel-fetch function, so OB = 4 pays off there.
 override OB: u32 = 2u;
 // Largest magnitude stored: f32::MAX for f32 activations, 65504 for f16 (no infinities).
 override STORE_MAX: f32 = 3.4028234e38;
@@ -155,8 +157,9 @@ fn add_column(acc: ptr<function, Tile>, base: u32, j: u32, v0: vec4<f32>, v1: ve
 
 // Add input block `layer` of `t` (read with `mode`) at weight block `cb` to the tiles whose
 // top-left output is (x, y0): output column 0 in acc0/acc1 (blocks 0, 1), column 1 in acc2/acc3
-// when TW = 2. Input column ic (x - 1 + ic) feeds output column 0 through tap kx = ic and output
-// column 1 through kx = ic - 1, so a 2-wide tile fetches 4 columns for 2 outputs instead of 6.
+// when TW = 2, or column 0's blocks 2 and 3 in acc2/acc3 when OB = 4 (never both). Input column
+// ic (x - 1 + ic) feeds output column 0 through tap kx = ic and output column 1 through
+// kx = ic - 1, so a 2-wide tile fetches 4 columns for 2 outputs instead of 6.
 fn accumulate(acc0: ptr<function, Tile>, acc1: ptr<function, Tile>, acc2: ptr<function, Tile>, acc3: ptr<function, Tile>, t: texture_2d_array<f32>, mode: u32, layer: u32, cb: u32, w: u32, x: i32, y0: i32) {
     for (var ic = 0u; ic < TW + 2u; ic++) {
         let sx = x + i32(ic) - 1;
@@ -201,6 +204,10 @@ fn accumulate(acc0: ptr<function, Tile>, acc1: ptr<function, Tile>, acc2: ptr<fu
             add_column(acc0, base, 0u, v0, v1, v2, v3, v4, v5, v6, v7, v8, v9, v10, v11, v12, v13, v14, v15, v16, v17);
             if OB > 1u {
                 add_column(acc1, base, 1u, v0, v1, v2, v3, v4, v5, v6, v7, v8, v9, v10, v11, v12, v13, v14, v15, v16, v17);
+            }
+            if OB > 2u {
+                add_column(acc2, base, 2u, v0, v1, v2, v3, v4, v5, v6, v7, v8, v9, v10, v11, v12, v13, v14, v15, v16, v17);
+                add_column(acc3, base, 3u, v0, v1, v2, v3, v4, v5, v6, v7, v8, v9, v10, v11, v12, v13, v14, v15, v16, v17);
             }
         }
         if TW > 1u && ic > 0u {
@@ -281,6 +288,13 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     var acc2 = acc0;
     var acc3 = acc1;
+    // Blocks 2 and 3 of a 4-block tile.
+    if OB > 2u {
+        let b2 = select(vec4<f32>(0.0), weights[bias_at + 2u], with_bias);
+        acc2 = Tile(b2, b2, b2, b2, b2, b2, b2, b2, b2, b2, b2, b2, b2, b2, b2, b2);
+        let b3 = select(vec4<f32>(0.0), weights[bias_at + 3u], with_bias);
+        acc3 = Tile(b3, b3, b3, b3, b3, b3, b3, b3, b3, b3, b3, b3, b3, b3, b3, b3);
+    }
     let xi = i32(x);
     let yi = i32(y0);
     // This part's input blocks k0 .. k1 of cat(a, b) (all of them when SPLIT = 1).
@@ -299,6 +313,10 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     store(acc0, x, y0, ob0);
     if second {
         store(acc1, x, y0, ob0 + 1u);
+    }
+    if OB > 2u {
+        if ob0 + 2u < params.cout4 { store(acc2, x, y0, ob0 + 2u); }
+        if ob0 + 3u < params.cout4 { store(acc3, x, y0, ob0 + 3u); }
     }
     // The second column, unless it is past the right edge.
     if TW > 1u && x + 1u < params.width {

@@ -164,6 +164,8 @@ fn conv_wide_input_uses_one_block_per_invocation_and_matches_cpu() {
     // 250 input channels (63 blocks): two output blocks' taps no longer fit a 64 KiB chunk.
     assert_eq!(kernels::blocks_per_invocation(63, 9), Some(1));
     assert_eq!(kernels::blocks_per_invocation(51, 9), Some(2), "the widest conv of the default network");
+    assert_eq!(kernels::blocks_per_invocation(28, 9), Some(4), "4 blocks up to 112 input channels");
+    assert_eq!(kernels::blocks_per_invocation(29, 9), Some(2));
     assert_eq!(kernels::blocks_per_invocation(114, 9), None);
     assert_eq!(kernels::blocks_per_invocation(63, 16), Some(1), "Winograd: 16 weights per pair");
     assert_eq!(kernels::blocks_per_invocation(64, 16), None);
@@ -193,8 +195,16 @@ fn conv_every_tile_shape_matches_cpu() {
         let seed = 70 + 3 * i as u64;
         check_conv_tile((tensor(6, 38, 26, seed), Read::Pool), Some((tensor(5, 19, 13, seed + 1), Read::Direct)), 11, true, 13, 19, seed + 2, tile, WeightMemory::Uniform);
     }
+    // Four blocks per invocation, on a conv of 6 output blocks (a partial second group) and on
+    // one of 3 (one group, its fourth block computed and dropped).
+    for (i, (rows, cout)) in [(16, 22), (4, 22), (1, 22), (8, 11)].into_iter().enumerate() {
+        let tile = Tile::new(rows, 4).expect("a 4-block tile");
+        let seed = 120 + 3 * i as u64;
+        check_conv_tile((tensor(6, 38, 26, seed), Read::Pool), Some((tensor(5, 19, 13, seed + 1), Read::Direct)), cout, true, 13, 19, seed + 2, tile, WeightMemory::Uniform);
+    }
     assert_eq!(Tile::new(3, 1), None);
     assert_eq!(Tile::new(16, 3), None);
+    assert_eq!(Tile::with_cols(16, 4, 2), None, "4 blocks take the second column's accumulators");
     assert_eq!(Tile::with_cols(8, 1, 3), None);
     assert_eq!(Tile::default().with_group(128), None);
 }
@@ -262,6 +272,27 @@ fn split_k_is_capped_by_input_blocks_and_partial_memory() {
     let plan = ConvPlan::new(&g.device, &mut kernels, &[spec(64, 64), spec(8, 8)], &[tile]).unwrap();
     assert_eq!(plan.tiles().iter().map(|t| t.split).collect::<Vec<_>>(), [1, 5]);
     assert_eq!(kernels::PARTIAL_LAYERS, 4);
+}
+
+#[test]
+fn four_block_tiles_shrink_to_the_conv() {
+    // 16 x 4 asked of every conv: 4 blocks where 4 output blocks and their weights fit (64
+    // inputs), 2 for 2 output blocks, 1 for one (the 3-channel output), 2 where 4 blocks' weights
+    // overflow a chunk (120 inputs), and 2 with storage weights.
+    let g = gpu();
+    let tile = Tile::new(16, 4).unwrap();
+    let blocks = |memory, ca: usize, cout: usize| {
+        let mut kernels = Kernels::new(&g.device, kernels::Precision::F32, memory);
+        let (weight, bias) = (vec![0.0; cout * ca * 9], vec![0.0; cout]);
+        let plan = ConvPlan::new(&g.device, &mut kernels, &[one_source_spec("c", 16, 16, ca, &weight, &bias)], &[tile]).unwrap();
+        plan.tiles()[0].blocks
+    };
+    assert_eq!(blocks(WeightMemory::Uniform, 64, 16), 4);
+    assert_eq!(blocks(WeightMemory::Uniform, 64, 11), 4);
+    assert_eq!(blocks(WeightMemory::Uniform, 64, 8), 2);
+    assert_eq!(blocks(WeightMemory::Uniform, 64, 3), 1);
+    assert_eq!(blocks(WeightMemory::Uniform, 120, 16), 2);
+    assert_eq!(blocks(WeightMemory::Storage, 64, 16), 2);
 }
 
 #[test]

@@ -98,10 +98,10 @@ enum Command {
         #[arg(long)]
         peak_gflops: Option<f64>,
         /// Conv register tiles to time: ROWSxBLOCKS[wCOLS][gGROUPX][kSPLIT] (rows 1, 2, 4, 8, 16;
-        /// blocks 1, 2; columns 1, 2; workgroups 8, 16, 32, 64 wide; input blocks split 1 to 16
+        /// blocks 1, 2, 4 (4 with one column); columns 1, 2; workgroups 8, 16, 32, 64 wide; input blocks split 1 to 16
         /// ways) or winoROWSxBLOCKS[gGROUPX]
         /// (Winograd F(2x2, 3x3); rows 2, 4) for one tile everywhere, `tuned` (each conv timed
-        /// with every candidate on this device while building), or `auto` (tuned on GPUs, 16x2
+        /// with every candidate on this device while building), or `auto` (tuned on GPUs, 16x4
         /// on CPU drivers: what `denoise` uses).
         #[arg(long, value_delimiter = ',', default_value = "auto")]
         tile: Vec<String>,
@@ -109,6 +109,12 @@ enum Command {
         /// dispatch per conv) or `auto` (uniform on CPU drivers, storage on GPUs).
         #[arg(long, value_delimiter = ',', default_value = "auto")]
         weights_memory: Vec<String>,
+        /// Build every combination first, then time them in turn, one frame each per round, for
+        /// `--frames` rounds: a side-by-side table (median and fastest ms per frame, and the
+        /// median of each round's ratio to the first combination) that a machine whose speed
+        /// drifts over seconds (a shared host) cannot tilt towards one combination.
+        #[arg(long)]
+        interleave: bool,
     },
 }
 
@@ -156,7 +162,7 @@ fn parse_tile(s: &str) -> Result<TileChoice> {
         .and_then(|t| t.with_group(group))
         .and_then(|t| t.with_split(split))
         .map(TileChoice::Fixed)
-        .with_context(|| format!("tile `{s}`: the kernel has 1, 2, 4, 8 or 16 rows, 1 or 2 blocks, 1 or 2 columns, workgroups 8, 16, 32 or 64 wide and splits of 1 to 16"))
+        .with_context(|| format!("tile `{s}`: the kernel has 1, 2, 4, 8 or 16 rows, 1, 2 or 4 blocks (4 with one column), 1 or 2 columns, workgroups 8, 16, 32 or 64 wide and splits of 1 to 16"))
 }
 
 fn parse_memory(s: &str) -> Result<Option<WeightMemory>> {
@@ -207,9 +213,7 @@ fn bench(path: &Path, sizes: &[String], frames: usize, layers: bool, precisions:
     for s in sizes {
         let (w, h) = parse_size(s)?;
         let n = (w * h) as usize;
-        // Smooth, noisy, deterministic buffers: the timing does not depend on values.
-        let wave: Vec<f32> = (0..3 * n).map(|i| 0.5 + 0.5 * ((i as f32) * 0.37).sin()).collect();
-        let one: Vec<f32> = wave[..n].to_vec();
+        let (wave, one) = bench_buffers(w, h);
         let frame = rae_core::FrameInputs { color: &wave, albedo: Some(&wave), normal: Some(&wave), depth: Some(&one), roughness: Some(&one) };
         let combos = precisions.iter().flat_map(|p| memories.iter().flat_map(move |m| tiles.iter().map(move |t| (*p, *m, *t))));
         for (p, memory, tiles) in combos {
@@ -255,6 +259,70 @@ fn bench(path: &Path, sizes: &[String], frames: usize, layers: bool, precisions:
             if layers {
                 stage_table(&mut d, &frame, &mut out, frames.max(1))?;
             }
+        }
+    }
+    Ok(())
+}
+
+/// Deterministic, smooth-but-noisy host buffers of a `w` x `h` frame (color, then the one-channel
+/// depth and roughness): timing does not depend on values.
+fn bench_buffers(w: u32, h: u32) -> (Vec<f32>, Vec<f32>) {
+    let n = (w * h) as usize;
+    let wave: Vec<f32> = (0..3 * n).map(|i| 0.5 + 0.5 * ((i as f32) * 0.37).sin()).collect();
+    let one = wave[..n].to_vec();
+    (wave, one)
+}
+
+/// `bench --interleave`: every combination of precision, weight memory and tile built at once
+/// and timed round-robin, one frame each per round, so that slow and fast spells of a shared
+/// machine fall on all of them alike; the ratio column is the median over rounds of each
+/// round's time over the first combination's in that round.
+fn bench_interleaved(path: &Path, sizes: &[String], rounds: usize, precisions: &[PrecisionArg], tiles: &[TileChoice], memories: &[Option<WeightMemory>]) -> Result<()> {
+    let weights = Weights::load(path)?;
+    let gpu = Gpu::new()?;
+    let rounds = rounds.max(1);
+    println!("adapter: {}; weights: {}; interleaved: {rounds} rounds of one frame per combination, after 2 warm-up frames each", gpu.describe(), path.display());
+    println!("ms: a frame from host slices to host slices (the `total` of bench); vs first: median over rounds of the ratio to the first combination in the same round");
+    println!("{:>10} {:>9} {:>12} {:>7} {:>10} {:>10} {:>9}", "size", "precision", "tile", "weights", "median ms", "fastest", "vs first");
+    for s in sizes {
+        let (w, h) = parse_size(s)?;
+        let (wave, one) = bench_buffers(w, h);
+        let frame = rae_core::FrameInputs { color: &wave, albedo: Some(&wave), normal: Some(&wave), depth: Some(&one), roughness: Some(&one) };
+        let mut out = vec![0.0; wave.len()];
+        // Build (and warm up) every combination before timing any.
+        let mut runs = Vec::new();
+        for &p in precisions {
+            for &memory in memories {
+                for &tiles in tiles {
+                    let precision = Precision::from(p);
+                    let mut d = Denoiser::with_options(&gpu.device, &gpu.queue, &weights, w, h, Options { precision, tiles, weights: memory })
+                        .with_context(|| format!("building the {} denoiser at {s}", precision.name()))?;
+                    for _ in 0..2 {
+                        d.denoise_into(&frame, &mut out)?;
+                    }
+                    runs.push((precision, tiles, d, Vec::with_capacity(rounds)));
+                }
+            }
+        }
+        for _ in 0..rounds {
+            for (_, _, d, ms) in runs.iter_mut() {
+                let t = Instant::now();
+                d.denoise_into(&frame, &mut out)?;
+                ms.push(t.elapsed().as_secs_f64() * 1e3);
+            }
+        }
+        let first = runs[0].3.clone();
+        for (precision, tiles, d, ms) in runs.iter_mut() {
+            let mut ratio: Vec<f64> = ms.iter().zip(&first).map(|(a, b)| a / b).collect();
+            let fastest = ms.iter().copied().fold(f64::INFINITY, f64::min);
+            println!(
+                "{s:>10} {:>9} {:>12} {:>7} {:>10.2} {fastest:>10.2} {:>9.3}",
+                precision.name(),
+                tile_name(*tiles),
+                d.weight_memory().name(),
+                median(ms),
+                median(&mut ratio)
+            );
         }
     }
     Ok(())
@@ -410,10 +478,14 @@ fn main() -> Result<()> {
         Command::Info { file, size } => info(&file, &size),
         Command::Devices => devices(),
         Command::Verify { golden } => verify(&golden),
-        Command::Bench { weights, sizes, frames, layers, precision, peak_gflops, tile, weights_memory } => {
+        Command::Bench { weights, sizes, frames, layers, precision, peak_gflops, tile, weights_memory, interleave } => {
             let tiles = tile.iter().map(|t| parse_tile(t)).collect::<Result<Vec<_>>>()?;
             let memories = weights_memory.iter().map(|m| parse_memory(m)).collect::<Result<Vec<_>>>()?;
-            bench(&weights, &sizes, frames, layers, &precision, &tiles, &memories, peak_gflops)
+            if interleave {
+                bench_interleaved(&weights, &sizes, frames, &precision, &tiles, &memories)
+            } else {
+                bench(&weights, &sizes, frames, layers, &precision, &tiles, &memories, peak_gflops)
+            }
         }
     }
 }

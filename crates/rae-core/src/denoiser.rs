@@ -116,7 +116,7 @@ struct Profiler {
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub enum TileChoice {
     /// [`TileChoice::Tuned`] on GPUs that have timestamps inside passes; the default tile on
-    /// CPU drivers (lavapipe compiles each variant for seconds, and 16 x 2 is its fastest
+    /// CPU drivers (lavapipe compiles each variant for seconds, and 16 x 4 is its fastest
     /// everywhere).
     #[default]
     Auto,

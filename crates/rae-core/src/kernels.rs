@@ -469,14 +469,16 @@ impl Kernels {
 /// (a 2-column tile fetches 4 input columns for 2 outputs, a 1-column tile 3 for 1). A Winograd
 /// tile (2 columns, 2 or 4 rows) multiplies 16 times per 2x2 outputs and input channel where the
 /// direct one multiplies 36 times, for 16 weights per channel pair instead of 9 and a few
-/// additions. The default (16 x 2 direct, one column) is the fastest measured on lavapipe
-/// (docs/PERF.md); `rae-cli bench --tile` sweeps others and GPUs tune per conv
-/// ([`crate::TileChoice`]).
+/// additions. The default (16 x 4 direct, one column: blocks 4 where the conv's weights fit a
+/// chunk, else 2 or 1) is the fastest measured on lavapipe, where every input fetch is a call
+/// into the driver and more output blocks share it (docs/PERF.md); `rae-cli bench --tile`
+/// sweeps others and GPUs tune per conv ([`crate::TileChoice`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct Tile {
     /// Output rows per invocation: 1, 2, 4, 8 or 16 ([`CONV_ROWS`]).
     pub rows: u32,
-    /// Output blocks per invocation: 1 or 2.
+    /// Output blocks per invocation: 1, 2, or 4 with one column (uniform weights only: storage
+    /// weights keep 2).
     pub blocks: u32,
     /// Output columns per invocation: 1 or 2.
     pub cols: u32,
@@ -491,7 +493,7 @@ pub struct Tile {
 
 impl Default for Tile {
     fn default() -> Self {
-        Tile { rows: CONV_ROWS, blocks: 2, cols: 1, group_x: WORKGROUP, method: Method::Direct, split: 1 }
+        Tile { rows: CONV_ROWS, blocks: 4, cols: 1, group_x: WORKGROUP, method: Method::Direct, split: 1 }
     }
 }
 
@@ -503,7 +505,8 @@ impl Tile {
 
     /// A tile, if the kernel has one of this shape.
     pub fn with_cols(rows: u32, blocks: u32, cols: u32) -> Option<Self> {
-        ([1, 2, 4, 8, 16].contains(&rows) && (1..=2).contains(&blocks) && (1..=2).contains(&cols)).then_some(Tile { rows, blocks, cols, group_x: WORKGROUP, method: Method::Direct, split: 1 })
+        // Four blocks take the accumulators a second column would use.
+        ([1, 2, 4, 8, 16].contains(&rows) && ((1..=2).contains(&blocks) || (blocks == 4 && cols == 1)) && (1..=2).contains(&cols)).then_some(Tile { rows, blocks, cols, group_x: WORKGROUP, method: Method::Direct, split: 1 })
     }
 
     /// A Winograd F(2x2, 3x3) tile of `rows` (2: one 2x2 output tile, 4: two stacked) x
@@ -566,11 +569,11 @@ pub fn rows_per_invocation(height: u32, max_rows: u32) -> u32 {
 }
 
 /// Output blocks per invocation for a conv reading `cin4` input blocks with `taps` weights
-/// per channel pair (9, or 16 for Winograd): the most of 2, 1 whose weights and biases fit one
-/// weight chunk (more outputs per input fetch); `None` when not even one block fits (direct:
+/// per channel pair (9, or 16 for Winograd): the most of 4, 2, 1 whose weights and biases fit
+/// one weight chunk (more outputs per input fetch; 4 up to 28 input blocks direct); `None` when not even one block fits (direct:
 /// more than 113 input blocks, 452 channels; Winograd: more than 63, 252 channels).
 pub fn blocks_per_invocation(cin4: u32, taps: u32) -> Option<u32> {
-    [2, 1].into_iter().find(|&ob| (cin4 * taps * 4 + 1) * ob <= WEIGHT_CHUNK)
+    [4, 2, 1].into_iter().find(|&ob| (cin4 * taps * 4 + 1) * ob <= WEIGHT_CHUNK)
 }
 
 /// Winograd F(2x2, 3x3)'s weight transform G g G^T of one 3x3 kernel (row-major, `[ky][kx]`),
@@ -757,9 +760,12 @@ impl ConvPlan {
                 WeightMemory::Storage => 2,
             };
             let cout4 = blocks(s.cout);
-            // A conv with one output block (the 3-channel output convs) would compute a second,
-            // discarded tile with OB = 2.
-            let ob = ob.min(cout4).min(tile.blocks);
+            // No more blocks than the conv has output blocks to fill: the 3-channel output convs
+            // would compute a second, discarded tile with OB = 2 (OB stays 1, 2 or 4).
+            let mut ob = ob.min(tile.blocks);
+            while ob > 1 && ob / 2 >= cout4 {
+                ob /= 2;
+            }
             let rows = rows_per_invocation(s.height, tile.rows);
             // Two columns only where the level is wider than one (Winograd tiles are 2 wide).
             let cols = if s.width > 1 || tile.method == Method::Winograd { tile.cols } else { 1 };
