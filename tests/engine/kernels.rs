@@ -278,7 +278,7 @@ fn split_k_is_capped_by_input_blocks_and_partial_memory() {
 fn four_block_tiles_shrink_to_the_conv() {
     // 16 x 4 asked of every conv: 4 blocks where 4 output blocks and their weights fit (64
     // inputs), 2 for 2 output blocks, 1 for one (the 3-channel output), 2 where 4 blocks' weights
-    // overflow a chunk (120 inputs), and 2 with storage weights.
+    // overflow a chunk (120 inputs); storage weights have no chunk.
     let g = gpu();
     let tile = Tile::new(16, 4).unwrap();
     let blocks = |memory, ca: usize, cout: usize| {
@@ -292,7 +292,7 @@ fn four_block_tiles_shrink_to_the_conv() {
     assert_eq!(blocks(WeightMemory::Uniform, 64, 8), 2);
     assert_eq!(blocks(WeightMemory::Uniform, 64, 3), 1);
     assert_eq!(blocks(WeightMemory::Uniform, 120, 16), 2);
-    assert_eq!(blocks(WeightMemory::Storage, 64, 16), 2);
+    assert_eq!(blocks(WeightMemory::Storage, 120, 16), 4);
 }
 
 #[test]
@@ -317,10 +317,11 @@ fn winograd_weight_transform_reproduces_the_direct_convolution() {
 #[test]
 fn conv_with_storage_weights_matches_cpu() {
     // Weights in one storage buffer: every group in one dispatch and no chunk limit, so the
-    // 250-channel conv keeps two blocks per invocation; 23 outputs = 3 groups of 2 blocks.
+    // 250-channel conv keeps two blocks per invocation; 23 outputs = 3 groups of 2 blocks. Then
+    // tiles of 1, 2 and 4 blocks on 11 outputs (3 blocks: one 4-block group with a spare).
     let storage = WeightMemory::Storage;
     check_conv_tile((tensor(130, 21, 17, 90), Read::Direct), Some((tensor(120, 21, 17, 91), Read::Direct)), 23, true, 17, 21, 92, Tile::default(), storage);
-    for (i, tile) in [Tile::new(4, 2), Tile::new(1, 1), Tile::with_cols(8, 2, 2)].into_iter().enumerate() {
+    for (i, tile) in [Tile::new(4, 2), Tile::new(1, 1), Tile::with_cols(8, 2, 2), Tile::new(8, 4)].into_iter().enumerate() {
         let seed = 93 + 3 * i as u64;
         check_conv_tile((tensor(6, 6, 11, seed), Read::Upsample), Some((tensor(5, 12, 22, seed + 1), Read::PoolUpsample)), 11, false, 22, 12, seed + 2, tile.unwrap(), storage);
     }

@@ -115,9 +115,9 @@ struct Profiler {
 /// How a [`Denoiser`] picks the conv kernel's register tile.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub enum TileChoice {
-    /// [`TileChoice::Tuned`] on GPUs that have timestamps inside passes; the default tile on
-    /// CPU drivers (lavapipe compiles each variant for seconds, and 16 x 4 is its fastest
-    /// everywhere).
+    /// [`TileChoice::Tuned`] on GPUs that have timestamps inside passes, [`Tile::CPU`] on CPU
+    /// drivers (lavapipe compiles each variant for seconds, and 16 x 4 is its fastest
+    /// everywhere), the default tile elsewhere.
     #[default]
     Auto,
     /// One tile for every conv (smaller where a level or a conv is smaller).
@@ -131,7 +131,7 @@ pub enum TileChoice {
 }
 
 /// The tiles [`TileChoice::Tuned`] times.
-pub const TUNE_TILES: [Tile; 31] = [
+pub const TUNE_TILES: [Tile; 33] = [
     Tile { rows: 16, blocks: 2, cols: 1, group_x: 8, method: Method::Direct, split: 1 },
     Tile { rows: 8, blocks: 2, cols: 1, group_x: 8, method: Method::Direct, split: 1 },
     Tile { rows: 4, blocks: 2, cols: 1, group_x: 8, method: Method::Direct, split: 1 },
@@ -154,6 +154,8 @@ pub const TUNE_TILES: [Tile; 31] = [
     Tile { rows: 8, blocks: 1, cols: 2, group_x: 32, method: Method::Direct, split: 1 },
     Tile { rows: 8, blocks: 1, cols: 1, group_x: 64, method: Method::Direct, split: 1 },
     Tile { rows: 16, blocks: 2, cols: 1, group_x: 64, method: Method::Direct, split: 1 },
+    Tile { rows: 4, blocks: 4, cols: 1, group_x: 32, method: Method::Direct, split: 1 },
+    Tile { rows: 8, blocks: 4, cols: 1, group_x: 32, method: Method::Direct, split: 1 },
     Tile { rows: 2, blocks: 1, cols: 2, group_x: 8, method: Method::Winograd, split: 1 },
     Tile { rows: 2, blocks: 1, cols: 2, group_x: 32, method: Method::Winograd, split: 1 },
     Tile { rows: 2, blocks: 2, cols: 2, group_x: 32, method: Method::Winograd, split: 1 },
@@ -332,7 +334,7 @@ impl Denoiser {
         let timestamps = device.features().contains(wgpu::Features::TIMESTAMP_QUERY_INSIDE_PASSES);
         let tiles = match tiles {
             TileChoice::Fixed(t) => vec![t],
-            TileChoice::Auto if device_type == wgpu::DeviceType::Cpu => vec![Tile::default()],
+            TileChoice::Auto if device_type == wgpu::DeviceType::Cpu => vec![Tile::CPU],
             TileChoice::Auto | TileChoice::Tuned if timestamps => tune(device, queue, &mut kernels, &specs, &node_views, &TUNE_TILES)?,
             TileChoice::TunedAmong(candidates) if timestamps && !candidates.is_empty() => tune(device, queue, &mut kernels, &specs, &node_views, candidates)?,
             TileChoice::Auto | TileChoice::Tuned | TileChoice::TunedAmong(_) => vec![Tile::default()],

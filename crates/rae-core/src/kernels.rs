@@ -469,16 +469,15 @@ impl Kernels {
 /// (a 2-column tile fetches 4 input columns for 2 outputs, a 1-column tile 3 for 1). A Winograd
 /// tile (2 columns, 2 or 4 rows) multiplies 16 times per 2x2 outputs and input channel where the
 /// direct one multiplies 36 times, for 16 weights per channel pair instead of 9 and a few
-/// additions. The default (16 x 4 direct, one column: blocks 4 where the conv's weights fit a
-/// chunk, else 2 or 1) is the fastest measured on lavapipe, where every input fetch is a call
-/// into the driver and more output blocks share it (docs/PERF.md); `rae-cli bench --tile`
-/// sweeps others and GPUs tune per conv ([`crate::TileChoice`]).
+/// additions. CPU drivers run [`Tile::CPU`] (16 x 4), the fastest measured on lavapipe, where
+/// every input fetch is a call into the driver and more output blocks share it
+/// (docs/PERF.md); GPUs tune per conv ([`crate::TileChoice`]) and fall back to the default
+/// (16 x 2) where they cannot time candidates; `rae-cli bench --tile` sweeps any of them.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct Tile {
     /// Output rows per invocation: 1, 2, 4, 8 or 16 ([`CONV_ROWS`]).
     pub rows: u32,
-    /// Output blocks per invocation: 1, 2, or 4 with one column (uniform weights only: storage
-    /// weights keep 2).
+    /// Output blocks per invocation: 1, 2, or 4 with one column.
     pub blocks: u32,
     /// Output columns per invocation: 1 or 2.
     pub cols: u32,
@@ -493,11 +492,15 @@ pub struct Tile {
 
 impl Default for Tile {
     fn default() -> Self {
-        Tile { rows: CONV_ROWS, blocks: 4, cols: 1, group_x: WORKGROUP, method: Method::Direct, split: 1 }
+        Tile { rows: CONV_ROWS, blocks: 2, cols: 1, group_x: WORKGROUP, method: Method::Direct, split: 1 }
     }
 }
 
 impl Tile {
+    /// The tile of CPU drivers: 16 rows x 4 blocks (2 or 1 where a conv's weights or outputs
+    /// are fewer), 0.83-0.93x the time of 16 x 2 on lavapipe (docs/PERF.md, session 6).
+    pub const CPU: Tile = Tile { rows: CONV_ROWS, blocks: 4, cols: 1, group_x: WORKGROUP, method: Method::Direct, split: 1 };
+
     /// A one-column tile, if the kernel has one of this shape.
     pub fn new(rows: u32, blocks: u32) -> Option<Self> {
         Self::with_cols(rows, blocks, 1)
@@ -757,7 +760,7 @@ impl ConvPlan {
                         if tile.method == Method::Winograd { "Winograd" } else { "direct" }
                     ),
                 })?,
-                WeightMemory::Storage => 2,
+                WeightMemory::Storage => 4,
             };
             let cout4 = blocks(s.cout);
             // No more blocks than the conv has output blocks to fill: the 3-channel output convs
