@@ -98,8 +98,8 @@ enum Command {
         #[arg(long)]
         peak_gflops: Option<f64>,
         /// Conv register tiles to time: ROWSxBLOCKS[wCOLS][gGROUPX][kSPLIT] (rows 1, 2, 4, 8, 16;
-        /// blocks 1, 2, 4 (4 with one column); columns 1, 2; workgroups 8, 16, 32, 64 wide; input blocks split 1 to 16
-        /// ways) or winoROWSxBLOCKS[gGROUPX]
+        /// blocks 1, 2, 4 (4 with one column); columns 1, 2; workgroups 8, 16, 32, 64 wide;
+        /// input blocks split 1 to 16 ways) or winoROWSxBLOCKS[gGROUPX]
         /// (Winograd F(2x2, 3x3); rows 2, 4) for one tile everywhere, `tuned` (each conv timed
         /// with every candidate on this device while building), or `auto` (tuned on GPUs, 16x4
         /// on CPU drivers: what `denoise` uses).
@@ -215,8 +215,7 @@ fn bench(path: &Path, sizes: &[String], frames: usize, layers: bool, precisions:
         let n = (w * h) as usize;
         let (wave, one) = bench_buffers(w, h);
         let frame = rae_core::FrameInputs { color: &wave, albedo: Some(&wave), normal: Some(&wave), depth: Some(&one), roughness: Some(&one) };
-        let combos = precisions.iter().flat_map(|p| memories.iter().flat_map(move |m| tiles.iter().map(move |t| (*p, *m, *t))));
-        for (p, memory, tiles) in combos {
+        for (p, memory, tiles) in combinations(precisions, memories, tiles) {
             let precision = Precision::from(p);
             let built = Instant::now();
             let mut d = Denoiser::with_options(&gpu.device, &gpu.queue, &weights, w, h, Options { precision, tiles, weights: memory })
@@ -264,6 +263,11 @@ fn bench(path: &Path, sizes: &[String], frames: usize, layers: bool, precisions:
     Ok(())
 }
 
+/// Every precision x weight memory x tile that `bench` times, in its table's order.
+fn combinations<'a>(precisions: &'a [PrecisionArg], memories: &'a [Option<WeightMemory>], tiles: &'a [TileChoice]) -> impl Iterator<Item = (PrecisionArg, Option<WeightMemory>, TileChoice)> + 'a {
+    precisions.iter().flat_map(move |p| memories.iter().flat_map(move |m| tiles.iter().map(move |t| (*p, *m, *t))))
+}
+
 /// Deterministic, smooth-but-noisy host buffers of a `w` x `h` frame (color, then the one-channel
 /// depth and roughness): timing does not depend on values.
 fn bench_buffers(w: u32, h: u32) -> (Vec<f32>, Vec<f32>) {
@@ -291,18 +295,14 @@ fn bench_interleaved(path: &Path, sizes: &[String], rounds: usize, precisions: &
         let mut out = vec![0.0; wave.len()];
         // Build (and warm up) every combination before timing any.
         let mut runs = Vec::new();
-        for &p in precisions {
-            for &memory in memories {
-                for &tiles in tiles {
-                    let precision = Precision::from(p);
-                    let mut d = Denoiser::with_options(&gpu.device, &gpu.queue, &weights, w, h, Options { precision, tiles, weights: memory })
-                        .with_context(|| format!("building the {} denoiser at {s}", precision.name()))?;
-                    for _ in 0..2 {
-                        d.denoise_into(&frame, &mut out)?;
-                    }
-                    runs.push((precision, tiles, d, Vec::with_capacity(rounds)));
-                }
+        for (p, memory, tiles) in combinations(precisions, memories, tiles) {
+            let precision = Precision::from(p);
+            let mut d = Denoiser::with_options(&gpu.device, &gpu.queue, &weights, w, h, Options { precision, tiles, weights: memory })
+                .with_context(|| format!("building the {} denoiser at {s}", precision.name()))?;
+            for _ in 0..2 {
+                d.denoise_into(&frame, &mut out)?;
             }
+            runs.push((precision, tiles, d, Vec::with_capacity(rounds)));
         }
         for _ in 0..rounds {
             for (_, _, d, ms) in runs.iter_mut() {

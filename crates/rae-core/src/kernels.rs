@@ -573,8 +573,9 @@ pub fn rows_per_invocation(height: u32, max_rows: u32) -> u32 {
 
 /// Output blocks per invocation for a conv reading `cin4` input blocks with `taps` weights
 /// per channel pair (9, or 16 for Winograd): the most of 4, 2, 1 whose weights and biases fit
-/// one weight chunk (more outputs per input fetch; 4 up to 28 input blocks direct); `None` when not even one block fits (direct:
-/// more than 113 input blocks, 452 channels; Winograd: more than 63, 252 channels).
+/// one weight chunk (more outputs per input fetch; direct tiles get 4 up to 28 input blocks);
+/// `None` when not even one block fits (direct: more than 113 input blocks, 452 channels;
+/// Winograd: more than 63, 252 channels).
 pub fn blocks_per_invocation(cin4: u32, taps: u32) -> Option<u32> {
     [4, 2, 1].into_iter().find(|&ob| (cin4 * taps * 4 + 1) * ob <= WEIGHT_CHUNK)
 }
