@@ -13,8 +13,9 @@
 //
 // Specialised per layer kind by override constants (read modes, activation, output blocks per
 // invocation); sizes come in the uniform, so one pipeline serves every resolution and width.
-// Entry points: `main` (the direct sum, optionally split-K), `reduce` (split-K's second pass)
-// and `winograd` (Winograd F(2x2, 3x3)); kernels::Method picks.
+// Entry points: `main` (the direct sum, optionally split-K), `lanes` (the same with each weight
+// loaded once per subgroup, for CPU drivers), `reduce` (split-K's second pass) and `winograd`
+// (Winograd F(2x2, 3x3)); kernels::Method picks.
 
 // How a source is read at output pixel (x, y).
 const READ_DIRECT: u32 = 0u;        // src[x, y]
@@ -48,6 +49,12 @@ const CHUNK: u32 = 4096u;
 // thousand outputs deep in 200-channel sums: one long dependent loop per invocation and too
 // few invocations to fill a GPU; SPLIT shortens the loop and multiplies the invocations.
 override SPLIT: u32 = 1u;
+// Weights loaded across the subgroup (entry point `lanes`, subgroups of at least 8 lanes): a
+// tap's 4 x OB vec4s are read 8 at a time, lane k loading the k-th, and handed to every lane by
+// subgroupBroadcast. Every lane needs the same weights, but lavapipe proves a uniform-buffer
+// load lane-uniform only when its offset is a constant or push constant, so `tap` costs one
+// lane-by-lane gather per vec4; here a gather fetches 8 vec4s and each broadcast is a shuffle.
+override LANES: bool = false;
 
 struct Params {
     width: u32,       // output (= convolution) resolution
@@ -74,6 +81,8 @@ struct Params {
 @group(0) @binding(5) var<storage, read_write> partial: array<vec4<f32>>;
 // The part of the input blocks this invocation sums (SPLIT > 1).
 var<private> part: u32;
+// This invocation's lane in its subgroup (LANES).
+var<private> lane: u32;
 
 fn max4(t: texture_2d_array<f32>, p: vec2<i32>, layer: u32) -> vec4<f32> {
     let a = textureLoad(t, p, layer, 0);
@@ -134,9 +143,57 @@ fn mac3(acc: vec4<f32>, m0: mat4x4<f32>, m1: mat4x4<f32>, m2: mat4x4<f32>, a: ve
 
 // Add the 3 taps of column kx, for output block j, to a tile (input column v0..v17).
 fn add_column(acc: ptr<function, Tile>, base: u32, j: u32, v0: vec4<f32>, v1: vec4<f32>, v2: vec4<f32>, v3: vec4<f32>, v4: vec4<f32>, v5: vec4<f32>, v6: vec4<f32>, v7: vec4<f32>, v8: vec4<f32>, v9: vec4<f32>, v10: vec4<f32>, v11: vec4<f32>, v12: vec4<f32>, v13: vec4<f32>, v14: vec4<f32>, v15: vec4<f32>, v16: vec4<f32>, v17: vec4<f32>) {
-    let m0 = tap(base, j);
-    let m1 = tap(base + 12u * OB, j);
-    let m2 = tap(base + 24u * OB, j);
+    add_taps(acc, tap(base, j), tap(base + 12u * OB, j), tap(base + 24u * OB, j), v0, v1, v2, v3, v4, v5, v6, v7, v8, v9, v10, v11, v12, v13, v14, v15, v16, v17);
+}
+
+// The tap matrices of block j from a tap's vec4s spread over the lanes (LANES): vec4 k of the
+// tap, (input lane l, block j) at k = l * OB + j, sits in lane k of `a` (k < 8) or k - 8 of `b`.
+fn lanes_1(a: vec4<f32>) -> mat4x4<f32> {
+    return mat4x4<f32>(subgroupBroadcast(a, 0u), subgroupBroadcast(a, 1u), subgroupBroadcast(a, 2u), subgroupBroadcast(a, 3u));
+}
+fn lanes_2_0(a: vec4<f32>) -> mat4x4<f32> {
+    return mat4x4<f32>(subgroupBroadcast(a, 0u), subgroupBroadcast(a, 2u), subgroupBroadcast(a, 4u), subgroupBroadcast(a, 6u));
+}
+fn lanes_2_1(a: vec4<f32>) -> mat4x4<f32> {
+    return mat4x4<f32>(subgroupBroadcast(a, 1u), subgroupBroadcast(a, 3u), subgroupBroadcast(a, 5u), subgroupBroadcast(a, 7u));
+}
+fn lanes_4_0(a: vec4<f32>, b: vec4<f32>) -> mat4x4<f32> {
+    return mat4x4<f32>(subgroupBroadcast(a, 0u), subgroupBroadcast(a, 4u), subgroupBroadcast(b, 0u), subgroupBroadcast(b, 4u));
+}
+fn lanes_4_1(a: vec4<f32>, b: vec4<f32>) -> mat4x4<f32> {
+    return mat4x4<f32>(subgroupBroadcast(a, 1u), subgroupBroadcast(a, 5u), subgroupBroadcast(b, 1u), subgroupBroadcast(b, 5u));
+}
+fn lanes_4_2(a: vec4<f32>, b: vec4<f32>) -> mat4x4<f32> {
+    return mat4x4<f32>(subgroupBroadcast(a, 2u), subgroupBroadcast(a, 6u), subgroupBroadcast(b, 2u), subgroupBroadcast(b, 6u));
+}
+fn lanes_4_3(a: vec4<f32>, b: vec4<f32>) -> mat4x4<f32> {
+    return mat4x4<f32>(subgroupBroadcast(a, 3u), subgroupBroadcast(a, 7u), subgroupBroadcast(b, 3u), subgroupBroadcast(b, 7u));
+}
+
+// add_column for every block of the tile (one column, TW = 1), weights read across the lanes.
+fn add_column_lanes(acc0: ptr<function, Tile>, acc1: ptr<function, Tile>, acc2: ptr<function, Tile>, acc3: ptr<function, Tile>, base: u32, v0: vec4<f32>, v1: vec4<f32>, v2: vec4<f32>, v3: vec4<f32>, v4: vec4<f32>, v5: vec4<f32>, v6: vec4<f32>, v7: vec4<f32>, v8: vec4<f32>, v9: vec4<f32>, v10: vec4<f32>, v11: vec4<f32>, v12: vec4<f32>, v13: vec4<f32>, v14: vec4<f32>, v15: vec4<f32>, v16: vec4<f32>, v17: vec4<f32>) {
+    // Tap ky's 4 x OB vec4s start at base + ky * 12 * OB; lanes past them load unused vec4s.
+    let a0 = weights[base + lane];
+    let a1 = weights[base + 12u * OB + lane];
+    let a2 = weights[base + 24u * OB + lane];
+    if OB == 1u {
+        add_taps(acc0, lanes_1(a0), lanes_1(a1), lanes_1(a2), v0, v1, v2, v3, v4, v5, v6, v7, v8, v9, v10, v11, v12, v13, v14, v15, v16, v17);
+    } else if OB == 2u {
+        add_taps(acc0, lanes_2_0(a0), lanes_2_0(a1), lanes_2_0(a2), v0, v1, v2, v3, v4, v5, v6, v7, v8, v9, v10, v11, v12, v13, v14, v15, v16, v17);
+        add_taps(acc1, lanes_2_1(a0), lanes_2_1(a1), lanes_2_1(a2), v0, v1, v2, v3, v4, v5, v6, v7, v8, v9, v10, v11, v12, v13, v14, v15, v16, v17);
+    } else {
+        let b0 = weights[base + 8u + lane];
+        let b1 = weights[base + 12u * OB + 8u + lane];
+        let b2 = weights[base + 24u * OB + 8u + lane];
+        add_taps(acc0, lanes_4_0(a0, b0), lanes_4_0(a1, b1), lanes_4_0(a2, b2), v0, v1, v2, v3, v4, v5, v6, v7, v8, v9, v10, v11, v12, v13, v14, v15, v16, v17);
+        add_taps(acc1, lanes_4_1(a0, b0), lanes_4_1(a1, b1), lanes_4_1(a2, b2), v0, v1, v2, v3, v4, v5, v6, v7, v8, v9, v10, v11, v12, v13, v14, v15, v16, v17);
+        add_taps(acc2, lanes_4_2(a0, b0), lanes_4_2(a1, b1), lanes_4_2(a2, b2), v0, v1, v2, v3, v4, v5, v6, v7, v8, v9, v10, v11, v12, v13, v14, v15, v16, v17);
+        add_taps(acc3, lanes_4_3(a0, b0), lanes_4_3(a1, b1), lanes_4_3(a2, b2), v0, v1, v2, v3, v4, v5, v6, v7, v8, v9, v10, v11, v12, v13, v14, v15, v16, v17);
+    }
+}
+
+// Add the taps m0, m1, m2 (ky = 0, 1, 2) of one column and block to a tile.
+fn add_taps(acc: ptr<function, Tile>, m0: mat4x4<f32>, m1: mat4x4<f32>, m2: mat4x4<f32>, v0: vec4<f32>, v1: vec4<f32>, v2: vec4<f32>, v3: vec4<f32>, v4: vec4<f32>, v5: vec4<f32>, v6: vec4<f32>, v7: vec4<f32>, v8: vec4<f32>, v9: vec4<f32>, v10: vec4<f32>, v11: vec4<f32>, v12: vec4<f32>, v13: vec4<f32>, v14: vec4<f32>, v15: vec4<f32>, v16: vec4<f32>, v17: vec4<f32>) {
     (*acc).r0 = mac3((*acc).r0, m0, m1, m2, v0, v1, v2);
     if ROWS > 1u { (*acc).r1 = mac3((*acc).r1, m0, m1, m2, v1, v2, v3); }
     if ROWS > 2u { (*acc).r2 = mac3((*acc).r2, m0, m1, m2, v2, v3, v4); }
@@ -201,13 +258,17 @@ fn accumulate(acc0: ptr<function, Tile>, acc1: ptr<function, Tile>, acc2: ptr<fu
         // Tap (ky, kx) starts at w + ((cb * 9 + ky * 3 + kx) * 4) * OB.
         if ic < 3u {
             let base = w + (cb * 36u + ic * 4u) * OB;
-            add_column(acc0, base, 0u, v0, v1, v2, v3, v4, v5, v6, v7, v8, v9, v10, v11, v12, v13, v14, v15, v16, v17);
-            if OB > 1u {
-                add_column(acc1, base, 1u, v0, v1, v2, v3, v4, v5, v6, v7, v8, v9, v10, v11, v12, v13, v14, v15, v16, v17);
-            }
-            if OB > 2u {
-                add_column(acc2, base, 2u, v0, v1, v2, v3, v4, v5, v6, v7, v8, v9, v10, v11, v12, v13, v14, v15, v16, v17);
-                add_column(acc3, base, 3u, v0, v1, v2, v3, v4, v5, v6, v7, v8, v9, v10, v11, v12, v13, v14, v15, v16, v17);
+            if LANES {
+                add_column_lanes(acc0, acc1, acc2, acc3, base, v0, v1, v2, v3, v4, v5, v6, v7, v8, v9, v10, v11, v12, v13, v14, v15, v16, v17);
+            } else {
+                add_column(acc0, base, 0u, v0, v1, v2, v3, v4, v5, v6, v7, v8, v9, v10, v11, v12, v13, v14, v15, v16, v17);
+                if OB > 1u {
+                    add_column(acc1, base, 1u, v0, v1, v2, v3, v4, v5, v6, v7, v8, v9, v10, v11, v12, v13, v14, v15, v16, v17);
+                }
+                if OB > 2u {
+                    add_column(acc2, base, 2u, v0, v1, v2, v3, v4, v5, v6, v7, v8, v9, v10, v11, v12, v13, v14, v15, v16, v17);
+                    add_column(acc3, base, 3u, v0, v1, v2, v3, v4, v5, v6, v7, v8, v9, v10, v11, v12, v13, v14, v15, v16, v17);
+                }
             }
         }
         if TW > 1u && ic > 0u {
@@ -265,6 +326,29 @@ override WG_Y: u32 = 8u;
 
 @compute @workgroup_size(WG_X, WG_Y, 1)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    conv(gid);
+}
+
+// `main` with LANES, in one-dimensional workgroups of WG_X x WG_Y invocations (subgroup
+// builtins need them) laid out as main's.
+@compute @workgroup_size(64, 1, 1)
+fn lanes(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) l: vec3<u32>, @builtin(subgroup_invocation_id) sg: u32) {
+    lane = sg;
+    conv(vec3<u32>(wg.x * WG_X + l.x % WG_X, wg.y * WG_Y + l.x / WG_X, wg.z));
+}
+
+// What subgroupBroadcast becomes on devices without subgroups (kernels::WITHOUT_SUBGROUPS,
+// which also drops the subgroup builtin): there `lanes` is never used.
+fn no_subgroups(v: vec4<f32>, id: u32) -> vec4<f32> {
+    return v;
+}
+
+// What subgroupAny becomes there.
+fn no_subgroups_any(e: bool) -> bool {
+    return e;
+}
+
+fn conv(gid: vec3<u32>) {
     let x = gid.x * TW;
     let y0 = gid.y * ROWS;
     // This workgroup's group: its first output block and its weights (uniform over the group),
@@ -273,7 +357,18 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     part = gid.z % SPLIT;
     let ob0 = params.ob0 + group * OB;
     let w = group * params.group_stride;
-    if x >= params.width || y0 >= params.height || ob0 >= params.cout4 {
+    if ob0 >= params.cout4 {
+        return;
+    }
+    // Invocations past the edge return, except with LANES where the subgroup has lanes inside:
+    // a broadcast from an inactive lane is undefined, so they load weights for the others and
+    // store nothing.
+    let inside = x < params.width && y0 < params.height;
+    if LANES {
+        if !subgroupAny(inside) {
+            return;
+        }
+    } else if !inside {
         return;
     }
     let bias_at = w + params.cin4_total * 36u * OB;
@@ -308,6 +403,9 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     for (var c = max(k0, params.cin4_a); c < k1; c++) {
         accumulate(&acc0, &acc1, &acc2, &acc3, src_b, MODE_B, c - params.cin4_a, c, w, xi, yi);
+    }
+    if !inside {
+        return;
     }
     let second = OB > 1u && ob0 + 1u < params.cout4;
     store(acc0, x, y0, ob0);

@@ -106,8 +106,10 @@ fn gpu_conv(a: (&Chw, Read), b: Option<(&Chw, Read)>, weight: &[f32], bias: &[f3
     o
 }
 
+/// A conv with the CPU drivers' tile ([`Tile::cpu`]: weights across lanes on lavapipe), the
+/// goldens' tile, so the pipelines are shared.
 fn check_conv(a: (Chw, Read), b: Option<(Chw, Read)>, cout: usize, leaky: bool, w: usize, h: usize, seed: u64) {
-    check_conv_tile(a, b, cout, leaky, w, h, seed, Tile::CPU, WeightMemory::Uniform);
+    check_conv_tile(a, b, cout, leaky, w, h, seed, Tile::cpu(&gpu().device), WeightMemory::Uniform);
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -196,9 +198,8 @@ fn conv_every_tile_shape_matches_cpu() {
         check_conv_tile((tensor(6, 38, 26, seed), Read::Pool), Some((tensor(5, 19, 13, seed + 1), Read::Direct)), 11, true, 13, 19, seed + 2, tile, WeightMemory::Uniform);
     }
     // Four blocks per invocation, on a conv of 6 output blocks (a partial second group) and on
-    // one of 3 (one group, its fourth block computed and dropped); 16 x 4 is also every
-    // check_conv's tile.
-    for (i, (rows, cout)) in [(4, 22), (8, 11)].into_iter().enumerate() {
+    // one of 3 (one group, its fourth block computed and dropped).
+    for (i, (rows, cout)) in [(4, 22), (16, 11)].into_iter().enumerate() {
         let tile = Tile::new(rows, 4).expect("a 4-block tile");
         let seed = 120 + 3 * i as u64;
         check_conv_tile((tensor(6, 38, 26, seed), Read::Pool), Some((tensor(5, 19, 13, seed + 1), Read::Direct)), cout, true, 13, 19, seed + 2, tile, WeightMemory::Uniform);
@@ -208,6 +209,36 @@ fn conv_every_tile_shape_matches_cpu() {
     assert_eq!(Tile::with_cols(16, 4, 2), None, "4 blocks take the second column's accumulators");
     assert_eq!(Tile::with_cols(8, 1, 3), None);
     assert_eq!(Tile::default().with_group(128), None);
+}
+
+#[test]
+fn conv_lanes_tiles_match_cpu() {
+    // Weights loaded across the subgroup: 1, 2 and 4 blocks per invocation (one, two or three
+    // loads per tap), split-K, both weight memories and a wider workgroup, on levels 13 and 22
+    // wide (subgroups with lanes past the right edge, which load for the others) and 19 and 12
+    // high; every check_conv case runs 16 x 4 with lanes too where the device has them.
+    let g = gpu();
+    let lanes = |rows, blocks| Tile::new(rows, blocks).and_then(Tile::with_lanes).expect("a lanes tile");
+    let cases = [(lanes(16, 1), WeightMemory::Uniform), (lanes(8, 2).with_group(32).unwrap(), WeightMemory::Storage), (lanes(4, 4).with_split(2).unwrap(), WeightMemory::Uniform)];
+    if !kernels::lanes_supported(&g.device) {
+        // Refused, with the reason, where the device has no subgroups of 8 lanes.
+        let mut k = Kernels::new(&g.device, kernels::Precision::F32, WeightMemory::Uniform);
+        let (weight, bias) = (vec![0.0; 4 * 4 * 9], vec![0.0; 4]);
+        let err = ConvPlan::new(&g.device, &mut k, &[one_source_spec("c", 16, 16, 4, &weight, &bias)], &[cases[0].0]).err().expect("refused");
+        assert!(err.to_string().contains("subgroups of at least 8 lanes"), "{err}");
+        return;
+    }
+    for (i, (tile, memory)) in cases.into_iter().enumerate() {
+        let seed = 700 + 3 * i as u64;
+        if i % 2 == 0 {
+            check_conv_tile((tensor(6, 38, 26, seed), Read::Pool), Some((tensor(5, 19, 13, seed + 1), Read::Direct)), 11, true, 13, 19, seed + 2, tile, memory);
+        } else {
+            check_conv_tile((tensor(6, 6, 11, seed), Read::Upsample), Some((tensor(5, 12, 22, seed + 1), Read::PoolUpsample)), 11, false, 22, 12, seed + 2, tile, memory);
+        }
+    }
+    assert_eq!(lanes(16, 4).to_string(), "lanes16x4");
+    assert_eq!(Tile::with_cols(8, 2, 2).unwrap().with_lanes(), None, "one column only");
+    assert_eq!(Tile::winograd(2, 1).unwrap().with_lanes(), None);
 }
 
 #[test]

@@ -99,10 +99,12 @@ enum Command {
         peak_gflops: Option<f64>,
         /// Conv register tiles to time: ROWSxBLOCKS[wCOLS][gGROUPX][kSPLIT] (rows 1, 2, 4, 8, 16;
         /// blocks 1, 2, 4 (4 with one column); columns 1, 2; workgroups 8, 16, 32, 64 wide;
-        /// input blocks split 1 to 16 ways) or winoROWSxBLOCKS[gGROUPX]
-        /// (Winograd F(2x2, 3x3); rows 2, 4) for one tile everywhere, `tuned` (each conv timed
-        /// with every candidate on this device while building), or `auto` (tuned on GPUs, 16x4
-        /// on CPU drivers: what `denoise` uses).
+        /// input blocks split 1 to 16 ways), the same prefixed `lanes` (one column; weights
+        /// loaded across the subgroup, devices with subgroups of 8 or more lanes) or
+        /// winoROWSxBLOCKS[gGROUPX] (Winograd F(2x2, 3x3); rows 2, 4) for one tile everywhere,
+        /// `tuned` (each conv timed with every candidate on this device while building), or
+        /// `auto` (tuned on GPUs; on CPU drivers lanes16x4, or 16x4 without subgroups: what
+        /// `denoise` uses).
         #[arg(long, value_delimiter = ',', default_value = "auto")]
         tile: Vec<String>,
         /// Where the convs read weights: `uniform` (64 KiB chunks), `storage` (one buffer, a
@@ -142,8 +144,9 @@ fn parse_tile(s: &str) -> Result<TileChoice> {
         "tuned" => return Ok(TileChoice::Tuned),
         _ => {}
     }
-    let bad = || format!("tile `{s}` is not [wino]ROWSxBLOCKS[wCOLS][gGROUPX][kSPLIT], tuned or auto");
+    let bad = || format!("tile `{s}` is not [wino|lanes]ROWSxBLOCKS[wCOLS][gGROUPX][kSPLIT], tuned or auto");
     let (winograd, s2) = s.strip_prefix("wino").map_or((false, s), |r| (true, r));
+    let (lanes, s2) = s2.strip_prefix("lanes").map_or((false, s2), |r| (true, r));
     let (s2, split) = s2.split_once('k').map_or((s2, "1"), |(a, k)| (a, k));
     let split: u32 = split.parse().with_context(bad)?;
     let (rest, group) = s2.split_once('g').map_or((s2, "8"), |(a, g)| (a, g));
@@ -159,10 +162,11 @@ fn parse_tile(s: &str) -> Result<TileChoice> {
             .with_context(|| format!("tile `{s}`: Winograd tiles have 2 or 4 rows, 1 or 2 blocks and workgroups 8, 16, 32 or 64 wide"));
     }
     Tile::with_cols(r, b, c)
+        .and_then(|t| if lanes { t.with_lanes() } else { Some(t) })
         .and_then(|t| t.with_group(group))
         .and_then(|t| t.with_split(split))
         .map(TileChoice::Fixed)
-        .with_context(|| format!("tile `{s}`: the kernel has 1, 2, 4, 8 or 16 rows, 1, 2 or 4 blocks (4 with one column), 1 or 2 columns, workgroups 8, 16, 32 or 64 wide and splits of 1 to 16"))
+        .with_context(|| format!("tile `{s}`: the kernel has 1, 2, 4, 8 or 16 rows, 1, 2 or 4 blocks (4 with one column), 1 or 2 columns (lanes tiles one), workgroups 8, 16, 32 or 64 wide and splits of 1 to 16"))
 }
 
 fn parse_memory(s: &str) -> Result<Option<WeightMemory>> {

@@ -115,9 +115,9 @@ struct Profiler {
 /// How a [`Denoiser`] picks the conv kernel's register tile.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub enum TileChoice {
-    /// [`TileChoice::Tuned`] on GPUs that have timestamps inside passes, [`Tile::CPU`] on CPU
-    /// drivers (lavapipe compiles each variant for seconds, and 16 x 4 is its fastest
-    /// everywhere), the default tile elsewhere.
+    /// [`TileChoice::Tuned`] on GPUs that have timestamps inside passes, [`Tile::cpu`] on CPU
+    /// drivers (lavapipe compiles each variant for seconds, and 16 x 4 with weights across the
+    /// subgroup is its fastest everywhere), the default tile elsewhere.
     #[default]
     Auto,
     /// One tile for every conv (smaller where a level or a conv is smaller).
@@ -334,7 +334,7 @@ impl Denoiser {
         let timestamps = device.features().contains(wgpu::Features::TIMESTAMP_QUERY_INSIDE_PASSES);
         let tiles = match tiles {
             TileChoice::Fixed(t) => vec![t],
-            TileChoice::Auto if device_type == wgpu::DeviceType::Cpu => vec![Tile::CPU],
+            TileChoice::Auto if device_type == wgpu::DeviceType::Cpu => vec![Tile::cpu(device)],
             TileChoice::Auto | TileChoice::Tuned if timestamps => tune(device, queue, &mut kernels, &specs, &node_views, &TUNE_TILES)?,
             TileChoice::TunedAmong(candidates) if timestamps && !candidates.is_empty() => tune(device, queue, &mut kernels, &specs, &node_views, candidates)?,
             TileChoice::Auto | TileChoice::Tuned | TileChoice::TunedAmong(_) => vec![Tile::default()],

@@ -154,6 +154,14 @@ pub enum Error {
     /// The GPU failed while running or reading back a frame.
     #[error("GPU: {0}")]
     Gpu(String),
+    /// A conv tile this device cannot run.
+    #[error("tile {tile}: {reason}")]
+    UnsupportedTile {
+        /// The tile as written (`lanes16x4`).
+        tile: String,
+        /// What the device lacks.
+        reason: String,
+    },
 }
 
 /// Result with rae-core's [`Error`].

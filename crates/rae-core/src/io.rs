@@ -162,7 +162,14 @@ fn extension(path: &Path) -> Option<String> {
     path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase())
 }
 
-fn exr_size_and_groups(path: &Path) -> Result<((u32, u32), Vec<(String, Vec<String>)>)> {
+/// An EXR file's channel groups (a layer or name prefix such as `albedo`), each with its
+/// channel names.
+type ChannelGroups = Vec<(String, Vec<String>)>;
+
+/// An EXR file's pixels by channel group: each group's channels by name, with their values.
+type GroupPixels = BTreeMap<String, Vec<(String, Vec<f32>)>>;
+
+fn exr_size_and_groups(path: &Path) -> Result<((u32, u32), ChannelGroups)> {
     let meta = exr::meta::MetaData::read_from_file(path, false)
         .map_err(|e| input_err(path, format!("not a readable EXR file: {e}")))?;
     let mut groups: BTreeMap<String, Vec<String>> = BTreeMap::new();
@@ -410,9 +417,9 @@ fn pick_channels(path: &Path, slot: Slot, chans: &[(String, Vec<f32>)], n: usize
     Ok(out)
 }
 
-fn read_exr_groups(path: &Path) -> Result<BTreeMap<String, Vec<(String, Vec<f32>)>>> {
+fn read_exr_groups(path: &Path) -> Result<GroupPixels> {
     let image = exr::prelude::read_all_flat_layers_from_file(path).map_err(|e| input_err(path, format!("cannot read EXR: {e}")))?;
-    let mut groups: BTreeMap<String, Vec<(String, Vec<f32>)>> = BTreeMap::new();
+    let mut groups = GroupPixels::new();
     for layer in &image.layer_data {
         let lname = layer.attributes.layer_name.as_ref().map(|t| t.to_string());
         for c in &layer.channel_data.list {

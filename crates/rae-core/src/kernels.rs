@@ -104,6 +104,22 @@ pub const UNIFORM_WEIGHTS: &str = "var<uniform> weights: array<vec4<f32>, CHUNK>
 /// What [`UNIFORM_WEIGHTS`] becomes for [`WeightMemory::Storage`].
 pub const STORAGE_WEIGHTS: &str = "var<storage, read> weights: array<vec4<f32>>;";
 
+/// The rewrites of conv3x3.wgsl for devices without [`wgpu::Features::SUBGROUP`] (naga refuses
+/// subgroup operations anywhere in a module there): its subgroup operations become plain
+/// functions and the `lanes` entry point's subgroup builtin another builtin. [`Method::Lanes`]
+/// never runs on such a device ([`lanes_supported`]).
+pub const WITHOUT_SUBGROUPS: [(&str, &str); 3] = [
+    ("subgroupBroadcast(", "no_subgroups("),
+    ("subgroupAny(", "no_subgroups_any("),
+    ("@builtin(subgroup_invocation_id)", "@builtin(local_invocation_index)"),
+];
+
+/// Whether a device runs [`Method::Lanes`]: it has subgroups, and of at least 8 lanes (a tap's
+/// weights are spread over lanes 0 to 7).
+pub fn lanes_supported(device: &wgpu::Device) -> bool {
+    device.features().contains(wgpu::Features::SUBGROUP) && device.adapter_info().subgroup_min_size >= 8
+}
+
 /// Texture format of activations at f32 (weights-independent tests upload in it).
 pub const ACTIVATION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 
@@ -281,13 +297,17 @@ pub enum Method {
     Direct,
     /// `winograd`: Winograd F(2x2, 3x3), 16 multiplies per 2x2 outputs and channel pair for 36.
     Winograd,
+    /// `lanes`: the direct sum with each weight vec4 loaded by one lane of the subgroup and
+    /// broadcast to the others (one-column tiles; subgroups of at least 8 lanes,
+    /// [`lanes_supported`]). On lavapipe a weight load is otherwise a lane-by-lane gather.
+    Lanes,
 }
 
 impl Method {
     /// Weights per input-output channel pair: 9 taps, or 16 transformed ones for Winograd.
     pub fn taps(self) -> u32 {
         match self {
-            Method::Direct => 9,
+            Method::Direct | Method::Lanes => 9,
             Method::Winograd => 16,
         }
     }
@@ -297,6 +317,7 @@ impl Method {
         match self {
             Method::Direct => "main",
             Method::Winograd => "winograd",
+            Method::Lanes => "lanes",
         }
     }
 }
@@ -338,6 +359,12 @@ impl Kernels {
             let mut src = shader_source(name).to_string();
             if precision == Precision::F16 {
                 src = src.replace("rgba32float", "rgba16float");
+            }
+            if !device.features().contains(wgpu::Features::SUBGROUP) && name == "conv3x3" {
+                for (from, to) in WITHOUT_SUBGROUPS {
+                    assert!(src.contains(from), "conv3x3.wgsl has {from}");
+                    src = src.replace(from, to);
+                }
             }
             if memory == WeightMemory::Storage && name == "conv3x3" {
                 assert!(src.contains(UNIFORM_WEIGHTS), "conv3x3.wgsl declares its weights as kernels::UNIFORM_WEIGHTS");
@@ -442,6 +469,7 @@ impl Kernels {
                     ("WG_X", v.group_x as f64),
                     ("WG_Y", (64 / v.group_x) as f64),
                     ("SPLIT", v.split as f64),
+                    ("LANES", if v.method == Method::Lanes { 1.0 } else { 0.0 }),
                     ("STORE_MAX", precision.store_max() as f64),
                 ];
                 device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
@@ -469,9 +497,9 @@ impl Kernels {
 /// (a 2-column tile fetches 4 input columns for 2 outputs, a 1-column tile 3 for 1). A Winograd
 /// tile (2 columns, 2 or 4 rows) multiplies 16 times per 2x2 outputs and input channel where the
 /// direct one multiplies 36 times, for 16 weights per channel pair instead of 9 and a few
-/// additions. CPU drivers run [`Tile::CPU`] (16 x 4), the fastest measured on lavapipe, where
-/// every input fetch is a call into the driver and more output blocks share it
-/// (docs/PERF.md); GPUs tune per conv ([`crate::TileChoice`]) and fall back to the default
+/// additions. CPU drivers run [`Tile::cpu`] (16 x 4, weights loaded across the subgroup), the
+/// fastest measured on lavapipe, where every input fetch is a call into the driver and more
+/// output blocks share it (docs/PERF.md); GPUs tune per conv ([`crate::TileChoice`]) and fall back to the default
 /// (16 x 2) where they cannot time candidates; `rae-cli bench --tile` sweeps any of them.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct Tile {
@@ -497,9 +525,16 @@ impl Default for Tile {
 }
 
 impl Tile {
-    /// The tile of CPU drivers: 16 rows x 4 blocks (2 or 1 where a conv's weights or outputs
-    /// are fewer), 0.83-0.93x the time of 16 x 2 on lavapipe (docs/PERF.md, session 6).
+    /// The tile of CPU drivers without subgroups: 16 rows x 4 blocks (2 or 1 where a conv's
+    /// weights or outputs are fewer), 0.83-0.93x the time of 16 x 2 on lavapipe (docs/PERF.md,
+    /// session 6); [`Tile::cpu`] adds weights across lanes where the device has them.
     pub const CPU: Tile = Tile { rows: CONV_ROWS, blocks: 4, cols: 1, group_x: WORKGROUP, method: Method::Direct, split: 1 };
+
+    /// The tile of CPU drivers on `device`: [`Tile::CPU`], with its weights loaded across the
+    /// subgroup where the device can ([`lanes_supported`]).
+    pub fn cpu(device: &wgpu::Device) -> Tile {
+        if lanes_supported(device) { Tile::CPU.with_lanes().expect("a one-column direct tile") } else { Tile::CPU }
+    }
 
     /// A one-column tile, if the kernel has one of this shape.
     pub fn new(rows: u32, blocks: u32) -> Option<Self> {
@@ -518,6 +553,12 @@ impl Tile {
         ([2, 4].contains(&rows) && (1..=2).contains(&blocks)).then_some(Tile { rows, blocks, cols: 2, group_x: WORKGROUP, method: Method::Winograd, split: 1 })
     }
 
+    /// This one-column direct tile with its weights loaded across the subgroup
+    /// ([`Method::Lanes`]), if it is one.
+    pub fn with_lanes(self) -> Option<Self> {
+        (self.method == Method::Direct && self.cols == 1).then_some(Tile { method: Method::Lanes, ..self })
+    }
+
     /// Weights per input-output channel pair ([`Method::taps`]).
     pub fn taps(&self) -> u32 {
         self.method.taps()
@@ -531,7 +572,7 @@ impl Tile {
     /// This direct tile with its input blocks split `split` ways (1 to 16; 1: no split), if it
     /// is direct.
     pub fn with_split(self, split: u32) -> Option<Self> {
-        (self.method == Method::Direct && (1..=16).contains(&split)).then_some(Tile { split, ..self })
+        (self.method != Method::Winograd && (1..=16).contains(&split)).then_some(Tile { split, ..self })
     }
 
     /// Workgroup height in invocations.
@@ -548,6 +589,7 @@ impl std::fmt::Display for Tile {
         match self.method {
             Method::Direct => {}
             Method::Winograd => write!(f, "wino")?,
+            Method::Lanes => write!(f, "lanes")?,
         }
         write!(f, "{}x{}", self.rows, self.blocks)?;
         if self.cols > 1 && self.method != Method::Winograd {
@@ -730,6 +772,13 @@ impl ConvPlan {
     pub fn new(device: &wgpu::Device, kernels: &mut Kernels, specs: &[ConvSpec], tiles: &[Tile]) -> crate::Result<Self> {
         use wgpu::util::DeviceExt;
         assert!(tiles.len() == 1 || tiles.len() == specs.len(), "one tile, or one per conv");
+        if let Some(t) = tiles.iter().find(|t| t.method == Method::Lanes && !lanes_supported(device)) {
+            let info = device.adapter_info();
+            return Err(crate::Error::UnsupportedTile {
+                tile: t.to_string(),
+                reason: format!("weights across lanes need subgroups of at least 8 lanes; {} has {}", info.name, if device.features().contains(wgpu::Features::SUBGROUP) { format!("{} to {}", info.subgroup_min_size, info.subgroup_max_size) } else { "none".to_string() }),
+            });
+        }
         let memory = kernels.memory;
         let limits = device.limits();
         let align = match memory {
@@ -776,7 +825,7 @@ impl ConvPlan {
             // Split (direct tiles only) no further than one input block per part, nor beyond the
             // partial-sum budget.
             let part_bytes = cout4 as u64 * s.width as u64 * s.height as u64 * 16;
-            let split = if tile.method == Method::Direct { tile.split.min(cin4).min((partial_budget / part_bytes) as u32).max(1) } else { 1 };
+            let split = if tile.method != Method::Winograd { tile.split.min(cin4).min((partial_budget / part_bytes) as u32).max(1) } else { 1 };
             let used_tile = Tile { rows, blocks: ob, cols, group_x: tile.group_x, method: tile.method, split };
             let variant = ConvVariant { read_a: s.read_a, read_b: s.read_b, leaky: s.leaky, ob, rows, cols, group_x: tile.group_x, method: tile.method, split, reduce: false };
             // Split-K's partial sums: one buffer for the largest split conv, which every split
