@@ -35,7 +35,7 @@ fn rank(info: &wgpu::AdapterInfo) -> (u8, u8) {
 impl Gpu {
     /// Open the adapter named by `WGPU_ADAPTER_NAME` (a case-insensitive substring, e.g.
     /// `llvmpipe` for lavapipe) or else the best one, with the optional features rae uses
-    /// (SHADER_F16, TIMESTAMP_QUERY) enabled where the adapter has them.
+    /// (SHADER_F16, TIMESTAMP_QUERY, SUBGROUP) enabled where the adapter has them.
     pub fn new() -> Result<Self> {
         let wanted = std::env::var("WGPU_ADAPTER_NAME").ok().filter(|s| !s.is_empty());
         let all = adapters();
