@@ -236,6 +236,11 @@ fn conv_lanes_tiles_match_cpu() {
             check_conv_tile((tensor(6, 6, 11, seed), Read::Upsample), Some((tensor(5, 12, 22, seed + 1), Read::PoolUpsample)), 11, false, 22, 12, seed + 2, tile, memory);
         }
     }
+    // The same products summed in the same order as the direct tile: bit-identical.
+    let (a, b) = (tensor(6, 38, 26, 710), tensor(5, 19, 13, 711));
+    let (weight, bias) = (noise(11 * 11 * 9, 712), noise(11, 713));
+    let run = |tile| gpu_conv((&a, Read::Pool), Some((&b, Read::Direct)), &weight, &bias, true, 13, 19, tile, WeightMemory::Uniform).data;
+    assert_eq!(run(lanes(16, 1)), run(Tile::new(16, 1).unwrap()), "lanes16x1 against 16x1");
     assert_eq!(lanes(16, 4).to_string(), "lanes16x4");
     assert_eq!(Tile::with_cols(8, 2, 2).unwrap().with_lanes(), None, "one column only");
     assert_eq!(Tile::winograd(2, 1).unwrap().with_lanes(), None);
