@@ -7,6 +7,7 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand};
+use rae_core::frame::parse_size;
 use rae_core::golden::{Golden, Tolerance};
 use rae_core::graph::Graph;
 use rae_core::{Denoiser, Gpu, GpuFrameIo, Options, Precision, Tile, TileChoice, WeightMemory, Weights};
@@ -187,10 +188,6 @@ fn tile_name(t: TileChoice) -> String {
     }
 }
 
-fn parse_size(s: &str) -> Result<(u32, u32)> {
-    let (w, h) = s.split_once('x').with_context(|| format!("size `{s}` is not WxH"))?;
-    Ok((w.parse().with_context(|| format!("width in `{s}`"))?, h.parse().with_context(|| format!("height in `{s}`"))?))
-}
 
 fn median(v: &mut [f64]) -> f64 {
     v.sort_by(f64::total_cmp);

@@ -154,6 +154,14 @@ pub enum Error {
     /// The GPU failed while running or reading back a frame.
     #[error("GPU: {0}")]
     Gpu(String),
+    /// A frame size on a command line that is not `WxH` with both positive.
+    #[error("size `{text}`: {reason}")]
+    SizeText {
+        /// The text as given.
+        text: String,
+        /// What is wrong with it.
+        reason: &'static str,
+    },
     /// A conv tile this device cannot run.
     #[error("tile {tile}: {reason}")]
     UnsupportedTile {

@@ -22,6 +22,19 @@
 use crate::error::{Error, Result};
 use crate::model::InputBuffer;
 
+/// A frame size written `WxH` (`1920x1080`), as the command lines (rae-cli, rae-trace) take
+/// it: both whole numbers, both positive.
+pub fn parse_size(text: &str) -> Result<(u32, u32)> {
+    let bad = |reason| Error::SizeText { text: text.to_string(), reason };
+    let (w, h) = text.split_once('x').ok_or_else(|| bad("not WxH"))?;
+    let w: u32 = w.parse().map_err(|_| bad("the width is not a whole number"))?;
+    let h: u32 = h.parse().map_err(|_| bad("the height is not a whole number"))?;
+    if w == 0 || h == 0 {
+        return Err(bad("empty"));
+    }
+    Ok((w, h))
+}
+
 /// One frame's buffers on the host. `color` is required; the others are used when the model
 /// declares them (see [`crate::Arch::required_buffers`]).
 #[derive(Debug, Clone, Copy, Default)]
@@ -82,4 +95,18 @@ pub struct FrameTimings {
     pub gpu: std::time::Duration,
     /// Mapping and copying the output back.
     pub download: std::time::Duration,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::parse_size;
+
+    #[test]
+    fn sizes_parse_and_bad_ones_say_why() {
+        assert_eq!(parse_size("1920x1080").unwrap(), (1920, 1080));
+        for (text, why) in [("1920", "not WxH"), ("x5", "width"), ("5x-1", "height"), ("0x8", "empty"), ("8x0", "empty")] {
+            let err = parse_size(text).unwrap_err().to_string();
+            assert!(err.contains(&format!("`{text}`")) && err.contains(why), "{text}: {err}");
+        }
+    }
 }

@@ -6,6 +6,7 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
+use rae_core::frame::parse_size;
 use rae_trace::{Scene, Settings, output, render_frame, scenes};
 
 #[derive(Parser)]
@@ -88,14 +89,6 @@ enum Command {
     },
 }
 
-fn parse_size(s: &str) -> Result<(u32, u32)> {
-    let (w, h) = s.split_once('x').with_context(|| format!("size `{s}` is not WxH"))?;
-    let (w, h): (u32, u32) = (w.parse().with_context(|| format!("width in `{s}`"))?, h.parse().with_context(|| format!("height in `{s}`"))?);
-    if w == 0 || h == 0 {
-        bail!("size `{s}` is empty");
-    }
-    Ok((w, h))
-}
 
 fn progress(frames: u32) -> ProgressBar {
     let bar = ProgressBar::new(frames as u64);

@@ -176,7 +176,10 @@ pub fn random(seed: u64) -> Scene {
             b.sphere(v(x, rad, z), rad, m);
         } else {
             let half = v(r.random_range(0.15..0.7), r.random_range(0.15..1.0), r.random_range(0.15..0.7));
-            b.prims.extend(cuboid(v(x, half.y, z), half, r.random_range(0.0..3.14), m));
+            // A yaw in [0, 3.14): not PI, which would change every generated scene after it.
+            #[allow(clippy::approx_constant)]
+            let yaw = r.random_range(0.0..3.14);
+            b.prims.extend(cuboid(v(x, half.y, z), half, yaw, m));
         }
     }
     for _ in 0..r.random_range(1..3) {
