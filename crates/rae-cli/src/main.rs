@@ -64,8 +64,8 @@ enum Command {
         /// A .safetensors weights file written by weights-tool.
         file: PathBuf,
         /// Also report GPU memory for these frame sizes (WxH), f32 and f16.
-        #[arg(long, value_delimiter = ',')]
-        size: Vec<String>,
+        #[arg(long, value_delimiter = ',', value_parser = parse_size)]
+        size: Vec<(u32, u32)>,
     },
     /// List the adapters wgpu sees (WGPU_BACKEND filters; WGPU_ADAPTER_NAME picks one).
     Devices,
@@ -83,8 +83,8 @@ enum Command {
         /// A .safetensors weights file.
         weights: PathBuf,
         /// Frame sizes, WxH.
-        #[arg(long, value_delimiter = ',', default_value = "256x256,512x512,1280x720")]
-        sizes: Vec<String>,
+        #[arg(long, value_delimiter = ',', default_value = "256x256,512x512,1280x720", value_parser = parse_size)]
+        sizes: Vec<(u32, u32)>,
         /// Timed frames per size (after 2 warm-up frames).
         #[arg(long, default_value_t = 10)]
         frames: usize,
@@ -195,7 +195,7 @@ fn median(v: &mut [f64]) -> f64 {
 }
 
 #[allow(clippy::too_many_arguments)]
-fn bench(path: &Path, sizes: &[String], frames: usize, layers: bool, precisions: &[PrecisionArg], tiles: &[TileChoice], memories: &[Option<WeightMemory>], peak: Option<f64>) -> Result<()> {
+fn bench(path: &Path, sizes: &[(u32, u32)], frames: usize, layers: bool, precisions: &[PrecisionArg], tiles: &[TileChoice], memories: &[Option<WeightMemory>], peak: Option<f64>) -> Result<()> {
     let weights = Weights::load(path)?;
     let gpu = Gpu::new()?;
     let flop_px = 2.0 * Graph::new(&weights.arch).macs_per_pixel();
@@ -211,8 +211,8 @@ fn bench(path: &Path, sizes: &[String], frames: usize, layers: bool, precisions:
         "{:>10} {:>9} {:>5} {:>7} {:>6} {:>10} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>7} {:>9} {:>9}",
         "size", "precision", "tile", "weights", "build", "total ms", "upload", "gpu", "download", "resident", "pipelined", "GFLOP/s", "of peak", "peak MiB", "alloc MiB"
     );
-    for s in sizes {
-        let (w, h) = parse_size(s)?;
+    for &(w, h) in sizes {
+        let s = format!("{w}x{h}");
         let n = (w * h) as usize;
         let (wave, one) = bench_buffers(w, h);
         let frame = rae_core::FrameInputs { color: &wave, albedo: Some(&wave), normal: Some(&wave), depth: Some(&one), roughness: Some(&one) };
@@ -282,15 +282,15 @@ fn bench_buffers(w: u32, h: u32) -> (Vec<f32>, Vec<f32>) {
 /// and timed round-robin, one frame each per round, so that slow and fast spells of a shared
 /// machine fall on all of them alike; the ratio column is the median over rounds of each
 /// round's time over the first combination's in that round.
-fn bench_interleaved(path: &Path, sizes: &[String], rounds: usize, precisions: &[PrecisionArg], tiles: &[TileChoice], memories: &[Option<WeightMemory>]) -> Result<()> {
+fn bench_interleaved(path: &Path, sizes: &[(u32, u32)], rounds: usize, precisions: &[PrecisionArg], tiles: &[TileChoice], memories: &[Option<WeightMemory>]) -> Result<()> {
     let weights = Weights::load(path)?;
     let gpu = Gpu::new()?;
     let rounds = rounds.max(1);
     println!("adapter: {}; weights: {}; interleaved: {rounds} rounds of one frame per combination, after 2 warm-up frames each", gpu.describe(), path.display());
     println!("ms: a frame from host slices to host slices (the `total` of bench); vs first: median over rounds of the ratio to the first combination in the same round");
     println!("{:>10} {:>9} {:>12} {:>7} {:>10} {:>10} {:>9}", "size", "precision", "tile", "weights", "median ms", "fastest", "vs first");
-    for s in sizes {
-        let (w, h) = parse_size(s)?;
+    for &(w, h) in sizes {
+        let s = format!("{w}x{h}");
         let (wave, one) = bench_buffers(w, h);
         let frame = rae_core::FrameInputs { color: &wave, albedo: Some(&wave), normal: Some(&wave), depth: Some(&one), roughness: Some(&one) };
         let mut out = vec![0.0; wave.len()];
@@ -392,7 +392,7 @@ fn stage_table(d: &mut Denoiser, frame: &rae_core::FrameInputs, out: &mut [f32],
     Ok(())
 }
 
-fn info(path: &Path, sizes: &[String]) -> Result<()> {
+fn info(path: &Path, sizes: &[(u32, u32)]) -> Result<()> {
     let w = Weights::load(path)?;
     let a = &w.arch;
     let macs = Graph::new(a).macs_per_pixel();
@@ -410,8 +410,8 @@ fn info(path: &Path, sizes: &[String]) -> Result<()> {
     println!("cost per pixel:  {:.0} multiply-adds, {:.1} kFLOP", macs, 2.0 * macs / 1e3);
     let graph = Graph::new(a);
     let m = 1u32 << a.levels();
-    for s in sizes {
-        let (w, h) = parse_size(s)?;
+    for &(w, h) in sizes {
+        let s = format!("{w}x{h}");
         let (pw, ph) = (w.next_multiple_of(m), h.next_multiple_of(m));
         let mib = |p: Precision| rae_core::denoiser::activation_bytes(&graph, pw, ph, p) as f64 / (1u64 << 20) as f64;
         println!(

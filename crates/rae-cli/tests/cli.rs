@@ -354,6 +354,23 @@ fn bench_refuses_a_tile_the_kernel_does_not_have() {
 }
 
 #[test]
+fn bench_and_info_refuse_a_bad_size_before_opening_a_device() {
+    // A lanes tile parses too; the size is refused by the argument parser, before any GPU work.
+    for (cmd, size, why) in [("bench", "0x8", "empty"), ("bench", "12", "not WxH"), ("info", "64xA", "height")] {
+        let flag = if cmd == "bench" { "--sizes" } else { "--size" };
+        let mut args = vec![cmd.to_string(), fixture("weights_full.safetensors"), flag.to_string(), size.to_string()];
+        if cmd == "bench" {
+            args.extend(["--tile".to_string(), "lanes16x4".to_string()]);
+        }
+        let out = rae().args(&args).output().unwrap();
+        assert!(!out.status.success(), "{cmd} {flag} {size} must fail");
+        let err = String::from_utf8(out.stderr).unwrap();
+        assert!(err.contains(&format!("size `{size}`")) && err.contains(why), "{err}");
+        assert!(!String::from_utf8(out.stdout).unwrap().contains("adapter"), "no device opened");
+    }
+}
+
+#[test]
 fn bench_interleave_prints_a_row_per_combination_against_the_first() {
     // Three combinations timed round-robin, the first its own reference (the CPU tile under
     // two names: lavapipe compiles each distinct pipeline for seconds).

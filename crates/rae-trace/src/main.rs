@@ -56,8 +56,8 @@ enum Command {
         #[arg(long, default_value_t = 1024)]
         ref_spp: u32,
         /// Image size, WxH.
-        #[arg(long, default_value = "256x256")]
-        size: String,
+        #[arg(long, default_value = "256x256", value_parser = parse_size)]
+        size: (u32, u32),
         /// Seed of the noise (the scene's own seed is --random).
         #[arg(long, default_value_t = 0)]
         seed: u64,
@@ -82,8 +82,8 @@ enum Command {
         #[arg(long, default_value_t = 8)]
         frames: u32,
         /// Image size, WxH.
-        #[arg(long, default_value = "256x256")]
-        size: String,
+        #[arg(long, default_value = "256x256", value_parser = parse_size)]
+        size: (u32, u32),
         /// Output folder (created).
         out: PathBuf,
     },
@@ -164,10 +164,10 @@ fn live(choice: &SceneChoice, weights: &Path, frames: u32, size: (u32, u32), out
 fn main() -> Result<()> {
     match Cli::parse().command {
         Command::Render { scene, frames, spp, ref_spp, size, seed, max_depth, half, out } => {
-            let (width, height) = parse_size(&size)?;
+            let (width, height) = size;
             let precision = if half { output::Precision::F16 } else { output::Precision::F32 };
             render(&scene, frames, Settings { width, height, spp, ref_spp, seed, max_depth }, precision, &out)
         }
-        Command::Live { scene, weights, frames, size, out } => live(&scene, &weights, frames, parse_size(&size)?, &out),
+        Command::Live { scene, weights, frames, size, out } => live(&scene, &weights, frames, size, &out),
     }
 }
