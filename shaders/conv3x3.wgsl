@@ -26,6 +26,10 @@ const READ_POOL_UPSAMPLE: u32 = 3u; // upsample(pool(src)): max of the 2x2 block
 override MODE_A: u32 = 0u;
 override MODE_B: u32 = 0u;
 override LEAKY: bool = true;
+// The conv reads a source b (a concatenation). Half the convs read one source: without the
+// second input-block loop their kernels are half the code, which halves lavapipe's compile
+// (LLVM at the first dispatch) and changes nothing at run time.
+override SOURCE_B: bool = true;
 // Output blocks (4 channels each) per invocation: 1, 2, or 4 with TW = 1 (kernels::Tile,
 // kernels::blocks_per_invocation). Every fetched input texel feeds 4 * OB output channels: on
 // lavapipe each fetch is a call into the driver's texel-fetch function, so OB = 4 pays off there.
@@ -401,8 +405,10 @@ fn conv(gid: vec3<u32>) {
     for (var c = k0; c < min(k1, params.cin4_a); c++) {
         accumulate(&acc0, &acc1, &acc2, &acc3, src_a, MODE_A, c, c, w, xi, yi);
     }
-    for (var c = max(k0, params.cin4_a); c < k1; c++) {
-        accumulate(&acc0, &acc1, &acc2, &acc3, src_b, MODE_B, c - params.cin4_a, c, w, xi, yi);
+    if SOURCE_B {
+        for (var c = max(k0, params.cin4_a); c < k1; c++) {
+            accumulate(&acc0, &acc1, &acc2, &acc3, src_b, MODE_B, c - params.cin4_a, c, w, xi, yi);
+        }
     }
     if !inside {
         return;
@@ -582,8 +588,10 @@ fn winograd(@builtin(global_invocation_id) gid: vec3<u32>) {
     for (var c = 0u; c < params.cin4_a; c++) {
         wino_accumulate(&m0, &m1, &m2, &m3, src_a, MODE_A, c, c, w, xi, yi);
     }
-    for (var c = 0u; c < params.cin4_b; c++) {
-        wino_accumulate(&m0, &m1, &m2, &m3, src_b, MODE_B, c, params.cin4_a + c, w, xi, yi);
+    if SOURCE_B {
+        for (var c = 0u; c < params.cin4_b; c++) {
+            wino_accumulate(&m0, &m1, &m2, &m3, src_b, MODE_B, c, params.cin4_a + c, w, xi, yi);
+        }
     }
     let bias_at = w + params.cin4_total * 64u * OB;
     let second = OB > 1u && ob0 + 1u < params.cout4;

@@ -139,7 +139,7 @@ fn tensor(c: usize, h: usize, w: usize, seed: u64) -> Chw {
 #[test]
 fn conv_direct_single_source_matches_cpu() {
     // 45 rows: three 16-row tiles, the last partial.
-    assert!(45 > 2 * kernels::CONV_ROWS);
+    const { assert!(45 > 2 * kernels::CONV_ROWS) };
     check_conv((tensor(5, 45, 37, 1), Read::Direct), None, 9, true, 37, 45, 10);
 }
 

@@ -10,8 +10,11 @@ use safetensors::Dtype;
 
 use crate::fixture;
 
-/// Tensors of a fixture as (name, dtype, shape, bytes), and its metadata.
-fn parts(name: &str) -> (Vec<(String, Dtype, Vec<usize>, Vec<u8>)>, HashMap<String, String>) {
+/// One tensor of a weights file: name, dtype, shape, bytes.
+type Tensor = (String, Dtype, Vec<usize>, Vec<u8>);
+
+/// Tensors of a fixture, and its metadata.
+fn parts(name: &str) -> (Vec<Tensor>, HashMap<String, String>) {
     let bytes = std::fs::read(fixture(name)).unwrap();
     let (_, meta) = safetensors::SafeTensors::read_metadata(&bytes).unwrap();
     let st = safetensors::SafeTensors::deserialize(&bytes).unwrap();
@@ -19,7 +22,7 @@ fn parts(name: &str) -> (Vec<(String, Dtype, Vec<usize>, Vec<u8>)>, HashMap<Stri
     (tensors, meta.metadata().clone().unwrap())
 }
 
-fn build(tensors: &[(String, Dtype, Vec<usize>, Vec<u8>)], meta: Option<HashMap<String, String>>) -> Vec<u8> {
+fn build(tensors: &[Tensor], meta: Option<HashMap<String, String>>) -> Vec<u8> {
     let views: Vec<(String, TensorView)> =
         tensors.iter().map(|(n, d, s, b)| (n.clone(), TensorView::new(*d, s.clone(), b).unwrap())).collect();
     safetensors::serialize(views, meta).unwrap()

@@ -271,6 +271,8 @@ pub struct ConvVariant {
     pub read_a: Read,
     /// Read mode of source b (Direct when there is none).
     pub read_b: Read,
+    /// The conv has a source b (a one-source kernel compiles without its loop).
+    pub source_b: bool,
     /// LeakyReLU or linear.
     pub leaky: bool,
     /// Output blocks per invocation ([`blocks_per_invocation`]).
@@ -462,6 +464,7 @@ impl Kernels {
                 let constants = [
                     ("MODE_A", v.read_a as u32 as f64),
                     ("MODE_B", v.read_b as u32 as f64),
+                    ("SOURCE_B", if v.source_b { 1.0 } else { 0.0 }),
                     ("LEAKY", if v.leaky { 1.0 } else { 0.0 }),
                     ("OB", v.ob as f64),
                     ("ROWS", v.rows as f64),
@@ -827,7 +830,7 @@ impl ConvPlan {
             let part_bytes = cout4 as u64 * s.width as u64 * s.height as u64 * 16;
             let split = if tile.method != Method::Winograd { tile.split.min(cin4).min((partial_budget / part_bytes) as u32).max(1) } else { 1 };
             let used_tile = Tile { rows, blocks: ob, cols, group_x: tile.group_x, method: tile.method, split };
-            let variant = ConvVariant { read_a: s.read_a, read_b: s.read_b, leaky: s.leaky, ob, rows, cols, group_x: tile.group_x, method: tile.method, split, reduce: false };
+            let variant = ConvVariant { read_a: s.read_a, read_b: s.read_b, source_b: s.cb > 0, leaky: s.leaky, ob, rows, cols, group_x: tile.group_x, method: tile.method, split, reduce: false };
             // Split-K's partial sums: one buffer for the largest split conv, which every split
             // conv overwrites in turn (the reduce of one runs before the next conv starts).
             if split > 1 {
@@ -872,7 +875,7 @@ impl ConvPlan {
                 groups.push(group);
             }
             // The reduce pipeline depends on the activation and the part count only.
-            let reduce_variant = ConvVariant { read_a: Read::Direct, read_b: Read::Direct, ob: 1, rows: 1, cols: 1, group_x: WORKGROUP, method: Method::Direct, reduce: true, ..variant };
+            let reduce_variant = ConvVariant { read_a: Read::Direct, read_b: Read::Direct, source_b: true, ob: 1, rows: 1, cols: 1, group_x: WORKGROUP, method: Method::Direct, reduce: true, ..variant };
             let reduce = (split > 1).then(|| (kernels.conv(device, reduce_variant), [s.width.div_ceil(8), s.height.div_ceil(8), cout4]));
             convs.push(Planned {
                 pipeline: kernels.conv(device, variant),

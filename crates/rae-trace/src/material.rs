@@ -195,7 +195,7 @@ impl Material {
         match self {
             Material::Emitter { .. } => None,
             Material::Diffuse { albedo } => {
-                let wi = cosine_hemisphere(s.next2());
+                let wi = cosine_hemisphere(s.uniform2());
                 (wi.z > 0.0).then(|| BsdfSample { wi, weight: albedo.eval(uv), pdf: wi.z / PI, specular: false })
             }
             Material::Conductor { f0, roughness } => {
@@ -204,7 +204,7 @@ impl Material {
                     return Some(BsdfSample { wi, weight: schlick(*f0, wo.z), pdf: 0.0, specular: true });
                 }
                 let a = alpha(*roughness);
-                let h = sample_vndf(wo, a, s.next2());
+                let h = sample_vndf(wo, a, s.uniform2());
                 let wi = reflect(wo, h);
                 if wi.z <= 0.0 {
                     return None;
@@ -214,10 +214,10 @@ impl Material {
             }
             Material::Plastic { roughness, .. } => {
                 let p = plastic_spec_probability(*roughness);
-                let wi = if s.next() < p {
-                    reflect(wo, sample_vndf(wo, alpha(*roughness), s.next2()))
+                let wi = if s.uniform() < p {
+                    reflect(wo, sample_vndf(wo, alpha(*roughness), s.uniform2()))
                 } else {
-                    cosine_hemisphere(s.next2())
+                    cosine_hemisphere(s.uniform2())
                 };
                 let (f_cos, pdf) = self.eval(wo, wi, uv);
                 (pdf > 0.0).then(|| BsdfSample { wi, weight: f_cos / pdf, pdf, specular: false })
@@ -231,14 +231,14 @@ impl Material {
                 let (h, g1_weight) = if *roughness < SMOOTH {
                     (Vec3A::Z, None)
                 } else {
-                    (sample_vndf(wo_up, alpha(*roughness), s.next2()), Some(alpha(*roughness)))
+                    (sample_vndf(wo_up, alpha(*roughness), s.uniform2()), Some(alpha(*roughness)))
                 };
                 let cos_i = wo_up.dot(h);
                 if cos_i <= 0.0 {
                     return None;
                 }
                 let fr = fresnel_dielectric(cos_i, eta);
-                let reflect_chosen = s.next() < fr;
+                let reflect_chosen = s.uniform() < fr;
                 let wi_up = if reflect_chosen {
                     reflect(wo_up, h)
                 } else {

@@ -108,7 +108,7 @@ pub fn radiance(scene: &Scene, origin: Vec3A, dir: Vec3A, max_depth: u32, s: &mu
         // Russian roulette after a few bounces.
         if depth >= 3 {
             let q = beta.max_element().clamp(0.05, 0.95);
-            if s.next() >= q {
+            if s.uniform() >= q {
                 break;
             }
             beta /= q;
@@ -155,7 +155,7 @@ pub fn render_frame(scene: &Scene, frame: u32, frames: u32, st: &Settings) -> Fr
                 let mut s = Sampler::new(st.seed, frame, i, pass);
                 let mut acc = Vec3A::ZERO;
                 for _ in 0..n {
-                    let j: Vec2 = s.next2();
+                    let j: Vec2 = s.uniform2();
                     let d = cam.direction(x as f32 + j.x, y as f32 + j.y, w, h);
                     acc += radiance(scene, cam.position, d, st.max_depth, &mut s);
                 }

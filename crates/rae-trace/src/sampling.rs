@@ -21,13 +21,13 @@ impl Sampler {
     }
 
     /// Uniform in [0, 1).
-    pub fn next(&mut self) -> f32 {
+    pub fn uniform(&mut self) -> f32 {
         self.0.random::<f32>()
     }
 
     /// Two uniforms in [0, 1).
-    pub fn next2(&mut self) -> Vec2 {
-        Vec2::new(self.next(), self.next())
+    pub fn uniform2(&mut self) -> Vec2 {
+        Vec2::new(self.uniform(), self.uniform())
     }
 }
 

@@ -204,7 +204,7 @@ impl Scene {
         if self.lights.is_empty() {
             return None;
         }
-        let u = s.next();
+        let u = s.uniform();
         let k = self.light_cdf.partition_point(|&c| c < u).min(self.lights.len() - 1);
         let prim = &self.prims[self.lights[k] as usize];
         let Material::Emitter { radiance } = self.materials[prim.material as usize] else { unreachable!() };
@@ -219,7 +219,7 @@ impl Scene {
                 }
                 let cos_max = (1.0 - radius * radius / d2).max(0.0).sqrt();
                 let frame = Frame::new(to / d2.sqrt());
-                let wi = frame.to_world(uniform_cone(s.next2(), cos_max));
+                let wi = frame.to_world(uniform_cone(s.uniform2(), cos_max));
                 let ray = Ray::new(p, wi, 0.0, f32::INFINITY);
                 let dist = prim.intersect(&ray);
                 if !dist.is_finite() {
@@ -228,7 +228,7 @@ impl Scene {
                 Some(LightSample { wi, dist, radiance, pdf: pmf / (2.0 * PI * (1.0 - cos_max)).max(1e-12) })
             }
             Shape::Triangle { p: v, .. } => {
-                let (mut a, mut b) = (s.next(), s.next());
+                let (mut a, mut b) = (s.uniform(), s.uniform());
                 if a + b > 1.0 {
                     (a, b) = (1.0 - a, 1.0 - b);
                 }
