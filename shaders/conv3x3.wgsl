@@ -27,8 +27,9 @@ override MODE_A: u32 = 0u;
 override MODE_B: u32 = 0u;
 override LEAKY: bool = true;
 // The conv reads a source b (a concatenation). Half the convs read one source: without the
-// second input-block loop their kernels are half the code, which halves lavapipe's compile
-// (LLVM at the first dispatch) and changes nothing at run time.
+// second input-block loop their kernels carry half the multiply-add code, which lavapipe
+// compiles with LLVM at the first dispatch (the sample's cold first frame 0.84x of the time
+// with the loop everywhere); run time is unchanged (docs/PERF.md, session 8).
 override SOURCE_B: bool = true;
 // Output blocks (4 channels each) per invocation: 1, 2, or 4 with TW = 1 (kernels::Tile,
 // kernels::blocks_per_invocation). Every fetched input texel feeds 4 * OB output channels: on
