@@ -188,7 +188,6 @@ fn tile_name(t: TileChoice) -> String {
     }
 }
 
-
 fn median(v: &mut [f64]) -> f64 {
     v.sort_by(f64::total_cmp);
     v[v.len() / 2]

@@ -89,7 +89,6 @@ enum Command {
     },
 }
 
-
 fn progress(frames: u32) -> ProgressBar {
     let bar = ProgressBar::new(frames as u64);
     bar.set_style(
