@@ -286,6 +286,12 @@ fn accumulate(acc0: ptr<function, Tile>, acc1: ptr<function, Tile>, acc2: ptr<fu
     }
 }
 
+// A two-column lanes tile's step over one input block. This empty one is what every module
+// has; kernels::Kernels::new swaps it (kernels::ROWS_STUB, the line below) for
+// conv3x3_rows.wgsl's in the module that runs such tiles: that body is unrolled, and a front
+// end that inlines it before dropping the dead branch spends seconds on every pipeline.
+fn accumulate_rows(acc0: ptr<function, Tile>, acc1: ptr<function, Tile>, acc2: ptr<function, Tile>, acc3: ptr<function, Tile>, acc4: ptr<function, Tile>, acc5: ptr<function, Tile>, acc6: ptr<function, Tile>, acc7: ptr<function, Tile>, t: texture_2d_array<f32>, mode: u32, layer: u32, cb: u32, w: u32, x: i32, y0: i32) {}
+
 fn activate(v: vec4<f32>) -> vec4<f32> {
     var a = v;
     if LEAKY {
@@ -395,6 +401,11 @@ fn conv(gid: vec3<u32>) {
         let b3 = select(vec4<f32>(0.0), weights[bias_at + 3u], with_bias);
         acc3 = Tile(b3, b3, b3, b3, b3, b3, b3, b3, b3, b3, b3, b3, b3, b3, b3, b3);
     }
+    // Column 1 of a two-column lanes tile, blocks 0 to 3.
+    var acc4 = acc0;
+    var acc5 = acc1;
+    var acc6 = acc2;
+    var acc7 = acc3;
     let xi = i32(x);
     let yi = i32(y0);
     // This part's input blocks k0 .. k1 of cat(a, b) (all of them when SPLIT = 1).
@@ -404,11 +415,19 @@ fn conv(gid: vec3<u32>) {
     let k1 = min(k0 + per, total);
     // Source a: input blocks 0 .. cin4_a; then source b: blocks cin4_a .. cin4_a + cin4_b.
     for (var c = k0; c < min(k1, params.cin4_a); c++) {
-        accumulate(&acc0, &acc1, &acc2, &acc3, src_a, MODE_A, c, c, w, xi, yi);
+        if LANES && TW > 1u {
+            accumulate_rows(&acc0, &acc1, &acc2, &acc3, &acc4, &acc5, &acc6, &acc7, src_a, MODE_A, c, c, w, xi, yi);
+        } else {
+            accumulate(&acc0, &acc1, &acc2, &acc3, src_a, MODE_A, c, c, w, xi, yi);
+        }
     }
     if SOURCE_B {
         for (var c = max(k0, params.cin4_a); c < k1; c++) {
-            accumulate(&acc0, &acc1, &acc2, &acc3, src_b, MODE_B, c - params.cin4_a, c, w, xi, yi);
+            if LANES && TW > 1u {
+                accumulate_rows(&acc0, &acc1, &acc2, &acc3, &acc4, &acc5, &acc6, &acc7, src_b, MODE_B, c - params.cin4_a, c, w, xi, yi);
+            } else {
+                accumulate(&acc0, &acc1, &acc2, &acc3, src_b, MODE_B, c - params.cin4_a, c, w, xi, yi);
+            }
         }
     }
     if !inside {
@@ -425,9 +444,20 @@ fn conv(gid: vec3<u32>) {
     }
     // The second column, unless it is past the right edge.
     if TW > 1u && x + 1u < params.width {
-        store(acc2, x + 1u, y0, ob0);
-        if second {
-            store(acc3, x + 1u, y0, ob0 + 1u);
+        if LANES {
+            store(acc4, x + 1u, y0, ob0);
+            if second {
+                store(acc5, x + 1u, y0, ob0 + 1u);
+            }
+            if OB > 2u {
+                if ob0 + 2u < params.cout4 { store(acc6, x + 1u, y0, ob0 + 2u); }
+                if ob0 + 3u < params.cout4 { store(acc7, x + 1u, y0, ob0 + 3u); }
+            }
+        } else {
+            store(acc2, x + 1u, y0, ob0);
+            if second {
+                store(acc3, x + 1u, y0, ob0 + 1u);
+            }
         }
     }
 }

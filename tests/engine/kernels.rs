@@ -214,12 +214,21 @@ fn conv_every_tile_shape_matches_cpu() {
 #[test]
 fn conv_lanes_tiles_match_cpu() {
     // Weights loaded across the subgroup: 1, 2 and 4 blocks per invocation (one, two or three
-    // loads per tap), split-K, both weight memories and a wider workgroup, on levels 13 and 22
-    // wide (subgroups with lanes past the right edge, which load for the others) and 19 and 12
-    // high; every check_conv case runs 16 x 4 with lanes too where the device has them.
+    // loads per tap) in one or two columns, split-K, both weight memories and a wider
+    // workgroup, on levels 13 and 22 wide (subgroups with lanes past the right edge, which load
+    // for the others; an odd width leaves a second column outside) and 19 and 12 high; every
+    // check_conv case runs 16 x 4 with lanes too where the device has them.
     let g = gpu();
-    let lanes = |rows, blocks| Tile::new(rows, blocks).and_then(Tile::with_lanes).expect("a lanes tile");
-    let cases = [(lanes(16, 1), WeightMemory::Uniform), (lanes(8, 2).with_group(32).unwrap(), WeightMemory::Storage), (lanes(4, 4).with_split(2).unwrap(), WeightMemory::Uniform)];
+    let lanes = |rows, blocks, cols| Tile::lanes(rows, blocks, cols).expect("a lanes tile");
+    let cases = [
+        (lanes(16, 1, 1), WeightMemory::Uniform),
+        (lanes(8, 2, 1).with_group(32).unwrap(), WeightMemory::Storage),
+        (lanes(4, 4, 1).with_split(2).unwrap(), WeightMemory::Uniform),
+        // Two columns (short tiles: their unrolled body compiles slowly on lavapipe).
+        (lanes(4, 4, 2), WeightMemory::Storage),
+        (lanes(8, 2, 2).with_group(16).unwrap(), WeightMemory::Uniform),
+        (lanes(2, 1, 2).with_split(3).unwrap(), WeightMemory::Uniform),
+    ];
     if !kernels::lanes_supported(&g.device) {
         // Refused, with the reason, where the device has no subgroups of 8 lanes.
         let mut k = Kernels::new(&g.device, kernels::Precision::F32, WeightMemory::Uniform);
@@ -240,9 +249,14 @@ fn conv_lanes_tiles_match_cpu() {
     let (a, b) = (tensor(6, 38, 26, 710), tensor(5, 19, 13, 711));
     let (weight, bias) = (noise(11 * 11 * 9, 712), noise(11, 713));
     let run = |tile| gpu_conv((&a, Read::Pool), Some((&b, Read::Direct)), &weight, &bias, true, 13, 19, tile, WeightMemory::Uniform).data;
-    assert_eq!(run(lanes(16, 1)), run(Tile::new(16, 1).unwrap()), "lanes16x1 against 16x1");
-    assert_eq!(lanes(16, 4).to_string(), "lanes16x4");
-    assert_eq!(Tile::with_cols(8, 2, 2).unwrap().with_lanes(), None, "one column only");
+    assert_eq!(run(lanes(16, 1, 1)), run(Tile::new(16, 1).unwrap()), "lanes16x1 against 16x1");
+    assert_eq!(run(lanes(4, 2, 2)), run(Tile::with_cols(4, 2, 2).unwrap()), "lanes4x2w2 against 4x2w2");
+    assert_eq!(run(lanes(4, 4, 2)), run(lanes(4, 4, 1)), "two columns against one");
+    assert_eq!(lanes(16, 4, 1).to_string(), "lanes16x4");
+    assert_eq!(lanes(8, 4, 2).to_string(), "lanes8x4w2");
+    assert_eq!(Tile::with_cols(8, 2, 2).unwrap().with_lanes(), Tile::lanes(8, 2, 2));
+    assert_eq!(Tile::lanes(16, 3, 1), None);
+    assert_eq!(Tile::lanes(16, 4, 3), None);
     assert_eq!(Tile::winograd(2, 1).unwrap().with_lanes(), None);
 }
 

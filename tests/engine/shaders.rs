@@ -1,24 +1,27 @@
 //! Every WGSL file parses and validates with naga: no GPU needed, a broken shader fails here.
 
-use rae_core::kernels::{SHADERS, STORAGE_WEIGHTS, UNIFORM_WEIGHTS, WITHOUT_SUBGROUPS, shader_source};
+use rae_core::kernels::{ROWS_STUB, SHADERS, STORAGE_WEIGHTS, UNIFORM_WEIGHTS, WITHOUT_SUBGROUPS, shader_source};
 
 #[test]
 fn every_shader_validates_with_naga() {
     assert!(SHADERS.len() >= 3);
-    // The sources as written, and the rewrites kernels::Kernels::new makes (f16 storage
-    // textures, storage-buffer weights; no subgroups, validated without the capability).
+    // The sources as written (conv3x3_rows.wgsl inside conv3x3.wgsl, the only way it is
+    // used), and the rewrites kernels::Kernels::new makes (f16 storage textures, storage-buffer
+    // weights; no subgroups, validated without the capability).
     let conv = shader_source("conv3x3");
     assert!(conv.contains(UNIFORM_WEIGHTS), "the weight declaration Kernels::new rewrites");
+    assert!(conv.contains(ROWS_STUB), "the empty accumulate_rows Kernels::conv replaces");
     let without_subgroups = WITHOUT_SUBGROUPS.iter().fold(conv.to_string(), |src, (from, to)| {
         assert!(src.contains(from), "conv3x3.wgsl has {from}");
         src.replace(from, to)
     });
     assert!(WITHOUT_SUBGROUPS.iter().all(|(from, _)| !without_subgroups.contains(from)), "no subgroup operation is left");
     let rewritten = [
+        ("conv3x3 (two-column lanes)", conv.replace(ROWS_STUB, shader_source("conv3x3_rows"))),
         ("conv3x3 (f16, storage weights)", conv.replace("rgba32float", "rgba16float").replace(UNIFORM_WEIGHTS, STORAGE_WEIGHTS)),
         ("conv3x3 (without subgroups)", without_subgroups),
     ];
-    let all = SHADERS.iter().map(|&(n, s)| (n, s.to_string())).chain(rewritten);
+    let all = SHADERS.iter().filter(|(n, _)| *n != "conv3x3_rows").map(|&(n, s)| (n, s.to_string())).chain(rewritten);
     for (name, source) in all {
         let source = source.as_str();
         let module = naga::front::wgsl::parse_str(source).unwrap_or_else(|e| panic!("{name}.wgsl: {}", e.emit_to_string(source)));

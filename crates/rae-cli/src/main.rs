@@ -100,8 +100,9 @@ enum Command {
         peak_gflops: Option<f64>,
         /// Conv register tiles to time: ROWSxBLOCKS[wCOLS][gGROUPX][kSPLIT] (rows 1, 2, 4, 8, 16;
         /// blocks 1, 2, 4 (4 with one column); columns 1, 2; workgroups 8, 16, 32, 64 wide;
-        /// input blocks split 1 to 16 ways), the same prefixed `lanes` (one column; weights
-        /// loaded across the subgroup, devices with subgroups of 8 or more lanes) or
+        /// input blocks split 1 to 16 ways), the same prefixed `lanes` (weights loaded across
+        /// the subgroup, devices with subgroups of 8 or more lanes; 4 blocks also in 2 columns,
+        /// e.g. lanes4x4w2: faster frames on lavapipe, slower pipeline builds) or
         /// winoROWSxBLOCKS[gGROUPX] (Winograd F(2x2, 3x3); rows 2, 4) for one tile everywhere,
         /// `tuned` (each conv timed with every candidate on this device while building), or
         /// `auto` (tuned on GPUs; on CPU drivers lanes16x4, or 16x4 without subgroups: what
@@ -162,12 +163,11 @@ fn parse_tile(s: &str) -> Result<TileChoice> {
             .map(TileChoice::Fixed)
             .with_context(|| format!("tile `{s}`: Winograd tiles have 2 or 4 rows, 1 or 2 blocks and workgroups 8, 16, 32 or 64 wide"));
     }
-    Tile::with_cols(r, b, c)
-        .and_then(|t| if lanes { t.with_lanes() } else { Some(t) })
+    if lanes { Tile::lanes(r, b, c) } else { Tile::with_cols(r, b, c) }
         .and_then(|t| t.with_group(group))
         .and_then(|t| t.with_split(split))
         .map(TileChoice::Fixed)
-        .with_context(|| format!("tile `{s}`: the kernel has 1, 2, 4, 8 or 16 rows, 1, 2 or 4 blocks (4 with one column), 1 or 2 columns (lanes tiles one), workgroups 8, 16, 32 or 64 wide and splits of 1 to 16"))
+        .with_context(|| format!("tile `{s}`: the kernel has 1, 2, 4, 8 or 16 rows, 1, 2 or 4 blocks (4 with one column, except lanes tiles), 1 or 2 columns, workgroups 8, 16, 32 or 64 wide and splits of 1 to 16"))
 }
 
 fn parse_memory(s: &str) -> Result<Option<WeightMemory>> {

@@ -10,6 +10,7 @@ use crate::graph::Read;
 /// Every shader of rae, by name; the only place WGSL enters the crate.
 pub const SHADERS: &[(&str, &str)] = &[
     ("conv3x3", include_str!("../../../shaders/conv3x3.wgsl")),
+    ("conv3x3_rows", include_str!("../../../shaders/conv3x3_rows.wgsl")),
     ("prep", include_str!("../../../shaders/prep.wgsl")),
     ("output", include_str!("../../../shaders/output.wgsl")),
     ("pool", include_str!("../../../shaders/pool.wgsl")),
@@ -104,6 +105,11 @@ pub const UNIFORM_WEIGHTS: &str = "var<uniform> weights: array<vec4<f32>, CHUNK>
 /// What [`UNIFORM_WEIGHTS`] becomes for [`WeightMemory::Storage`].
 pub const STORAGE_WEIGHTS: &str = "var<storage, read> weights: array<vec4<f32>>;";
 
+/// conv3x3.wgsl's empty `accumulate_rows`, which the conv module that runs two-column lanes
+/// tiles has replaced by conv3x3_rows.wgsl (and no other module: its unrolled body costs the
+/// driver's front end seconds per pipeline even where no call reaches it).
+pub const ROWS_STUB: &str = "fn accumulate_rows(acc0: ptr<function, Tile>, acc1: ptr<function, Tile>, acc2: ptr<function, Tile>, acc3: ptr<function, Tile>, acc4: ptr<function, Tile>, acc5: ptr<function, Tile>, acc6: ptr<function, Tile>, acc7: ptr<function, Tile>, t: texture_2d_array<f32>, mode: u32, layer: u32, cb: u32, w: u32, x: i32, y0: i32) {}";
+
 /// The rewrites of conv3x3.wgsl for devices without [`wgpu::Features::SUBGROUP`] (naga refuses
 /// subgroup operations anywhere in a module there): its subgroup operations become plain
 /// functions and the `lanes` entry point's subgroup builtin another builtin. [`Method::Lanes`]
@@ -122,6 +128,11 @@ pub fn lanes_supported(device: &wgpu::Device) -> bool {
 
 /// Texture format of activations at f32 (weights-independent tests upload in it).
 pub const ACTIVATION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+
+/// A WGSL module from source text.
+fn shader_module(device: &wgpu::Device, label: &str, source: String) -> wgpu::ShaderModule {
+    device.create_shader_module(wgpu::ShaderModuleDescriptor { label: Some(label), source: wgpu::ShaderSource::Wgsl(source.into()) })
+}
 
 /// Source text of a shader from [`SHADERS`].
 pub fn shader_source(name: &str) -> &'static str {
@@ -341,6 +352,10 @@ pub struct Kernels {
     /// The output pipeline.
     pub output: wgpu::ComputePipeline,
     conv_module: wgpu::ShaderModule,
+    /// conv3x3.wgsl as rewritten for this precision, memory and device.
+    conv_source: String,
+    /// The conv module with conv3x3_rows.wgsl, made when a two-column lanes tile first needs it.
+    conv_rows_module: Option<wgpu::ShaderModule>,
     conv_pipeline_layout: wgpu::PipelineLayout,
     conv: HashMap<ConvVariant, wgpu::ComputePipeline>,
     precision: Precision,
@@ -357,7 +372,7 @@ impl Kernels {
     /// declaration ([`UNIFORM_WEIGHTS`]) to [`STORAGE_WEIGHTS`]; everything else (the clamp to
     /// the f16 range) is an override.
     pub fn new(device: &wgpu::Device, precision: Precision, memory: WeightMemory) -> Self {
-        let module = |name: &str| {
+        let source = |name: &str| {
             let mut src = shader_source(name).to_string();
             if precision == Precision::F16 {
                 src = src.replace("rgba32float", "rgba16float");
@@ -372,11 +387,9 @@ impl Kernels {
                 assert!(src.contains(UNIFORM_WEIGHTS), "conv3x3.wgsl declares its weights as kernels::UNIFORM_WEIGHTS");
                 src = src.replace(UNIFORM_WEIGHTS, STORAGE_WEIGHTS);
             }
-            device.create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some(name),
-                source: wgpu::ShaderSource::Wgsl(src.into()),
-            })
+            src
         };
+        let module = |name: &str| shader_module(device, name, source(name));
         let layout = |label, entries: &[wgpu::BindGroupLayoutEntry]| {
             device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some(label), entries })
         };
@@ -437,6 +450,8 @@ impl Kernels {
         Self {
             conv_pipeline_layout: pipeline_layout(&conv_layout),
             conv_module: module("conv3x3"),
+            conv_source: source("conv3x3"),
+            conv_rows_module: None,
             conv_layout,
             prep_layout,
             output_layout,
@@ -457,7 +472,14 @@ impl Kernels {
 
     /// The conv pipeline for a variant, created on first use.
     pub fn conv(&mut self, device: &wgpu::Device, v: ConvVariant) -> wgpu::ComputePipeline {
-        let (module, layout, precision) = (&self.conv_module, &self.conv_pipeline_layout, self.precision);
+        // Two-column lanes tiles run in the module with conv3x3_rows.wgsl ([`ROWS_STUB`]).
+        let rows = v.method == Method::Lanes && v.cols > 1 && !v.reduce;
+        if rows && self.conv_rows_module.is_none() {
+            assert!(self.conv_source.contains(ROWS_STUB), "conv3x3.wgsl has kernels::ROWS_STUB");
+            self.conv_rows_module = Some(shader_module(device, "conv3x3 (two-column lanes)", self.conv_source.replace(ROWS_STUB, shader_source("conv3x3_rows"))));
+        }
+        let module = if rows { self.conv_rows_module.as_ref().expect("made above") } else { &self.conv_module };
+        let (layout, precision) = (&self.conv_pipeline_layout, self.precision);
         self.conv
             .entry(v)
             .or_insert_with(|| {
@@ -556,10 +578,16 @@ impl Tile {
         ([2, 4].contains(&rows) && (1..=2).contains(&blocks)).then_some(Tile { rows, blocks, cols: 2, group_x: WORKGROUP, method: Method::Winograd, split: 1 })
     }
 
-    /// This one-column direct tile with its weights loaded across the subgroup
-    /// ([`Method::Lanes`]), if it is one.
+    /// This direct tile with its weights loaded across the subgroup ([`Method::Lanes`]), if it
+    /// is direct.
     pub fn with_lanes(self) -> Option<Self> {
-        (self.method == Method::Direct && self.cols == 1).then_some(Tile { method: Method::Lanes, ..self })
+        (self.method == Method::Direct).then_some(Tile { method: Method::Lanes, ..self })
+    }
+
+    /// A tile with its weights loaded across the subgroup ([`Method::Lanes`]): `rows` x `blocks`
+    /// x `cols`, where lanes tiles also take 4 blocks in 2 columns, if the kernel has it.
+    pub fn lanes(rows: u32, blocks: u32, cols: u32) -> Option<Self> {
+        ([1, 2, 4, 8, 16].contains(&rows) && [1, 2, 4].contains(&blocks) && (1..=2).contains(&cols)).then_some(Tile { rows, blocks, cols, group_x: WORKGROUP, method: Method::Lanes, split: 1 })
     }
 
     /// Weights per input-output channel pair ([`Method::taps`]).
