@@ -91,6 +91,88 @@ fn mac_rows(p: Pair, m: mat4x4<f32>, u: vec4<f32>, v: vec4<f32>) -> Pair {
     return Pair(a, b);
 }
 
+// Add one block's nine taps `t` to its tile, two rows at a time, from the input columns l, c,
+// r (kx = 0, 1, 2).
+fn add_block_rows(acc: ptr<function, Tile>, t: Taps, l: Column, c: Column, r: Column) {
+    { let p = rows2((*acc).r0, (*acc).r1, t, l.v0, l.v1, l.v2, l.v3, c.v0, c.v1, c.v2, c.v3, r.v0, r.v1, r.v2, r.v3); (*acc).r0 = p.a; (*acc).r1 = p.b; }
+    if ROWS > 2u { let p = rows2((*acc).r2, (*acc).r3, t, l.v2, l.v3, l.v4, l.v5, c.v2, c.v3, c.v4, c.v5, r.v2, r.v3, r.v4, r.v5); (*acc).r2 = p.a; (*acc).r3 = p.b; }
+    if ROWS > 4u { let p = rows2((*acc).r4, (*acc).r5, t, l.v4, l.v5, l.v6, l.v7, c.v4, c.v5, c.v6, c.v7, r.v4, r.v5, r.v6, r.v7); (*acc).r4 = p.a; (*acc).r5 = p.b; }
+    if ROWS > 6u { let p = rows2((*acc).r6, (*acc).r7, t, l.v6, l.v7, l.v8, l.v9, c.v6, c.v7, c.v8, c.v9, r.v6, r.v7, r.v8, r.v9); (*acc).r6 = p.a; (*acc).r7 = p.b; }
+    if ROWS > 8u { let p = rows2((*acc).r8, (*acc).r9, t, l.v8, l.v9, l.v10, l.v11, c.v8, c.v9, c.v10, c.v11, r.v8, r.v9, r.v10, r.v11); (*acc).r8 = p.a; (*acc).r9 = p.b; }
+    if ROWS > 10u { let p = rows2((*acc).r10, (*acc).r11, t, l.v10, l.v11, l.v12, l.v13, c.v10, c.v11, c.v12, c.v13, r.v10, r.v11, r.v12, r.v13); (*acc).r10 = p.a; (*acc).r11 = p.b; }
+    if ROWS > 12u { let p = rows2((*acc).r12, (*acc).r13, t, l.v12, l.v13, l.v14, l.v15, c.v12, c.v13, c.v14, c.v15, r.v12, r.v13, r.v14, r.v15); (*acc).r12 = p.a; (*acc).r13 = p.b; }
+    if ROWS > 14u { let p = rows2((*acc).r14, (*acc).r15, t, l.v14, l.v15, l.v16, l.v17, c.v14, c.v15, c.v16, c.v17, r.v14, r.v15, r.v16, r.v17); (*acc).r14 = p.a; (*acc).r15 = p.b; }
+}
+
+// The taps of blocks j (0 to 3) from tap vec4s spread over the lanes as in `lanes_*`: a<kx><ky>
+// holds lanes 0..7 of tap (ky, kx), b<kx><ky> lanes 8..15.
+struct Spread {
+    a00: vec4<f32>, a01: vec4<f32>, a02: vec4<f32>, a10: vec4<f32>, a11: vec4<f32>, a12: vec4<f32>, a20: vec4<f32>, a21: vec4<f32>, a22: vec4<f32>,
+    b00: vec4<f32>, b01: vec4<f32>, b02: vec4<f32>, b10: vec4<f32>, b11: vec4<f32>, b12: vec4<f32>, b20: vec4<f32>, b21: vec4<f32>, b22: vec4<f32>,
+}
+
+// This lane's share of the weights of input block `cb`: tap (ky, kx)'s 4 x OB vec4s start at
+// base + (ky * 3 + kx) * 4 * OB (lanes past them load unused vec4s).
+fn spread(base: u32) -> Spread {
+    var s: Spread;
+    s.a00 = weights[base + 0u * OB + lane];
+    s.a01 = weights[base + 12u * OB + lane];
+    s.a02 = weights[base + 24u * OB + lane];
+    s.a10 = weights[base + 4u * OB + lane];
+    s.a11 = weights[base + 16u * OB + lane];
+    s.a12 = weights[base + 28u * OB + lane];
+    s.a20 = weights[base + 8u * OB + lane];
+    s.a21 = weights[base + 20u * OB + lane];
+    s.a22 = weights[base + 32u * OB + lane];
+    if OB > 2u {
+        s.b00 = weights[base + 0u * OB + 8u + lane];
+        s.b01 = weights[base + 12u * OB + 8u + lane];
+        s.b02 = weights[base + 24u * OB + 8u + lane];
+        s.b10 = weights[base + 4u * OB + 8u + lane];
+        s.b11 = weights[base + 16u * OB + 8u + lane];
+        s.b12 = weights[base + 28u * OB + 8u + lane];
+        s.b20 = weights[base + 8u * OB + 8u + lane];
+        s.b21 = weights[base + 20u * OB + 8u + lane];
+        s.b22 = weights[base + 32u * OB + 8u + lane];
+    }
+    return s;
+}
+
+// The nine taps of one block.
+fn taps_1(s: Spread) -> Taps {
+    return Taps(lanes_1(s.a00), lanes_1(s.a01), lanes_1(s.a02), lanes_1(s.a10), lanes_1(s.a11), lanes_1(s.a12), lanes_1(s.a20), lanes_1(s.a21), lanes_1(s.a22));
+}
+
+// The nine taps of block 0 of two.
+fn taps_2_0(s: Spread) -> Taps {
+    return Taps(lanes_2_0(s.a00), lanes_2_0(s.a01), lanes_2_0(s.a02), lanes_2_0(s.a10), lanes_2_0(s.a11), lanes_2_0(s.a12), lanes_2_0(s.a20), lanes_2_0(s.a21), lanes_2_0(s.a22));
+}
+
+// The nine taps of block 1 of two.
+fn taps_2_1(s: Spread) -> Taps {
+    return Taps(lanes_2_1(s.a00), lanes_2_1(s.a01), lanes_2_1(s.a02), lanes_2_1(s.a10), lanes_2_1(s.a11), lanes_2_1(s.a12), lanes_2_1(s.a20), lanes_2_1(s.a21), lanes_2_1(s.a22));
+}
+
+// The nine taps of block 0 of four.
+fn taps_4_0(s: Spread) -> Taps {
+    return Taps(lanes_4_0(s.a00, s.b00), lanes_4_0(s.a01, s.b01), lanes_4_0(s.a02, s.b02), lanes_4_0(s.a10, s.b10), lanes_4_0(s.a11, s.b11), lanes_4_0(s.a12, s.b12), lanes_4_0(s.a20, s.b20), lanes_4_0(s.a21, s.b21), lanes_4_0(s.a22, s.b22));
+}
+
+// The nine taps of block 1 of four.
+fn taps_4_1(s: Spread) -> Taps {
+    return Taps(lanes_4_1(s.a00, s.b00), lanes_4_1(s.a01, s.b01), lanes_4_1(s.a02, s.b02), lanes_4_1(s.a10, s.b10), lanes_4_1(s.a11, s.b11), lanes_4_1(s.a12, s.b12), lanes_4_1(s.a20, s.b20), lanes_4_1(s.a21, s.b21), lanes_4_1(s.a22, s.b22));
+}
+
+// The nine taps of block 2 of four.
+fn taps_4_2(s: Spread) -> Taps {
+    return Taps(lanes_4_2(s.a00, s.b00), lanes_4_2(s.a01, s.b01), lanes_4_2(s.a02, s.b02), lanes_4_2(s.a10, s.b10), lanes_4_2(s.a11, s.b11), lanes_4_2(s.a12, s.b12), lanes_4_2(s.a20, s.b20), lanes_4_2(s.a21, s.b21), lanes_4_2(s.a22, s.b22));
+}
+
+// The nine taps of block 3 of four.
+fn taps_4_3(s: Spread) -> Taps {
+    return Taps(lanes_4_3(s.a00, s.b00), lanes_4_3(s.a01, s.b01), lanes_4_3(s.a02, s.b02), lanes_4_3(s.a10, s.b10), lanes_4_3(s.a11, s.b11), lanes_4_3(s.a12, s.b12), lanes_4_3(s.a20, s.b20), lanes_4_3(s.a21, s.b21), lanes_4_3(s.a22, s.b22));
+}
+
 // Add input block `layer` of `t` at weight block `cb` to a two-column lanes tile (weights
 // across the subgroup) whose top-left output is (x, y0), two rows at a time: the input columns
 // x - 1 .. x + TW are fetched first, then each pair of rows of each block takes all its
@@ -111,164 +193,28 @@ fn accumulate_rows(acc0: ptr<function, Tile>, acc1: ptr<function, Tile>, acc2: p
     let k2 = column(t, mode, x + 1, y0, layer);
     var k3: Column;
     if TW > 1u { k3 = column(t, mode, x + 2, y0, layer); }
-    // Tap (ky, kx)'s 4 x OB vec4s start at base + (ky * 3 + kx) * 4 * OB, spread over the lanes.
-    let base = w + cb * 36u * OB;
-    let a00 = weights[base + 0u * OB + lane];
-    var b00 = vec4<f32>(0.0);
-    if OB > 2u { b00 = weights[base + 0u * OB + 8u + lane]; }
-    let a01 = weights[base + 12u * OB + lane];
-    var b01 = vec4<f32>(0.0);
-    if OB > 2u { b01 = weights[base + 12u * OB + 8u + lane]; }
-    let a02 = weights[base + 24u * OB + lane];
-    var b02 = vec4<f32>(0.0);
-    if OB > 2u { b02 = weights[base + 24u * OB + 8u + lane]; }
-    let a10 = weights[base + 4u * OB + lane];
-    var b10 = vec4<f32>(0.0);
-    if OB > 2u { b10 = weights[base + 4u * OB + 8u + lane]; }
-    let a11 = weights[base + 16u * OB + lane];
-    var b11 = vec4<f32>(0.0);
-    if OB > 2u { b11 = weights[base + 16u * OB + 8u + lane]; }
-    let a12 = weights[base + 28u * OB + lane];
-    var b12 = vec4<f32>(0.0);
-    if OB > 2u { b12 = weights[base + 28u * OB + 8u + lane]; }
-    let a20 = weights[base + 8u * OB + lane];
-    var b20 = vec4<f32>(0.0);
-    if OB > 2u { b20 = weights[base + 8u * OB + 8u + lane]; }
-    let a21 = weights[base + 20u * OB + lane];
-    var b21 = vec4<f32>(0.0);
-    if OB > 2u { b21 = weights[base + 20u * OB + 8u + lane]; }
-    let a22 = weights[base + 32u * OB + lane];
-    var b22 = vec4<f32>(0.0);
-    if OB > 2u { b22 = weights[base + 32u * OB + 8u + lane]; }
+    let s = spread(w + cb * 36u * OB);
+    // Column 0 from input columns 0..2, column 1 from 1..3, block by block.
     if OB == 1u {
-        let t0 = Taps(lanes_1(a00), lanes_1(a01), lanes_1(a02), lanes_1(a10), lanes_1(a11), lanes_1(a12), lanes_1(a20), lanes_1(a21), lanes_1(a22));
-        { let p = rows2((*acc0).r0, (*acc0).r1, t0, k0.v0, k0.v1, k0.v2, k0.v3, k1.v0, k1.v1, k1.v2, k1.v3, k2.v0, k2.v1, k2.v2, k2.v3); (*acc0).r0 = p.a; (*acc0).r1 = p.b; }
-        if ROWS > 2u { let p = rows2((*acc0).r2, (*acc0).r3, t0, k0.v2, k0.v3, k0.v4, k0.v5, k1.v2, k1.v3, k1.v4, k1.v5, k2.v2, k2.v3, k2.v4, k2.v5); (*acc0).r2 = p.a; (*acc0).r3 = p.b; }
-        if ROWS > 4u { let p = rows2((*acc0).r4, (*acc0).r5, t0, k0.v4, k0.v5, k0.v6, k0.v7, k1.v4, k1.v5, k1.v6, k1.v7, k2.v4, k2.v5, k2.v6, k2.v7); (*acc0).r4 = p.a; (*acc0).r5 = p.b; }
-        if ROWS > 6u { let p = rows2((*acc0).r6, (*acc0).r7, t0, k0.v6, k0.v7, k0.v8, k0.v9, k1.v6, k1.v7, k1.v8, k1.v9, k2.v6, k2.v7, k2.v8, k2.v9); (*acc0).r6 = p.a; (*acc0).r7 = p.b; }
-        if ROWS > 8u { let p = rows2((*acc0).r8, (*acc0).r9, t0, k0.v8, k0.v9, k0.v10, k0.v11, k1.v8, k1.v9, k1.v10, k1.v11, k2.v8, k2.v9, k2.v10, k2.v11); (*acc0).r8 = p.a; (*acc0).r9 = p.b; }
-        if ROWS > 10u { let p = rows2((*acc0).r10, (*acc0).r11, t0, k0.v10, k0.v11, k0.v12, k0.v13, k1.v10, k1.v11, k1.v12, k1.v13, k2.v10, k2.v11, k2.v12, k2.v13); (*acc0).r10 = p.a; (*acc0).r11 = p.b; }
-        if ROWS > 12u { let p = rows2((*acc0).r12, (*acc0).r13, t0, k0.v12, k0.v13, k0.v14, k0.v15, k1.v12, k1.v13, k1.v14, k1.v15, k2.v12, k2.v13, k2.v14, k2.v15); (*acc0).r12 = p.a; (*acc0).r13 = p.b; }
-        if ROWS > 14u { let p = rows2((*acc0).r14, (*acc0).r15, t0, k0.v14, k0.v15, k0.v16, k0.v17, k1.v14, k1.v15, k1.v16, k1.v17, k2.v14, k2.v15, k2.v16, k2.v17); (*acc0).r14 = p.a; (*acc0).r15 = p.b; }
-        if TW > 1u {
-            { let p = rows2((*acc4).r0, (*acc4).r1, t0, k1.v0, k1.v1, k1.v2, k1.v3, k2.v0, k2.v1, k2.v2, k2.v3, k3.v0, k3.v1, k3.v2, k3.v3); (*acc4).r0 = p.a; (*acc4).r1 = p.b; }
-            if ROWS > 2u { let p = rows2((*acc4).r2, (*acc4).r3, t0, k1.v2, k1.v3, k1.v4, k1.v5, k2.v2, k2.v3, k2.v4, k2.v5, k3.v2, k3.v3, k3.v4, k3.v5); (*acc4).r2 = p.a; (*acc4).r3 = p.b; }
-            if ROWS > 4u { let p = rows2((*acc4).r4, (*acc4).r5, t0, k1.v4, k1.v5, k1.v6, k1.v7, k2.v4, k2.v5, k2.v6, k2.v7, k3.v4, k3.v5, k3.v6, k3.v7); (*acc4).r4 = p.a; (*acc4).r5 = p.b; }
-            if ROWS > 6u { let p = rows2((*acc4).r6, (*acc4).r7, t0, k1.v6, k1.v7, k1.v8, k1.v9, k2.v6, k2.v7, k2.v8, k2.v9, k3.v6, k3.v7, k3.v8, k3.v9); (*acc4).r6 = p.a; (*acc4).r7 = p.b; }
-            if ROWS > 8u { let p = rows2((*acc4).r8, (*acc4).r9, t0, k1.v8, k1.v9, k1.v10, k1.v11, k2.v8, k2.v9, k2.v10, k2.v11, k3.v8, k3.v9, k3.v10, k3.v11); (*acc4).r8 = p.a; (*acc4).r9 = p.b; }
-            if ROWS > 10u { let p = rows2((*acc4).r10, (*acc4).r11, t0, k1.v10, k1.v11, k1.v12, k1.v13, k2.v10, k2.v11, k2.v12, k2.v13, k3.v10, k3.v11, k3.v12, k3.v13); (*acc4).r10 = p.a; (*acc4).r11 = p.b; }
-            if ROWS > 12u { let p = rows2((*acc4).r12, (*acc4).r13, t0, k1.v12, k1.v13, k1.v14, k1.v15, k2.v12, k2.v13, k2.v14, k2.v15, k3.v12, k3.v13, k3.v14, k3.v15); (*acc4).r12 = p.a; (*acc4).r13 = p.b; }
-            if ROWS > 14u { let p = rows2((*acc4).r14, (*acc4).r15, t0, k1.v14, k1.v15, k1.v16, k1.v17, k2.v14, k2.v15, k2.v16, k2.v17, k3.v14, k3.v15, k3.v16, k3.v17); (*acc4).r14 = p.a; (*acc4).r15 = p.b; }
-        }
+        add_block_rows(acc0, taps_1(s), k0, k1, k2);
+        if TW > 1u { add_block_rows(acc4, taps_1(s), k1, k2, k3); }
     } else if OB == 2u {
-        let t0 = Taps(lanes_2_0(a00), lanes_2_0(a01), lanes_2_0(a02), lanes_2_0(a10), lanes_2_0(a11), lanes_2_0(a12), lanes_2_0(a20), lanes_2_0(a21), lanes_2_0(a22));
-        let t1 = Taps(lanes_2_1(a00), lanes_2_1(a01), lanes_2_1(a02), lanes_2_1(a10), lanes_2_1(a11), lanes_2_1(a12), lanes_2_1(a20), lanes_2_1(a21), lanes_2_1(a22));
-        let t2 = t0;
-        let t3 = t1;
-        { let p = rows2((*acc0).r0, (*acc0).r1, t0, k0.v0, k0.v1, k0.v2, k0.v3, k1.v0, k1.v1, k1.v2, k1.v3, k2.v0, k2.v1, k2.v2, k2.v3); (*acc0).r0 = p.a; (*acc0).r1 = p.b; }
-        if ROWS > 2u { let p = rows2((*acc0).r2, (*acc0).r3, t0, k0.v2, k0.v3, k0.v4, k0.v5, k1.v2, k1.v3, k1.v4, k1.v5, k2.v2, k2.v3, k2.v4, k2.v5); (*acc0).r2 = p.a; (*acc0).r3 = p.b; }
-        if ROWS > 4u { let p = rows2((*acc0).r4, (*acc0).r5, t0, k0.v4, k0.v5, k0.v6, k0.v7, k1.v4, k1.v5, k1.v6, k1.v7, k2.v4, k2.v5, k2.v6, k2.v7); (*acc0).r4 = p.a; (*acc0).r5 = p.b; }
-        if ROWS > 6u { let p = rows2((*acc0).r6, (*acc0).r7, t0, k0.v6, k0.v7, k0.v8, k0.v9, k1.v6, k1.v7, k1.v8, k1.v9, k2.v6, k2.v7, k2.v8, k2.v9); (*acc0).r6 = p.a; (*acc0).r7 = p.b; }
-        if ROWS > 8u { let p = rows2((*acc0).r8, (*acc0).r9, t0, k0.v8, k0.v9, k0.v10, k0.v11, k1.v8, k1.v9, k1.v10, k1.v11, k2.v8, k2.v9, k2.v10, k2.v11); (*acc0).r8 = p.a; (*acc0).r9 = p.b; }
-        if ROWS > 10u { let p = rows2((*acc0).r10, (*acc0).r11, t0, k0.v10, k0.v11, k0.v12, k0.v13, k1.v10, k1.v11, k1.v12, k1.v13, k2.v10, k2.v11, k2.v12, k2.v13); (*acc0).r10 = p.a; (*acc0).r11 = p.b; }
-        if ROWS > 12u { let p = rows2((*acc0).r12, (*acc0).r13, t0, k0.v12, k0.v13, k0.v14, k0.v15, k1.v12, k1.v13, k1.v14, k1.v15, k2.v12, k2.v13, k2.v14, k2.v15); (*acc0).r12 = p.a; (*acc0).r13 = p.b; }
-        if ROWS > 14u { let p = rows2((*acc0).r14, (*acc0).r15, t0, k0.v14, k0.v15, k0.v16, k0.v17, k1.v14, k1.v15, k1.v16, k1.v17, k2.v14, k2.v15, k2.v16, k2.v17); (*acc0).r14 = p.a; (*acc0).r15 = p.b; }
-        if OB > 1u { let p = rows2((*acc1).r0, (*acc1).r1, t1, k0.v0, k0.v1, k0.v2, k0.v3, k1.v0, k1.v1, k1.v2, k1.v3, k2.v0, k2.v1, k2.v2, k2.v3); (*acc1).r0 = p.a; (*acc1).r1 = p.b; }
-        if ROWS > 2u && OB > 1u { let p = rows2((*acc1).r2, (*acc1).r3, t1, k0.v2, k0.v3, k0.v4, k0.v5, k1.v2, k1.v3, k1.v4, k1.v5, k2.v2, k2.v3, k2.v4, k2.v5); (*acc1).r2 = p.a; (*acc1).r3 = p.b; }
-        if ROWS > 4u && OB > 1u { let p = rows2((*acc1).r4, (*acc1).r5, t1, k0.v4, k0.v5, k0.v6, k0.v7, k1.v4, k1.v5, k1.v6, k1.v7, k2.v4, k2.v5, k2.v6, k2.v7); (*acc1).r4 = p.a; (*acc1).r5 = p.b; }
-        if ROWS > 6u && OB > 1u { let p = rows2((*acc1).r6, (*acc1).r7, t1, k0.v6, k0.v7, k0.v8, k0.v9, k1.v6, k1.v7, k1.v8, k1.v9, k2.v6, k2.v7, k2.v8, k2.v9); (*acc1).r6 = p.a; (*acc1).r7 = p.b; }
-        if ROWS > 8u && OB > 1u { let p = rows2((*acc1).r8, (*acc1).r9, t1, k0.v8, k0.v9, k0.v10, k0.v11, k1.v8, k1.v9, k1.v10, k1.v11, k2.v8, k2.v9, k2.v10, k2.v11); (*acc1).r8 = p.a; (*acc1).r9 = p.b; }
-        if ROWS > 10u && OB > 1u { let p = rows2((*acc1).r10, (*acc1).r11, t1, k0.v10, k0.v11, k0.v12, k0.v13, k1.v10, k1.v11, k1.v12, k1.v13, k2.v10, k2.v11, k2.v12, k2.v13); (*acc1).r10 = p.a; (*acc1).r11 = p.b; }
-        if ROWS > 12u && OB > 1u { let p = rows2((*acc1).r12, (*acc1).r13, t1, k0.v12, k0.v13, k0.v14, k0.v15, k1.v12, k1.v13, k1.v14, k1.v15, k2.v12, k2.v13, k2.v14, k2.v15); (*acc1).r12 = p.a; (*acc1).r13 = p.b; }
-        if ROWS > 14u && OB > 1u { let p = rows2((*acc1).r14, (*acc1).r15, t1, k0.v14, k0.v15, k0.v16, k0.v17, k1.v14, k1.v15, k1.v16, k1.v17, k2.v14, k2.v15, k2.v16, k2.v17); (*acc1).r14 = p.a; (*acc1).r15 = p.b; }
+        add_block_rows(acc0, taps_2_0(s), k0, k1, k2);
+        add_block_rows(acc1, taps_2_1(s), k0, k1, k2);
         if TW > 1u {
-            { let p = rows2((*acc4).r0, (*acc4).r1, t0, k1.v0, k1.v1, k1.v2, k1.v3, k2.v0, k2.v1, k2.v2, k2.v3, k3.v0, k3.v1, k3.v2, k3.v3); (*acc4).r0 = p.a; (*acc4).r1 = p.b; }
-            if ROWS > 2u { let p = rows2((*acc4).r2, (*acc4).r3, t0, k1.v2, k1.v3, k1.v4, k1.v5, k2.v2, k2.v3, k2.v4, k2.v5, k3.v2, k3.v3, k3.v4, k3.v5); (*acc4).r2 = p.a; (*acc4).r3 = p.b; }
-            if ROWS > 4u { let p = rows2((*acc4).r4, (*acc4).r5, t0, k1.v4, k1.v5, k1.v6, k1.v7, k2.v4, k2.v5, k2.v6, k2.v7, k3.v4, k3.v5, k3.v6, k3.v7); (*acc4).r4 = p.a; (*acc4).r5 = p.b; }
-            if ROWS > 6u { let p = rows2((*acc4).r6, (*acc4).r7, t0, k1.v6, k1.v7, k1.v8, k1.v9, k2.v6, k2.v7, k2.v8, k2.v9, k3.v6, k3.v7, k3.v8, k3.v9); (*acc4).r6 = p.a; (*acc4).r7 = p.b; }
-            if ROWS > 8u { let p = rows2((*acc4).r8, (*acc4).r9, t0, k1.v8, k1.v9, k1.v10, k1.v11, k2.v8, k2.v9, k2.v10, k2.v11, k3.v8, k3.v9, k3.v10, k3.v11); (*acc4).r8 = p.a; (*acc4).r9 = p.b; }
-            if ROWS > 10u { let p = rows2((*acc4).r10, (*acc4).r11, t0, k1.v10, k1.v11, k1.v12, k1.v13, k2.v10, k2.v11, k2.v12, k2.v13, k3.v10, k3.v11, k3.v12, k3.v13); (*acc4).r10 = p.a; (*acc4).r11 = p.b; }
-            if ROWS > 12u { let p = rows2((*acc4).r12, (*acc4).r13, t0, k1.v12, k1.v13, k1.v14, k1.v15, k2.v12, k2.v13, k2.v14, k2.v15, k3.v12, k3.v13, k3.v14, k3.v15); (*acc4).r12 = p.a; (*acc4).r13 = p.b; }
-            if ROWS > 14u { let p = rows2((*acc4).r14, (*acc4).r15, t0, k1.v14, k1.v15, k1.v16, k1.v17, k2.v14, k2.v15, k2.v16, k2.v17, k3.v14, k3.v15, k3.v16, k3.v17); (*acc4).r14 = p.a; (*acc4).r15 = p.b; }
-            if OB > 1u { let p = rows2((*acc5).r0, (*acc5).r1, t1, k1.v0, k1.v1, k1.v2, k1.v3, k2.v0, k2.v1, k2.v2, k2.v3, k3.v0, k3.v1, k3.v2, k3.v3); (*acc5).r0 = p.a; (*acc5).r1 = p.b; }
-            if ROWS > 2u && OB > 1u { let p = rows2((*acc5).r2, (*acc5).r3, t1, k1.v2, k1.v3, k1.v4, k1.v5, k2.v2, k2.v3, k2.v4, k2.v5, k3.v2, k3.v3, k3.v4, k3.v5); (*acc5).r2 = p.a; (*acc5).r3 = p.b; }
-            if ROWS > 4u && OB > 1u { let p = rows2((*acc5).r4, (*acc5).r5, t1, k1.v4, k1.v5, k1.v6, k1.v7, k2.v4, k2.v5, k2.v6, k2.v7, k3.v4, k3.v5, k3.v6, k3.v7); (*acc5).r4 = p.a; (*acc5).r5 = p.b; }
-            if ROWS > 6u && OB > 1u { let p = rows2((*acc5).r6, (*acc5).r7, t1, k1.v6, k1.v7, k1.v8, k1.v9, k2.v6, k2.v7, k2.v8, k2.v9, k3.v6, k3.v7, k3.v8, k3.v9); (*acc5).r6 = p.a; (*acc5).r7 = p.b; }
-            if ROWS > 8u && OB > 1u { let p = rows2((*acc5).r8, (*acc5).r9, t1, k1.v8, k1.v9, k1.v10, k1.v11, k2.v8, k2.v9, k2.v10, k2.v11, k3.v8, k3.v9, k3.v10, k3.v11); (*acc5).r8 = p.a; (*acc5).r9 = p.b; }
-            if ROWS > 10u && OB > 1u { let p = rows2((*acc5).r10, (*acc5).r11, t1, k1.v10, k1.v11, k1.v12, k1.v13, k2.v10, k2.v11, k2.v12, k2.v13, k3.v10, k3.v11, k3.v12, k3.v13); (*acc5).r10 = p.a; (*acc5).r11 = p.b; }
-            if ROWS > 12u && OB > 1u { let p = rows2((*acc5).r12, (*acc5).r13, t1, k1.v12, k1.v13, k1.v14, k1.v15, k2.v12, k2.v13, k2.v14, k2.v15, k3.v12, k3.v13, k3.v14, k3.v15); (*acc5).r12 = p.a; (*acc5).r13 = p.b; }
-            if ROWS > 14u && OB > 1u { let p = rows2((*acc5).r14, (*acc5).r15, t1, k1.v14, k1.v15, k1.v16, k1.v17, k2.v14, k2.v15, k2.v16, k2.v17, k3.v14, k3.v15, k3.v16, k3.v17); (*acc5).r14 = p.a; (*acc5).r15 = p.b; }
+            add_block_rows(acc4, taps_2_0(s), k1, k2, k3);
+            add_block_rows(acc5, taps_2_1(s), k1, k2, k3);
         }
     } else {
-        let t0 = Taps(lanes_4_0(a00, b00), lanes_4_0(a01, b01), lanes_4_0(a02, b02), lanes_4_0(a10, b10), lanes_4_0(a11, b11), lanes_4_0(a12, b12), lanes_4_0(a20, b20), lanes_4_0(a21, b21), lanes_4_0(a22, b22));
-        let t1 = Taps(lanes_4_1(a00, b00), lanes_4_1(a01, b01), lanes_4_1(a02, b02), lanes_4_1(a10, b10), lanes_4_1(a11, b11), lanes_4_1(a12, b12), lanes_4_1(a20, b20), lanes_4_1(a21, b21), lanes_4_1(a22, b22));
-        let t2 = Taps(lanes_4_2(a00, b00), lanes_4_2(a01, b01), lanes_4_2(a02, b02), lanes_4_2(a10, b10), lanes_4_2(a11, b11), lanes_4_2(a12, b12), lanes_4_2(a20, b20), lanes_4_2(a21, b21), lanes_4_2(a22, b22));
-        let t3 = Taps(lanes_4_3(a00, b00), lanes_4_3(a01, b01), lanes_4_3(a02, b02), lanes_4_3(a10, b10), lanes_4_3(a11, b11), lanes_4_3(a12, b12), lanes_4_3(a20, b20), lanes_4_3(a21, b21), lanes_4_3(a22, b22));
-        { let p = rows2((*acc0).r0, (*acc0).r1, t0, k0.v0, k0.v1, k0.v2, k0.v3, k1.v0, k1.v1, k1.v2, k1.v3, k2.v0, k2.v1, k2.v2, k2.v3); (*acc0).r0 = p.a; (*acc0).r1 = p.b; }
-        if ROWS > 2u { let p = rows2((*acc0).r2, (*acc0).r3, t0, k0.v2, k0.v3, k0.v4, k0.v5, k1.v2, k1.v3, k1.v4, k1.v5, k2.v2, k2.v3, k2.v4, k2.v5); (*acc0).r2 = p.a; (*acc0).r3 = p.b; }
-        if ROWS > 4u { let p = rows2((*acc0).r4, (*acc0).r5, t0, k0.v4, k0.v5, k0.v6, k0.v7, k1.v4, k1.v5, k1.v6, k1.v7, k2.v4, k2.v5, k2.v6, k2.v7); (*acc0).r4 = p.a; (*acc0).r5 = p.b; }
-        if ROWS > 6u { let p = rows2((*acc0).r6, (*acc0).r7, t0, k0.v6, k0.v7, k0.v8, k0.v9, k1.v6, k1.v7, k1.v8, k1.v9, k2.v6, k2.v7, k2.v8, k2.v9); (*acc0).r6 = p.a; (*acc0).r7 = p.b; }
-        if ROWS > 8u { let p = rows2((*acc0).r8, (*acc0).r9, t0, k0.v8, k0.v9, k0.v10, k0.v11, k1.v8, k1.v9, k1.v10, k1.v11, k2.v8, k2.v9, k2.v10, k2.v11); (*acc0).r8 = p.a; (*acc0).r9 = p.b; }
-        if ROWS > 10u { let p = rows2((*acc0).r10, (*acc0).r11, t0, k0.v10, k0.v11, k0.v12, k0.v13, k1.v10, k1.v11, k1.v12, k1.v13, k2.v10, k2.v11, k2.v12, k2.v13); (*acc0).r10 = p.a; (*acc0).r11 = p.b; }
-        if ROWS > 12u { let p = rows2((*acc0).r12, (*acc0).r13, t0, k0.v12, k0.v13, k0.v14, k0.v15, k1.v12, k1.v13, k1.v14, k1.v15, k2.v12, k2.v13, k2.v14, k2.v15); (*acc0).r12 = p.a; (*acc0).r13 = p.b; }
-        if ROWS > 14u { let p = rows2((*acc0).r14, (*acc0).r15, t0, k0.v14, k0.v15, k0.v16, k0.v17, k1.v14, k1.v15, k1.v16, k1.v17, k2.v14, k2.v15, k2.v16, k2.v17); (*acc0).r14 = p.a; (*acc0).r15 = p.b; }
-        if OB > 1u { let p = rows2((*acc1).r0, (*acc1).r1, t1, k0.v0, k0.v1, k0.v2, k0.v3, k1.v0, k1.v1, k1.v2, k1.v3, k2.v0, k2.v1, k2.v2, k2.v3); (*acc1).r0 = p.a; (*acc1).r1 = p.b; }
-        if ROWS > 2u && OB > 1u { let p = rows2((*acc1).r2, (*acc1).r3, t1, k0.v2, k0.v3, k0.v4, k0.v5, k1.v2, k1.v3, k1.v4, k1.v5, k2.v2, k2.v3, k2.v4, k2.v5); (*acc1).r2 = p.a; (*acc1).r3 = p.b; }
-        if ROWS > 4u && OB > 1u { let p = rows2((*acc1).r4, (*acc1).r5, t1, k0.v4, k0.v5, k0.v6, k0.v7, k1.v4, k1.v5, k1.v6, k1.v7, k2.v4, k2.v5, k2.v6, k2.v7); (*acc1).r4 = p.a; (*acc1).r5 = p.b; }
-        if ROWS > 6u && OB > 1u { let p = rows2((*acc1).r6, (*acc1).r7, t1, k0.v6, k0.v7, k0.v8, k0.v9, k1.v6, k1.v7, k1.v8, k1.v9, k2.v6, k2.v7, k2.v8, k2.v9); (*acc1).r6 = p.a; (*acc1).r7 = p.b; }
-        if ROWS > 8u && OB > 1u { let p = rows2((*acc1).r8, (*acc1).r9, t1, k0.v8, k0.v9, k0.v10, k0.v11, k1.v8, k1.v9, k1.v10, k1.v11, k2.v8, k2.v9, k2.v10, k2.v11); (*acc1).r8 = p.a; (*acc1).r9 = p.b; }
-        if ROWS > 10u && OB > 1u { let p = rows2((*acc1).r10, (*acc1).r11, t1, k0.v10, k0.v11, k0.v12, k0.v13, k1.v10, k1.v11, k1.v12, k1.v13, k2.v10, k2.v11, k2.v12, k2.v13); (*acc1).r10 = p.a; (*acc1).r11 = p.b; }
-        if ROWS > 12u && OB > 1u { let p = rows2((*acc1).r12, (*acc1).r13, t1, k0.v12, k0.v13, k0.v14, k0.v15, k1.v12, k1.v13, k1.v14, k1.v15, k2.v12, k2.v13, k2.v14, k2.v15); (*acc1).r12 = p.a; (*acc1).r13 = p.b; }
-        if ROWS > 14u && OB > 1u { let p = rows2((*acc1).r14, (*acc1).r15, t1, k0.v14, k0.v15, k0.v16, k0.v17, k1.v14, k1.v15, k1.v16, k1.v17, k2.v14, k2.v15, k2.v16, k2.v17); (*acc1).r14 = p.a; (*acc1).r15 = p.b; }
-        if OB > 2u { let p = rows2((*acc2).r0, (*acc2).r1, t2, k0.v0, k0.v1, k0.v2, k0.v3, k1.v0, k1.v1, k1.v2, k1.v3, k2.v0, k2.v1, k2.v2, k2.v3); (*acc2).r0 = p.a; (*acc2).r1 = p.b; }
-        if ROWS > 2u && OB > 2u { let p = rows2((*acc2).r2, (*acc2).r3, t2, k0.v2, k0.v3, k0.v4, k0.v5, k1.v2, k1.v3, k1.v4, k1.v5, k2.v2, k2.v3, k2.v4, k2.v5); (*acc2).r2 = p.a; (*acc2).r3 = p.b; }
-        if ROWS > 4u && OB > 2u { let p = rows2((*acc2).r4, (*acc2).r5, t2, k0.v4, k0.v5, k0.v6, k0.v7, k1.v4, k1.v5, k1.v6, k1.v7, k2.v4, k2.v5, k2.v6, k2.v7); (*acc2).r4 = p.a; (*acc2).r5 = p.b; }
-        if ROWS > 6u && OB > 2u { let p = rows2((*acc2).r6, (*acc2).r7, t2, k0.v6, k0.v7, k0.v8, k0.v9, k1.v6, k1.v7, k1.v8, k1.v9, k2.v6, k2.v7, k2.v8, k2.v9); (*acc2).r6 = p.a; (*acc2).r7 = p.b; }
-        if ROWS > 8u && OB > 2u { let p = rows2((*acc2).r8, (*acc2).r9, t2, k0.v8, k0.v9, k0.v10, k0.v11, k1.v8, k1.v9, k1.v10, k1.v11, k2.v8, k2.v9, k2.v10, k2.v11); (*acc2).r8 = p.a; (*acc2).r9 = p.b; }
-        if ROWS > 10u && OB > 2u { let p = rows2((*acc2).r10, (*acc2).r11, t2, k0.v10, k0.v11, k0.v12, k0.v13, k1.v10, k1.v11, k1.v12, k1.v13, k2.v10, k2.v11, k2.v12, k2.v13); (*acc2).r10 = p.a; (*acc2).r11 = p.b; }
-        if ROWS > 12u && OB > 2u { let p = rows2((*acc2).r12, (*acc2).r13, t2, k0.v12, k0.v13, k0.v14, k0.v15, k1.v12, k1.v13, k1.v14, k1.v15, k2.v12, k2.v13, k2.v14, k2.v15); (*acc2).r12 = p.a; (*acc2).r13 = p.b; }
-        if ROWS > 14u && OB > 2u { let p = rows2((*acc2).r14, (*acc2).r15, t2, k0.v14, k0.v15, k0.v16, k0.v17, k1.v14, k1.v15, k1.v16, k1.v17, k2.v14, k2.v15, k2.v16, k2.v17); (*acc2).r14 = p.a; (*acc2).r15 = p.b; }
-        if OB > 2u { let p = rows2((*acc3).r0, (*acc3).r1, t3, k0.v0, k0.v1, k0.v2, k0.v3, k1.v0, k1.v1, k1.v2, k1.v3, k2.v0, k2.v1, k2.v2, k2.v3); (*acc3).r0 = p.a; (*acc3).r1 = p.b; }
-        if ROWS > 2u && OB > 2u { let p = rows2((*acc3).r2, (*acc3).r3, t3, k0.v2, k0.v3, k0.v4, k0.v5, k1.v2, k1.v3, k1.v4, k1.v5, k2.v2, k2.v3, k2.v4, k2.v5); (*acc3).r2 = p.a; (*acc3).r3 = p.b; }
-        if ROWS > 4u && OB > 2u { let p = rows2((*acc3).r4, (*acc3).r5, t3, k0.v4, k0.v5, k0.v6, k0.v7, k1.v4, k1.v5, k1.v6, k1.v7, k2.v4, k2.v5, k2.v6, k2.v7); (*acc3).r4 = p.a; (*acc3).r5 = p.b; }
-        if ROWS > 6u && OB > 2u { let p = rows2((*acc3).r6, (*acc3).r7, t3, k0.v6, k0.v7, k0.v8, k0.v9, k1.v6, k1.v7, k1.v8, k1.v9, k2.v6, k2.v7, k2.v8, k2.v9); (*acc3).r6 = p.a; (*acc3).r7 = p.b; }
-        if ROWS > 8u && OB > 2u { let p = rows2((*acc3).r8, (*acc3).r9, t3, k0.v8, k0.v9, k0.v10, k0.v11, k1.v8, k1.v9, k1.v10, k1.v11, k2.v8, k2.v9, k2.v10, k2.v11); (*acc3).r8 = p.a; (*acc3).r9 = p.b; }
-        if ROWS > 10u && OB > 2u { let p = rows2((*acc3).r10, (*acc3).r11, t3, k0.v10, k0.v11, k0.v12, k0.v13, k1.v10, k1.v11, k1.v12, k1.v13, k2.v10, k2.v11, k2.v12, k2.v13); (*acc3).r10 = p.a; (*acc3).r11 = p.b; }
-        if ROWS > 12u && OB > 2u { let p = rows2((*acc3).r12, (*acc3).r13, t3, k0.v12, k0.v13, k0.v14, k0.v15, k1.v12, k1.v13, k1.v14, k1.v15, k2.v12, k2.v13, k2.v14, k2.v15); (*acc3).r12 = p.a; (*acc3).r13 = p.b; }
-        if ROWS > 14u && OB > 2u { let p = rows2((*acc3).r14, (*acc3).r15, t3, k0.v14, k0.v15, k0.v16, k0.v17, k1.v14, k1.v15, k1.v16, k1.v17, k2.v14, k2.v15, k2.v16, k2.v17); (*acc3).r14 = p.a; (*acc3).r15 = p.b; }
+        add_block_rows(acc0, taps_4_0(s), k0, k1, k2);
+        add_block_rows(acc1, taps_4_1(s), k0, k1, k2);
+        add_block_rows(acc2, taps_4_2(s), k0, k1, k2);
+        add_block_rows(acc3, taps_4_3(s), k0, k1, k2);
         if TW > 1u {
-            { let p = rows2((*acc4).r0, (*acc4).r1, t0, k1.v0, k1.v1, k1.v2, k1.v3, k2.v0, k2.v1, k2.v2, k2.v3, k3.v0, k3.v1, k3.v2, k3.v3); (*acc4).r0 = p.a; (*acc4).r1 = p.b; }
-            if ROWS > 2u { let p = rows2((*acc4).r2, (*acc4).r3, t0, k1.v2, k1.v3, k1.v4, k1.v5, k2.v2, k2.v3, k2.v4, k2.v5, k3.v2, k3.v3, k3.v4, k3.v5); (*acc4).r2 = p.a; (*acc4).r3 = p.b; }
-            if ROWS > 4u { let p = rows2((*acc4).r4, (*acc4).r5, t0, k1.v4, k1.v5, k1.v6, k1.v7, k2.v4, k2.v5, k2.v6, k2.v7, k3.v4, k3.v5, k3.v6, k3.v7); (*acc4).r4 = p.a; (*acc4).r5 = p.b; }
-            if ROWS > 6u { let p = rows2((*acc4).r6, (*acc4).r7, t0, k1.v6, k1.v7, k1.v8, k1.v9, k2.v6, k2.v7, k2.v8, k2.v9, k3.v6, k3.v7, k3.v8, k3.v9); (*acc4).r6 = p.a; (*acc4).r7 = p.b; }
-            if ROWS > 8u { let p = rows2((*acc4).r8, (*acc4).r9, t0, k1.v8, k1.v9, k1.v10, k1.v11, k2.v8, k2.v9, k2.v10, k2.v11, k3.v8, k3.v9, k3.v10, k3.v11); (*acc4).r8 = p.a; (*acc4).r9 = p.b; }
-            if ROWS > 10u { let p = rows2((*acc4).r10, (*acc4).r11, t0, k1.v10, k1.v11, k1.v12, k1.v13, k2.v10, k2.v11, k2.v12, k2.v13, k3.v10, k3.v11, k3.v12, k3.v13); (*acc4).r10 = p.a; (*acc4).r11 = p.b; }
-            if ROWS > 12u { let p = rows2((*acc4).r12, (*acc4).r13, t0, k1.v12, k1.v13, k1.v14, k1.v15, k2.v12, k2.v13, k2.v14, k2.v15, k3.v12, k3.v13, k3.v14, k3.v15); (*acc4).r12 = p.a; (*acc4).r13 = p.b; }
-            if ROWS > 14u { let p = rows2((*acc4).r14, (*acc4).r15, t0, k1.v14, k1.v15, k1.v16, k1.v17, k2.v14, k2.v15, k2.v16, k2.v17, k3.v14, k3.v15, k3.v16, k3.v17); (*acc4).r14 = p.a; (*acc4).r15 = p.b; }
-            if OB > 1u { let p = rows2((*acc5).r0, (*acc5).r1, t1, k1.v0, k1.v1, k1.v2, k1.v3, k2.v0, k2.v1, k2.v2, k2.v3, k3.v0, k3.v1, k3.v2, k3.v3); (*acc5).r0 = p.a; (*acc5).r1 = p.b; }
-            if ROWS > 2u && OB > 1u { let p = rows2((*acc5).r2, (*acc5).r3, t1, k1.v2, k1.v3, k1.v4, k1.v5, k2.v2, k2.v3, k2.v4, k2.v5, k3.v2, k3.v3, k3.v4, k3.v5); (*acc5).r2 = p.a; (*acc5).r3 = p.b; }
-            if ROWS > 4u && OB > 1u { let p = rows2((*acc5).r4, (*acc5).r5, t1, k1.v4, k1.v5, k1.v6, k1.v7, k2.v4, k2.v5, k2.v6, k2.v7, k3.v4, k3.v5, k3.v6, k3.v7); (*acc5).r4 = p.a; (*acc5).r5 = p.b; }
-            if ROWS > 6u && OB > 1u { let p = rows2((*acc5).r6, (*acc5).r7, t1, k1.v6, k1.v7, k1.v8, k1.v9, k2.v6, k2.v7, k2.v8, k2.v9, k3.v6, k3.v7, k3.v8, k3.v9); (*acc5).r6 = p.a; (*acc5).r7 = p.b; }
-            if ROWS > 8u && OB > 1u { let p = rows2((*acc5).r8, (*acc5).r9, t1, k1.v8, k1.v9, k1.v10, k1.v11, k2.v8, k2.v9, k2.v10, k2.v11, k3.v8, k3.v9, k3.v10, k3.v11); (*acc5).r8 = p.a; (*acc5).r9 = p.b; }
-            if ROWS > 10u && OB > 1u { let p = rows2((*acc5).r10, (*acc5).r11, t1, k1.v10, k1.v11, k1.v12, k1.v13, k2.v10, k2.v11, k2.v12, k2.v13, k3.v10, k3.v11, k3.v12, k3.v13); (*acc5).r10 = p.a; (*acc5).r11 = p.b; }
-            if ROWS > 12u && OB > 1u { let p = rows2((*acc5).r12, (*acc5).r13, t1, k1.v12, k1.v13, k1.v14, k1.v15, k2.v12, k2.v13, k2.v14, k2.v15, k3.v12, k3.v13, k3.v14, k3.v15); (*acc5).r12 = p.a; (*acc5).r13 = p.b; }
-            if ROWS > 14u && OB > 1u { let p = rows2((*acc5).r14, (*acc5).r15, t1, k1.v14, k1.v15, k1.v16, k1.v17, k2.v14, k2.v15, k2.v16, k2.v17, k3.v14, k3.v15, k3.v16, k3.v17); (*acc5).r14 = p.a; (*acc5).r15 = p.b; }
-            if OB > 2u { let p = rows2((*acc6).r0, (*acc6).r1, t2, k1.v0, k1.v1, k1.v2, k1.v3, k2.v0, k2.v1, k2.v2, k2.v3, k3.v0, k3.v1, k3.v2, k3.v3); (*acc6).r0 = p.a; (*acc6).r1 = p.b; }
-            if ROWS > 2u && OB > 2u { let p = rows2((*acc6).r2, (*acc6).r3, t2, k1.v2, k1.v3, k1.v4, k1.v5, k2.v2, k2.v3, k2.v4, k2.v5, k3.v2, k3.v3, k3.v4, k3.v5); (*acc6).r2 = p.a; (*acc6).r3 = p.b; }
-            if ROWS > 4u && OB > 2u { let p = rows2((*acc6).r4, (*acc6).r5, t2, k1.v4, k1.v5, k1.v6, k1.v7, k2.v4, k2.v5, k2.v6, k2.v7, k3.v4, k3.v5, k3.v6, k3.v7); (*acc6).r4 = p.a; (*acc6).r5 = p.b; }
-            if ROWS > 6u && OB > 2u { let p = rows2((*acc6).r6, (*acc6).r7, t2, k1.v6, k1.v7, k1.v8, k1.v9, k2.v6, k2.v7, k2.v8, k2.v9, k3.v6, k3.v7, k3.v8, k3.v9); (*acc6).r6 = p.a; (*acc6).r7 = p.b; }
-            if ROWS > 8u && OB > 2u { let p = rows2((*acc6).r8, (*acc6).r9, t2, k1.v8, k1.v9, k1.v10, k1.v11, k2.v8, k2.v9, k2.v10, k2.v11, k3.v8, k3.v9, k3.v10, k3.v11); (*acc6).r8 = p.a; (*acc6).r9 = p.b; }
-            if ROWS > 10u && OB > 2u { let p = rows2((*acc6).r10, (*acc6).r11, t2, k1.v10, k1.v11, k1.v12, k1.v13, k2.v10, k2.v11, k2.v12, k2.v13, k3.v10, k3.v11, k3.v12, k3.v13); (*acc6).r10 = p.a; (*acc6).r11 = p.b; }
-            if ROWS > 12u && OB > 2u { let p = rows2((*acc6).r12, (*acc6).r13, t2, k1.v12, k1.v13, k1.v14, k1.v15, k2.v12, k2.v13, k2.v14, k2.v15, k3.v12, k3.v13, k3.v14, k3.v15); (*acc6).r12 = p.a; (*acc6).r13 = p.b; }
-            if ROWS > 14u && OB > 2u { let p = rows2((*acc6).r14, (*acc6).r15, t2, k1.v14, k1.v15, k1.v16, k1.v17, k2.v14, k2.v15, k2.v16, k2.v17, k3.v14, k3.v15, k3.v16, k3.v17); (*acc6).r14 = p.a; (*acc6).r15 = p.b; }
-            if OB > 2u { let p = rows2((*acc7).r0, (*acc7).r1, t3, k1.v0, k1.v1, k1.v2, k1.v3, k2.v0, k2.v1, k2.v2, k2.v3, k3.v0, k3.v1, k3.v2, k3.v3); (*acc7).r0 = p.a; (*acc7).r1 = p.b; }
-            if ROWS > 2u && OB > 2u { let p = rows2((*acc7).r2, (*acc7).r3, t3, k1.v2, k1.v3, k1.v4, k1.v5, k2.v2, k2.v3, k2.v4, k2.v5, k3.v2, k3.v3, k3.v4, k3.v5); (*acc7).r2 = p.a; (*acc7).r3 = p.b; }
-            if ROWS > 4u && OB > 2u { let p = rows2((*acc7).r4, (*acc7).r5, t3, k1.v4, k1.v5, k1.v6, k1.v7, k2.v4, k2.v5, k2.v6, k2.v7, k3.v4, k3.v5, k3.v6, k3.v7); (*acc7).r4 = p.a; (*acc7).r5 = p.b; }
-            if ROWS > 6u && OB > 2u { let p = rows2((*acc7).r6, (*acc7).r7, t3, k1.v6, k1.v7, k1.v8, k1.v9, k2.v6, k2.v7, k2.v8, k2.v9, k3.v6, k3.v7, k3.v8, k3.v9); (*acc7).r6 = p.a; (*acc7).r7 = p.b; }
-            if ROWS > 8u && OB > 2u { let p = rows2((*acc7).r8, (*acc7).r9, t3, k1.v8, k1.v9, k1.v10, k1.v11, k2.v8, k2.v9, k2.v10, k2.v11, k3.v8, k3.v9, k3.v10, k3.v11); (*acc7).r8 = p.a; (*acc7).r9 = p.b; }
-            if ROWS > 10u && OB > 2u { let p = rows2((*acc7).r10, (*acc7).r11, t3, k1.v10, k1.v11, k1.v12, k1.v13, k2.v10, k2.v11, k2.v12, k2.v13, k3.v10, k3.v11, k3.v12, k3.v13); (*acc7).r10 = p.a; (*acc7).r11 = p.b; }
-            if ROWS > 12u && OB > 2u { let p = rows2((*acc7).r12, (*acc7).r13, t3, k1.v12, k1.v13, k1.v14, k1.v15, k2.v12, k2.v13, k2.v14, k2.v15, k3.v12, k3.v13, k3.v14, k3.v15); (*acc7).r12 = p.a; (*acc7).r13 = p.b; }
-            if ROWS > 14u && OB > 2u { let p = rows2((*acc7).r14, (*acc7).r15, t3, k1.v14, k1.v15, k1.v16, k1.v17, k2.v14, k2.v15, k2.v16, k2.v17, k3.v14, k3.v15, k3.v16, k3.v17); (*acc7).r14 = p.a; (*acc7).r15 = p.b; }
+            add_block_rows(acc4, taps_4_0(s), k1, k2, k3);
+            add_block_rows(acc5, taps_4_1(s), k1, k2, k3);
+            add_block_rows(acc6, taps_4_2(s), k1, k2, k3);
+            add_block_rows(acc7, taps_4_3(s), k1, k2, k3);
         }
     }
 }
