@@ -311,8 +311,9 @@ pub enum Method {
     /// `winograd`: Winograd F(2x2, 3x3), 16 multiplies per 2x2 outputs and channel pair for 36.
     Winograd,
     /// `lanes`: the direct sum with each weight vec4 loaded by one lane of the subgroup and
-    /// broadcast to the others (one-column tiles; subgroups of at least 8 lanes,
-    /// [`lanes_supported`]). On lavapipe a weight load is otherwise a lane-by-lane gather.
+    /// broadcast to the others (one or two columns, the two-column step in conv3x3_rows.wgsl;
+    /// subgroups of at least 8 lanes, [`lanes_supported`]). On lavapipe a weight load is
+    /// otherwise a lane-by-lane gather.
     Lanes,
 }
 
