@@ -3,7 +3,8 @@
 // runs them, and in no other. It uses conv3x3.wgsl's declarations (Tile, fetch, weights, lane,
 // lanes_*, mac3, the overrides).
 
-// ROWS + 2 rows of one input column (the rows past them stay zero).
+// ROWS + 2 rows of one input column (the rows past them stay zero); two-column lanes tiles
+// have at most 8 rows (kernels::LANES_W2_MAX_ROWS).
 struct Column {
     v0: vec4<f32>,
     v1: vec4<f32>,
@@ -15,14 +16,6 @@ struct Column {
     v7: vec4<f32>,
     v8: vec4<f32>,
     v9: vec4<f32>,
-    v10: vec4<f32>,
-    v11: vec4<f32>,
-    v12: vec4<f32>,
-    v13: vec4<f32>,
-    v14: vec4<f32>,
-    v15: vec4<f32>,
-    v16: vec4<f32>,
-    v17: vec4<f32>,
 }
 
 fn column(t: texture_2d_array<f32>, mode: u32, x: i32, y0: i32, layer: u32) -> Column {
@@ -37,14 +30,6 @@ fn column(t: texture_2d_array<f32>, mode: u32, x: i32, y0: i32, layer: u32) -> C
     if ROWS > 5u { c.v7 = fetch(t, mode, x, y0 + 6, layer); }
     if ROWS > 6u { c.v8 = fetch(t, mode, x, y0 + 7, layer); }
     if ROWS > 7u { c.v9 = fetch(t, mode, x, y0 + 8, layer); }
-    if ROWS > 8u { c.v10 = fetch(t, mode, x, y0 + 9, layer); }
-    if ROWS > 9u { c.v11 = fetch(t, mode, x, y0 + 10, layer); }
-    if ROWS > 10u { c.v12 = fetch(t, mode, x, y0 + 11, layer); }
-    if ROWS > 11u { c.v13 = fetch(t, mode, x, y0 + 12, layer); }
-    if ROWS > 12u { c.v14 = fetch(t, mode, x, y0 + 13, layer); }
-    if ROWS > 13u { c.v15 = fetch(t, mode, x, y0 + 14, layer); }
-    if ROWS > 14u { c.v16 = fetch(t, mode, x, y0 + 15, layer); }
-    if ROWS > 15u { c.v17 = fetch(t, mode, x, y0 + 16, layer); }
     return c;
 }
 
@@ -98,10 +83,6 @@ fn add_block_rows(acc: ptr<function, Tile>, t: Taps, l: Column, c: Column, r: Co
     if ROWS > 2u { let p = rows2((*acc).r2, (*acc).r3, t, l.v2, l.v3, l.v4, l.v5, c.v2, c.v3, c.v4, c.v5, r.v2, r.v3, r.v4, r.v5); (*acc).r2 = p.a; (*acc).r3 = p.b; }
     if ROWS > 4u { let p = rows2((*acc).r4, (*acc).r5, t, l.v4, l.v5, l.v6, l.v7, c.v4, c.v5, c.v6, c.v7, r.v4, r.v5, r.v6, r.v7); (*acc).r4 = p.a; (*acc).r5 = p.b; }
     if ROWS > 6u { let p = rows2((*acc).r6, (*acc).r7, t, l.v6, l.v7, l.v8, l.v9, c.v6, c.v7, c.v8, c.v9, r.v6, r.v7, r.v8, r.v9); (*acc).r6 = p.a; (*acc).r7 = p.b; }
-    if ROWS > 8u { let p = rows2((*acc).r8, (*acc).r9, t, l.v8, l.v9, l.v10, l.v11, c.v8, c.v9, c.v10, c.v11, r.v8, r.v9, r.v10, r.v11); (*acc).r8 = p.a; (*acc).r9 = p.b; }
-    if ROWS > 10u { let p = rows2((*acc).r10, (*acc).r11, t, l.v10, l.v11, l.v12, l.v13, c.v10, c.v11, c.v12, c.v13, r.v10, r.v11, r.v12, r.v13); (*acc).r10 = p.a; (*acc).r11 = p.b; }
-    if ROWS > 12u { let p = rows2((*acc).r12, (*acc).r13, t, l.v12, l.v13, l.v14, l.v15, c.v12, c.v13, c.v14, c.v15, r.v12, r.v13, r.v14, r.v15); (*acc).r12 = p.a; (*acc).r13 = p.b; }
-    if ROWS > 14u { let p = rows2((*acc).r14, (*acc).r15, t, l.v14, l.v15, l.v16, l.v17, c.v14, c.v15, c.v16, c.v17, r.v14, r.v15, r.v16, r.v17); (*acc).r14 = p.a; (*acc).r15 = p.b; }
 }
 
 // The taps of blocks j (0 to 3) from tap vec4s spread over the lanes as in `lanes_*`: a<kx><ky>
@@ -181,8 +162,11 @@ fn taps_4_3(s: Spread) -> Taps {
 // every sum runs in `accumulate`'s order, so the output is bit-identical to the direct tile's.
 // A ROWS = 1 tile computes a second row it never stores.
 //
-// Why only two-column tiles: this body is one basic block of up to 2 x 16 x 4 x 144
-// multiply-adds per input block, and LLVM's compile time grows faster than its size. On
+// Why only two-column tiles, and at most 8 rows: this body is one basic block of up to
+// 2 x 8 x 4 x 144 multiply-adds per input block, and LLVM's compile time grows faster than its
+// size; the driver's front end also inlines every row pair before the override drops the ones
+// past ROWS, so the rows this file does not have cost no build time (16-row two-column tiles
+// ran 1.36-1.41x the time of 8-row ones, session 9). On
 // lavapipe (docs/PERF.md, session 9) the one-column 16 x 4 tile unrolled this way ran 0.89x
 // `accumulate`'s column loop but took 3x as long to compile cold; the column loop with two
 // rows at a time gained nothing. Two columns share each fetched column and weight twice, so a

@@ -257,6 +257,9 @@ fn conv_lanes_tiles_match_cpu() {
     assert_eq!(Tile::with_cols(8, 2, 2).unwrap().with_lanes(), Tile::lanes(8, 2, 2));
     assert_eq!(Tile::lanes(16, 3, 1), None);
     assert_eq!(Tile::lanes(16, 4, 3), None);
+    assert_eq!(Tile::lanes(16, 2, 2), None, "two-column lanes tiles have at most 8 rows");
+    assert_eq!(Tile::with_cols(16, 2, 2).unwrap().with_lanes(), None);
+    assert_eq!(Tile::with_cols(8, 2, 2).unwrap().with_group(32).unwrap().with_lanes().map(|t| t.group_x), Some(32));
     assert_eq!(Tile::winograd(2, 1).unwrap().with_lanes(), None);
 }
 
@@ -344,6 +347,24 @@ fn four_block_tiles_shrink_to_the_conv() {
     assert_eq!(blocks(WeightMemory::Uniform, 64, 3), 1);
     assert_eq!(blocks(WeightMemory::Uniform, 120, 16), 2);
     assert_eq!(blocks(WeightMemory::Storage, 120, 16), 4);
+}
+
+#[test]
+fn plans_make_each_pipeline_once() {
+    // Three convs of two variants (a 4-row level takes a 4-row tile), made side by side: two
+    // pipelines, one per variant, and none more for a second plan of the same convs or for a
+    // split conv's reduce pass beside its conv.
+    let g = gpu();
+    let mut kernels = Kernels::new(&g.device, kernels::Precision::F32, WeightMemory::Uniform);
+    let (weight, bias) = (vec![0.0; 8 * 8 * 9], vec![0.0; 8]);
+    let specs = [one_source_spec("a", 16, 16, 8, &weight, &bias), one_source_spec("b", 16, 16, 8, &weight, &bias), one_source_spec("c", 16, 4, 8, &weight, &bias)];
+    let tile = Tile::new(16, 2).unwrap();
+    ConvPlan::new(&g.device, &mut kernels, &specs, &[tile]).unwrap();
+    assert_eq!(kernels.conv_pipelines(), 2);
+    ConvPlan::new(&g.device, &mut kernels, &specs, &[tile]).unwrap();
+    assert_eq!(kernels.conv_pipelines(), 2);
+    ConvPlan::new(&g.device, &mut kernels, &specs[..1], &[tile.with_split(2).unwrap()]).unwrap();
+    assert_eq!(kernels.conv_pipelines(), 4, "the split conv and its reduce pass");
 }
 
 #[test]

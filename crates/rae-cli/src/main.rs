@@ -102,7 +102,8 @@ enum Command {
         /// blocks 1, 2, 4 (4 with one column); columns 1, 2; workgroups 8, 16, 32, 64 wide;
         /// input blocks split 1 to 16 ways), the same prefixed `lanes` (weights loaded across
         /// the subgroup, devices with subgroups of 8 or more lanes; 4 blocks also in 2 columns,
-        /// e.g. lanes4x4w2: faster frames on lavapipe, slower pipeline builds) or
+        /// two columns at most 8 rows, e.g. lanes4x4w2: faster frames on lavapipe, slower
+        /// pipeline builds) or
         /// winoROWSxBLOCKS[gGROUPX] (Winograd F(2x2, 3x3); rows 2, 4) for one tile everywhere,
         /// `tuned` (each conv timed with every candidate on this device while building), or
         /// `auto` (tuned on GPUs; on CPU drivers lanes16x4, or 16x4 without subgroups: what
@@ -167,7 +168,7 @@ fn parse_tile(s: &str) -> Result<TileChoice> {
         .and_then(|t| t.with_group(group))
         .and_then(|t| t.with_split(split))
         .map(TileChoice::Fixed)
-        .with_context(|| format!("tile `{s}`: the kernel has 1, 2, 4, 8 or 16 rows, 1, 2 or 4 blocks (4 with one column, except lanes tiles), 1 or 2 columns, workgroups 8, 16, 32 or 64 wide and splits of 1 to 16"))
+        .with_context(|| format!("tile `{s}`: the kernel has 1, 2, 4, 8 or 16 rows, 1, 2 or 4 blocks (4 with one column, except lanes tiles), 1 or 2 columns (lanes tiles with 2 at most 8 rows), workgroups 8, 16, 32 or 64 wide and splits of 1 to 16"))
 }
 
 fn parse_memory(s: &str) -> Result<Option<WeightMemory>> {

@@ -302,6 +302,13 @@ pub struct ConvVariant {
     pub reduce: bool,
 }
 
+impl ConvVariant {
+    /// Whether the variant runs conv3x3_rows.wgsl's `accumulate_rows` (two-column lanes tiles).
+    fn runs_rows(&self) -> bool {
+        self.method == Method::Lanes && self.cols > 1 && !self.reduce
+    }
+}
+
 /// How a conv tile is computed: the entry point of conv3x3.wgsl.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub enum Method {
@@ -466,6 +473,11 @@ impl Kernels {
         }
     }
 
+    /// How many conv pipelines are made (one per variant; [`Kernels::prepare`]).
+    pub fn conv_pipelines(&self) -> usize {
+        self.conv.len()
+    }
+
     /// Where the conv reads its weights.
     pub fn weight_memory(&self) -> WeightMemory {
         self.memory
@@ -473,46 +485,81 @@ impl Kernels {
 
     /// The conv pipeline for a variant, created on first use.
     pub fn conv(&mut self, device: &wgpu::Device, v: ConvVariant) -> wgpu::ComputePipeline {
+        self.prepare(device, &[v]);
+        self.conv[&v].clone()
+    }
+
+    /// Create the pipelines of `variants` that are not cached yet, on one thread per core.
+    ///
+    /// A pipeline's creation is mostly the driver's front end (lavapipe translates and
+    /// optimises the SPIR-V before its shader cache is consulted: 0.3-0.6 s per conv pipeline,
+    /// most of a denoiser's build), and Vulkan lets pipelines of one device be created
+    /// concurrently, so a plan's dozen or so variants are made side by side rather than in turn.
+    pub fn prepare(&mut self, device: &wgpu::Device, variants: &[ConvVariant]) {
+        let mut missing: Vec<ConvVariant> = Vec::new();
+        for v in variants {
+            if !self.conv.contains_key(v) && !missing.contains(v) {
+                missing.push(*v);
+            }
+        }
+        if missing.is_empty() {
+            return;
+        }
         // Two-column lanes tiles run in the module with conv3x3_rows.wgsl ([`ROWS_STUB`]).
-        let rows = v.method == Method::Lanes && v.cols > 1 && !v.reduce;
-        if rows && self.conv_rows_module.is_none() {
+        if missing.iter().any(|v| v.runs_rows()) && self.conv_rows_module.is_none() {
             assert!(self.conv_source.contains(ROWS_STUB), "conv3x3.wgsl has kernels::ROWS_STUB");
             self.conv_rows_module = Some(shader_module(device, "conv3x3 (two-column lanes)", self.conv_source.replace(ROWS_STUB, shader_source("conv3x3_rows"))));
         }
-        let module = if rows { self.conv_rows_module.as_ref().expect("made above") } else { &self.conv_module };
-        let (layout, precision) = (&self.conv_pipeline_layout, self.precision);
-        self.conv
-            .entry(v)
-            .or_insert_with(|| {
-                let constants = [
-                    ("MODE_A", v.read_a as u32 as f64),
-                    ("MODE_B", v.read_b as u32 as f64),
-                    ("SOURCE_B", if v.source_b { 1.0 } else { 0.0 }),
-                    ("LEAKY", if v.leaky { 1.0 } else { 0.0 }),
-                    ("OB", v.ob as f64),
-                    ("ROWS", v.rows as f64),
-                    ("TW", v.cols as f64),
-                    ("WG_X", v.group_x as f64),
-                    ("WG_Y", (64 / v.group_x) as f64),
-                    ("SPLIT", v.split as f64),
-                    ("LANES", if v.method == Method::Lanes { 1.0 } else { 0.0 }),
-                    ("STORE_MAX", precision.store_max() as f64),
-                ];
-                device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                    label: Some("conv3x3"),
-                    layout: Some(layout),
-                    module,
-                    entry_point: Some(if v.reduce { "reduce" } else { v.method.entry_point() }),
-                    compilation_options: wgpu::PipelineCompilationOptions {
-                        constants: &constants,
-                        zero_initialize_workgroup_memory: false,
-                    },
-                    cache: None,
-                })
+        let threads = std::thread::available_parallelism().map_or(1, |n| n.get()).min(missing.len());
+        let this = &*self;
+        let made: Vec<(ConvVariant, wgpu::ComputePipeline)> = if threads <= 1 {
+            missing.iter().map(|&v| (v, this.create_conv(device, v))).collect()
+        } else {
+            // Thread t makes variants t, t + threads, ...; the results are gathered in order.
+            std::thread::scope(|scope| {
+                let workers: Vec<_> = (0..threads)
+                    .map(|t| {
+                        let missing = &missing;
+                        scope.spawn(move || missing.iter().skip(t).step_by(threads).map(|&v| (v, this.create_conv(device, v))).collect::<Vec<_>>())
+                    })
+                    .collect();
+                workers.into_iter().flat_map(|w| w.join().expect("a pipeline-creating thread panicked")).collect()
             })
-            .clone()
+        };
+        self.conv.extend(made);
+    }
+
+    /// Create one conv pipeline (its module made by [`Kernels::prepare`]).
+    fn create_conv(&self, device: &wgpu::Device, v: ConvVariant) -> wgpu::ComputePipeline {
+        let module = if v.runs_rows() { self.conv_rows_module.as_ref().expect("made by prepare") } else { &self.conv_module };
+        let constants = [
+            ("MODE_A", v.read_a as u32 as f64),
+            ("MODE_B", v.read_b as u32 as f64),
+            ("SOURCE_B", if v.source_b { 1.0 } else { 0.0 }),
+            ("LEAKY", if v.leaky { 1.0 } else { 0.0 }),
+            ("OB", v.ob as f64),
+            ("ROWS", v.rows as f64),
+            ("TW", v.cols as f64),
+            ("WG_X", v.group_x as f64),
+            ("WG_Y", (64 / v.group_x) as f64),
+            ("SPLIT", v.split as f64),
+            ("LANES", if v.method == Method::Lanes { 1.0 } else { 0.0 }),
+            ("STORE_MAX", self.precision.store_max() as f64),
+        ];
+        device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("conv3x3"),
+            layout: Some(&self.conv_pipeline_layout),
+            module,
+            entry_point: Some(if v.reduce { "reduce" } else { v.method.entry_point() }),
+            compilation_options: wgpu::PipelineCompilationOptions { constants: &constants, zero_initialize_workgroup_memory: false },
+            cache: None,
+        })
     }
 }
+
+/// The most rows of a two-column lanes tile: conv3x3_rows.wgsl has no more (16 rows in two
+/// columns ran 1.36-1.41x the time of 8 on lavapipe, and every row it has costs build time).
+pub const LANES_W2_MAX_ROWS: u32 = 8;
 
 /// The conv kernel's register tile: at most `rows` output rows x `blocks` output blocks (4
 /// channels each) x `cols` adjacent columns per invocation, computed directly or by Winograd's
@@ -582,13 +629,15 @@ impl Tile {
     /// This direct tile with its weights loaded across the subgroup ([`Method::Lanes`]), if it
     /// is direct.
     pub fn with_lanes(self) -> Option<Self> {
-        (self.method == Method::Direct).then_some(Tile { method: Method::Lanes, ..self })
+        Tile::lanes(self.rows, self.blocks, self.cols).filter(|_| self.method == Method::Direct).map(|t| Tile { group_x: self.group_x, split: self.split, ..t })
     }
 
     /// A tile with its weights loaded across the subgroup ([`Method::Lanes`]): `rows` x `blocks`
-    /// x `cols`, where lanes tiles also take 4 blocks in 2 columns, if the kernel has it.
+    /// x `cols`, where lanes tiles also take 4 blocks in 2 columns (and two columns at most
+    /// [`LANES_W2_MAX_ROWS`] rows), if the kernel has it.
     pub fn lanes(rows: u32, blocks: u32, cols: u32) -> Option<Self> {
-        ([1, 2, 4, 8, 16].contains(&rows) && [1, 2, 4].contains(&blocks) && (1..=2).contains(&cols)).then_some(Tile { rows, blocks, cols, group_x: WORKGROUP, method: Method::Lanes, split: 1 })
+        let rows_ok = [1, 2, 4, 8, 16].contains(&rows) && (cols == 1 || rows <= LANES_W2_MAX_ROWS);
+        (rows_ok && [1, 2, 4].contains(&blocks) && (1..=2).contains(&cols)).then_some(Tile { rows, blocks, cols, group_x: WORKGROUP, method: Method::Lanes, split: 1 })
     }
 
     /// Weights per input-output channel pair ([`Method::taps`]).
@@ -819,7 +868,8 @@ impl ConvPlan {
         } as usize;
         let mut params: Vec<u8> = Vec::new();
         let mut weights: Vec<u8> = Vec::new();
-        let mut convs = Vec::with_capacity(specs.len());
+        // Each conv's variant, workgroups, split, groups and reduce pass, before its pipelines.
+        let mut pending = Vec::with_capacity(specs.len());
         let mut used = Vec::with_capacity(specs.len());
         let mut binding = 0u64;
         let mut partial = 0u64;
@@ -905,16 +955,23 @@ impl ConvPlan {
             }
             // The reduce pipeline depends on the activation and the part count only.
             let reduce_variant = ConvVariant { read_a: Read::Direct, read_b: Read::Direct, source_b: true, ob: 1, rows: 1, cols: 1, group_x: WORKGROUP, method: Method::Direct, reduce: true, ..variant };
-            let reduce = (split > 1).then(|| (kernels.conv(device, reduce_variant), [s.width.div_ceil(8), s.height.div_ceil(8), cout4]));
-            convs.push(Planned {
-                pipeline: kernels.conv(device, variant),
-                workgroups: (s.width.div_ceil(cols).div_ceil(tile.group_x), s.height.div_ceil(rows).div_ceil(tile.group_y())),
-                split,
-                groups,
-                reduce,
-            });
+            let reduce = (split > 1).then_some((reduce_variant, [s.width.div_ceil(8), s.height.div_ceil(8), cout4]));
+            pending.push((variant, (s.width.div_ceil(cols).div_ceil(tile.group_x), s.height.div_ceil(rows).div_ceil(tile.group_y())), split, groups, reduce));
             used.push(used_tile);
         }
+        // Every pipeline the plan needs, made side by side, then the convs' dispatches.
+        let variants: Vec<ConvVariant> = pending.iter().flat_map(|p| std::iter::once(p.0).chain(p.4.map(|r| r.0))).collect();
+        kernels.prepare(device, &variants);
+        let convs: Vec<Planned> = pending
+            .into_iter()
+            .map(|(variant, workgroups, split, groups, reduce)| Planned {
+                pipeline: kernels.conv(device, variant),
+                workgroups,
+                split,
+                groups,
+                reduce: reduce.map(|(v, n)| (kernels.conv(device, v), n)),
+            })
+            .collect();
         // Every binding spans a whole chunk (or the largest conv) past its offset.
         let weight_binding = match memory {
             WeightMemory::Uniform => WEIGHT_CHUNK_BYTES,
