@@ -7,7 +7,7 @@ use std::time::Duration;
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
 use rae_core::io::{self, Sequence, Slot};
-use rae_core::{Denoiser, Gpu, InputBuffer, Precision, Weights, metrics};
+use rae_core::{Denoiser, Gpu, InputBuffer, Precision, TileChoice, Weights, metrics};
 
 /// What `denoise` was asked to do.
 pub struct Options {
@@ -33,6 +33,8 @@ pub struct Options {
     pub precision: Precision,
     /// Write per-frame times (and errors, where a reference exists) as CSV to this file.
     pub csv: Option<PathBuf>,
+    /// The conv tile (`--tile`).
+    pub tiles: TileChoice,
 }
 
 /// Parse `A..B`, `A..`, `..B` or `A` (inclusive frame numbers).
@@ -162,12 +164,13 @@ pub fn run(o: &Options) -> Result<()> {
     prepare_output(&o.input, &out_dir)?;
 
     let gpu = Gpu::new()?;
-    let mut d = Denoiser::with_precision(&gpu.device, &gpu.queue, &weights, seq.width, seq.height, o.precision)?;
+    let mut d = Denoiser::with_options(&gpu.device, &gpu.queue, &weights, seq.width, seq.height, rae_core::Options { precision: o.precision, tiles: o.tiles, weights: None })?;
     let used: Vec<&str> = weights.arch.required_buffers().iter().map(|b| b.name()).collect();
     println!("input:   {} ({}, {} frames {}..{}, {}x{})", o.input.display(), seq.layout, seq.numbers.len(), seq.numbers[0], seq.numbers[seq.numbers.len() - 1], seq.width, seq.height);
     println!("buffers: {:?}{}", seq.slots.iter().map(|s| s.name()).collect::<Vec<_>>(), if seq.has_reference() { " (reference used for error only)" } else { "" });
     println!("model:   {} (uses {used:?})", weights_path.display());
     println!("device:  {}", gpu.describe());
+    println!("tile:    {} at full resolution ({})", d.conv_tiles()[0], match o.tiles { TileChoice::Auto => "auto", TileChoice::Tuned | TileChoice::TunedAmong(_) => "tuned", TileChoice::Fixed(_) => "--tile" });
     println!("output:  {}", out_dir.display());
 
     let bar = ProgressBar::new(indices.len() as u64);

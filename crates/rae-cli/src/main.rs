@@ -58,6 +58,12 @@ enum Command {
         /// relMSE/PSNR/SSIM of input and result to this CSV file.
         #[arg(long)]
         csv: Option<PathBuf>,
+        /// Conv register tile, as `bench --tile` takes it (one): `auto` (tuned on GPUs,
+        /// lanes16x4 on CPU drivers), `tuned`, or a fixed tile. On lavapipe `lanes8x4w2` runs a
+        /// 256x256 frame in about 0.8x the time of `auto` but builds its pipelines ~2 s longer
+        /// (and compiles them ~4x longer into an empty shader cache): for long sequences.
+        #[arg(long, default_value = "auto")]
+        tile: String,
     },
     /// Print a weights file's architecture, inputs, parameter count and cost per pixel.
     Info {
@@ -472,9 +478,10 @@ fn verify(files: &[PathBuf]) -> Result<()> {
 
 fn main() -> Result<()> {
     match Cli::parse().command {
-        Command::Denoise { input, output, weights, models, frames, reset_at, png, half, allow_nonfinite, precision, csv } => {
+        Command::Denoise { input, output, weights, models, frames, reset_at, png, half, allow_nonfinite, precision, csv, tile } => {
             let frames = frames.as_deref().map(denoise::parse_range).transpose()?;
-            denoise::run(&denoise::Options { input, output, weights, models, frames, reset_at, png, half, allow_nonfinite, precision: precision.into(), csv })
+            let tiles = parse_tile(&tile)?;
+            denoise::run(&denoise::Options { input, output, weights, models, frames, reset_at, png, half, allow_nonfinite, precision: precision.into(), csv, tiles })
         }
         Command::Info { file, size } => info(&file, &size),
         Command::Devices => devices(),

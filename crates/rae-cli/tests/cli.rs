@@ -144,9 +144,14 @@ fn frame_range_selects_frames() {
     let seq = seq_dir(&tmp);
     per_buffer_sequence(&seq, 3);
     let out = tmp.path().join("o");
-    let (ok, so, se) = denoise(&seq, &["-o", out.to_str().unwrap(), "--frames", "1..1", "--reset-at", "1"]);
+    let (ok, so, se) = denoise(&seq, &["-o", out.to_str().unwrap(), "--frames", "1..1", "--reset-at", "1", "--tile", "2x1"]);
     assert!(ok, "{so}{se}");
     assert_eq!(listing(&out), ["denoised_0001.exr"]);
+    assert!(so.contains("tile:    2x1 at full resolution (--tile)"), "{so}");
+    // A tile the kernel does not have is refused before anything is written.
+    let out = tmp.path().join("o2");
+    expect_error(&seq, &["-o", out.to_str().unwrap(), "--tile", "lanes16x2w2"], &["tile `lanes16x2w2`", "at most 8 rows"]);
+    assert!(!out.exists(), "no output folder for a refused tile");
 }
 
 #[test]
@@ -345,7 +350,7 @@ fn the_shipped_model_that_fits_is_chosen() {
 
 #[test]
 fn bench_refuses_a_tile_the_kernel_does_not_have() {
-    for (tile, shown) in [("3x1", "3x1"), ("8x1w3", "8x1w3"), ("8x1g128", "8x1g128"), ("big", "big")] {
+    for (tile, shown) in [("3x1", "3x1"), ("8x1w3", "8x1w3"), ("8x1g128", "8x1g128"), ("big", "big"), ("lanes16x4w2", "lanes16x4w2")] {
         let out = rae().args(["bench", &fixture("weights_full.safetensors"), "--sizes", "32x32", "--tile", tile]).output().unwrap();
         assert!(!out.status.success(), "--tile {tile} must fail");
         let err = String::from_utf8(out.stderr).unwrap();
