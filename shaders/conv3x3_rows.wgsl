@@ -40,49 +40,63 @@ struct Taps {
     m20: mat4x4<f32>, m21: mat4x4<f32>, m22: mat4x4<f32>,
 }
 
-// Two rows' accumulators of one output block.
-struct Pair {
+// The accumulators of two rows of one output block in both columns: a, b rows r, r + 1 of
+// column 0; c, d the same rows of column 1.
+struct Rows {
     a: vec4<f32>,
     b: vec4<f32>,
+    c: vec4<f32>,
+    d: vec4<f32>,
 }
 
-// Two output rows (a: row r, b: row r + 1) of one block over all nine taps, from input rows
-// r .. r + 3 of the columns l, c, r (kx = 0, 1, 2): each weight scalar feeds both rows while it
-// is in a register, and the 8 accumulators stay in registers for the 72 multiply-adds each.
-// Each row's products come in `add_column`'s order (kx, then ky, then input lane).
-fn rows2(a: vec4<f32>, b: vec4<f32>, ta: Taps, l0: vec4<f32>, l1: vec4<f32>, l2: vec4<f32>, l3: vec4<f32>, c0: vec4<f32>, c1: vec4<f32>, c2: vec4<f32>, c3: vec4<f32>, r0: vec4<f32>, r1: vec4<f32>, r2: vec4<f32>, r3: vec4<f32>) -> Pair {
-    var p = mac_rows(Pair(a, b), ta.m00, l0, l1);
-    p = mac_rows(p, ta.m01, l1, l2);
-    p = mac_rows(p, ta.m02, l2, l3);
-    p = mac_rows(p, ta.m10, c0, c1);
-    p = mac_rows(p, ta.m11, c1, c2);
-    p = mac_rows(p, ta.m12, c2, c3);
-    p = mac_rows(p, ta.m20, r0, r1);
-    p = mac_rows(p, ta.m21, r1, r2);
-    p = mac_rows(p, ta.m22, r2, r3);
+// One tap's 4x4 weights `m` on the four accumulators, from input texels u, v (column 0's
+// rows) and s, t (column 1's), interleaved: each weight scalar feeds four accumulators while
+// it is in a register, and each accumulator's products come in `mac`'s order (input lane x,
+// y, z, w).
+fn mac_rows(p: Rows, m: mat4x4<f32>, u: vec4<f32>, v: vec4<f32>, s: vec4<f32>, t: vec4<f32>) -> Rows {
+    var a = fma(m[0], vec4<f32>(u.x), p.a);
+    var b = fma(m[0], vec4<f32>(v.x), p.b);
+    var c = fma(m[0], vec4<f32>(s.x), p.c);
+    var d = fma(m[0], vec4<f32>(t.x), p.d);
+    a = fma(m[1], vec4<f32>(u.y), a);
+    b = fma(m[1], vec4<f32>(v.y), b);
+    c = fma(m[1], vec4<f32>(s.y), c);
+    d = fma(m[1], vec4<f32>(t.y), d);
+    a = fma(m[2], vec4<f32>(u.z), a);
+    b = fma(m[2], vec4<f32>(v.z), b);
+    c = fma(m[2], vec4<f32>(s.z), c);
+    d = fma(m[2], vec4<f32>(t.z), d);
+    a = fma(m[3], vec4<f32>(u.w), a);
+    b = fma(m[3], vec4<f32>(v.w), b);
+    c = fma(m[3], vec4<f32>(s.w), c);
+    d = fma(m[3], vec4<f32>(t.w), d);
+    return Rows(a, b, c, d);
+}
+
+// Rows r, r + 1 of one block in columns 0 (a, b) and 1 (c, d) over all nine taps, from input
+// rows r .. r + 3 of the input columns l, k, r, q (column 0 reads l, k, r as kx = 0, 1, 2;
+// column 1 reads k, r, q): 16 accumulators stay in registers for the 144 multiply-adds each.
+// Each accumulator's products come in `add_column`'s order (kx, then ky, then input lane).
+fn rows2(p0: Rows, ta: Taps, l0: vec4<f32>, l1: vec4<f32>, l2: vec4<f32>, l3: vec4<f32>, k0: vec4<f32>, k1: vec4<f32>, k2: vec4<f32>, k3: vec4<f32>, r0: vec4<f32>, r1: vec4<f32>, r2: vec4<f32>, r3: vec4<f32>, q0: vec4<f32>, q1: vec4<f32>, q2: vec4<f32>, q3: vec4<f32>) -> Rows {
+    var p = mac_rows(p0, ta.m00, l0, l1, k0, k1);
+    p = mac_rows(p, ta.m01, l1, l2, k1, k2);
+    p = mac_rows(p, ta.m02, l2, l3, k2, k3);
+    p = mac_rows(p, ta.m10, k0, k1, r0, r1);
+    p = mac_rows(p, ta.m11, k1, k2, r1, r2);
+    p = mac_rows(p, ta.m12, k2, k3, r2, r3);
+    p = mac_rows(p, ta.m20, r0, r1, q0, q1);
+    p = mac_rows(p, ta.m21, r1, r2, q1, q2);
+    p = mac_rows(p, ta.m22, r2, r3, q2, q3);
     return p;
 }
 
-// `mac` on two rows of one block at once (inputs u for row a, v for row b), interleaved.
-fn mac_rows(p: Pair, m: mat4x4<f32>, u: vec4<f32>, v: vec4<f32>) -> Pair {
-    var a = fma(m[0], vec4<f32>(u.x), p.a);
-    var b = fma(m[0], vec4<f32>(v.x), p.b);
-    a = fma(m[1], vec4<f32>(u.y), a);
-    b = fma(m[1], vec4<f32>(v.y), b);
-    a = fma(m[2], vec4<f32>(u.z), a);
-    b = fma(m[2], vec4<f32>(v.z), b);
-    a = fma(m[3], vec4<f32>(u.w), a);
-    b = fma(m[3], vec4<f32>(v.w), b);
-    return Pair(a, b);
-}
-
-// Add one block's nine taps `t` to its tile, two rows at a time, from the input columns l, c,
-// r (kx = 0, 1, 2).
-fn add_block_rows(acc: ptr<function, Tile>, t: Taps, l: Column, c: Column, r: Column) {
-    { let p = rows2((*acc).r0, (*acc).r1, t, l.v0, l.v1, l.v2, l.v3, c.v0, c.v1, c.v2, c.v3, r.v0, r.v1, r.v2, r.v3); (*acc).r0 = p.a; (*acc).r1 = p.b; }
-    if ROWS > 2u { let p = rows2((*acc).r2, (*acc).r3, t, l.v2, l.v3, l.v4, l.v5, c.v2, c.v3, c.v4, c.v5, r.v2, r.v3, r.v4, r.v5); (*acc).r2 = p.a; (*acc).r3 = p.b; }
-    if ROWS > 4u { let p = rows2((*acc).r4, (*acc).r5, t, l.v4, l.v5, l.v6, l.v7, c.v4, c.v5, c.v6, c.v7, r.v4, r.v5, r.v6, r.v7); (*acc).r4 = p.a; (*acc).r5 = p.b; }
-    if ROWS > 6u { let p = rows2((*acc).r6, (*acc).r7, t, l.v6, l.v7, l.v8, l.v9, c.v6, c.v7, c.v8, c.v9, r.v6, r.v7, r.v8, r.v9); (*acc).r6 = p.a; (*acc).r7 = p.b; }
+// Add one block's nine taps `t` to its tile in column 0 (acc, from the input columns l, c, r)
+// and column 1 (acd, from c, r, q), two rows at a time.
+fn add_block_rows(acc: ptr<function, Tile>, acd: ptr<function, Tile>, t: Taps, l: Column, c: Column, r: Column, q: Column) {
+    { let p = rows2(Rows((*acc).r0, (*acc).r1, (*acd).r0, (*acd).r1), t, l.v0, l.v1, l.v2, l.v3, c.v0, c.v1, c.v2, c.v3, r.v0, r.v1, r.v2, r.v3, q.v0, q.v1, q.v2, q.v3); (*acc).r0 = p.a; (*acc).r1 = p.b; (*acd).r0 = p.c; (*acd).r1 = p.d; }
+    if ROWS > 2u { let p = rows2(Rows((*acc).r2, (*acc).r3, (*acd).r2, (*acd).r3), t, l.v2, l.v3, l.v4, l.v5, c.v2, c.v3, c.v4, c.v5, r.v2, r.v3, r.v4, r.v5, q.v2, q.v3, q.v4, q.v5); (*acc).r2 = p.a; (*acc).r3 = p.b; (*acd).r2 = p.c; (*acd).r3 = p.d; }
+    if ROWS > 4u { let p = rows2(Rows((*acc).r4, (*acc).r5, (*acd).r4, (*acd).r5), t, l.v4, l.v5, l.v6, l.v7, c.v4, c.v5, c.v6, c.v7, r.v4, r.v5, r.v6, r.v7, q.v4, q.v5, q.v6, q.v7); (*acc).r4 = p.a; (*acc).r5 = p.b; (*acd).r4 = p.c; (*acd).r5 = p.d; }
+    if ROWS > 6u { let p = rows2(Rows((*acc).r6, (*acc).r7, (*acd).r6, (*acd).r7), t, l.v6, l.v7, l.v8, l.v9, c.v6, c.v7, c.v8, c.v9, r.v6, r.v7, r.v8, r.v9, q.v6, q.v7, q.v8, q.v9); (*acc).r6 = p.a; (*acc).r7 = p.b; (*acd).r6 = p.c; (*acd).r7 = p.d; }
 }
 
 // The taps of blocks j (0 to 3) from tap vec4s spread over the lanes as in `lanes_*`: a<kx><ky>
@@ -156,9 +170,9 @@ fn taps_4_3(s: Spread) -> Taps {
 
 // Add input block `layer` of `t` at weight block `cb` to a two-column lanes tile (weights
 // across the subgroup) whose top-left output is (x, y0), two rows at a time: the input columns
-// x - 1 .. x + TW are fetched first, then each pair of rows of each block takes all its
-// products in one pass (`rows2`), its accumulators loaded and stored once per input block
-// rather than once per column. Column 0's blocks are in acc0..acc3, column 1's in acc4..acc7;
+// x - 1 .. x + 2 are fetched first, then each pair of rows of each block takes all its
+// products in both columns in one pass (`rows2`), its accumulators loaded and stored once per
+// input block rather than once per column. Column 0's blocks are in acc0..acc3, column 1's in acc4..acc7;
 // every sum runs in `accumulate`'s order, so the output is bit-identical to the direct tile's.
 // A ROWS = 1 tile computes a second row it never stores.
 //
@@ -166,8 +180,10 @@ fn taps_4_3(s: Spread) -> Taps {
 // 2 x 8 x 4 x 144 multiply-adds per input block, and LLVM's compile time grows faster than its
 // size; the driver's front end also inlines every row pair before the override drops the ones
 // past ROWS, so the rows this file does not have cost no build time (16-row two-column tiles
-// ran 1.36-1.41x the time of 8-row ones, session 9). On
-// lavapipe (docs/PERF.md, session 9) the one-column 16 x 4 tile unrolled this way ran 0.89x
+// ran 1.36-1.41x the time of 8-row ones, session 9). Both columns in one pass (16
+// accumulators) gave lanes8x4w2 fastest frames 0.94x those of one column per pass (8
+// accumulators; session 10, the medians within the machine's noise). On lavapipe
+// (docs/PERF.md, session 9) the one-column 16 x 4 tile unrolled this way ran 0.89x
 // `accumulate`'s column loop but took 3x as long to compile cold; the column loop with two
 // rows at a time gained nothing. Two columns share each fetched column and weight twice, so a
 // 4- or 8-row tile is the fast shape, and a short tile keeps the compile near the loop's.
@@ -175,30 +191,19 @@ fn accumulate_rows(acc0: ptr<function, Tile>, acc1: ptr<function, Tile>, acc2: p
     let k0 = column(t, mode, x - 1, y0, layer);
     let k1 = column(t, mode, x, y0, layer);
     let k2 = column(t, mode, x + 1, y0, layer);
-    var k3: Column;
-    if TW > 1u { k3 = column(t, mode, x + 2, y0, layer); }
+    let k3 = column(t, mode, x + 2, y0, layer);
     let s = spread(w + cb * 36u * OB);
-    // Column 0 from input columns 0..2, column 1 from 1..3, block by block.
+    // Column 0 from input columns 0..2, column 1 from 1..3, block by block, both columns in
+    // one pass (TW is 2 wherever this runs).
     if OB == 1u {
-        add_block_rows(acc0, taps_1(s), k0, k1, k2);
-        if TW > 1u { add_block_rows(acc4, taps_1(s), k1, k2, k3); }
+        add_block_rows(acc0, acc4, taps_1(s), k0, k1, k2, k3);
     } else if OB == 2u {
-        add_block_rows(acc0, taps_2_0(s), k0, k1, k2);
-        add_block_rows(acc1, taps_2_1(s), k0, k1, k2);
-        if TW > 1u {
-            add_block_rows(acc4, taps_2_0(s), k1, k2, k3);
-            add_block_rows(acc5, taps_2_1(s), k1, k2, k3);
-        }
+        add_block_rows(acc0, acc4, taps_2_0(s), k0, k1, k2, k3);
+        add_block_rows(acc1, acc5, taps_2_1(s), k0, k1, k2, k3);
     } else {
-        add_block_rows(acc0, taps_4_0(s), k0, k1, k2);
-        add_block_rows(acc1, taps_4_1(s), k0, k1, k2);
-        add_block_rows(acc2, taps_4_2(s), k0, k1, k2);
-        add_block_rows(acc3, taps_4_3(s), k0, k1, k2);
-        if TW > 1u {
-            add_block_rows(acc4, taps_4_0(s), k1, k2, k3);
-            add_block_rows(acc5, taps_4_1(s), k1, k2, k3);
-            add_block_rows(acc6, taps_4_2(s), k1, k2, k3);
-            add_block_rows(acc7, taps_4_3(s), k1, k2, k3);
-        }
+        add_block_rows(acc0, acc4, taps_4_0(s), k0, k1, k2, k3);
+        add_block_rows(acc1, acc5, taps_4_1(s), k0, k1, k2, k3);
+        add_block_rows(acc2, acc6, taps_4_2(s), k0, k1, k2, k3);
+        add_block_rows(acc3, acc7, taps_4_3(s), k0, k1, k2, k3);
     }
 }
