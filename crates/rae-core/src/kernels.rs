@@ -492,9 +492,9 @@ impl Kernels {
     /// Create the pipelines of `variants` that are not cached yet, on one thread per core.
     ///
     /// A pipeline's creation is mostly the driver's front end (lavapipe translates and
-    /// optimises the SPIR-V before its shader cache is consulted: 0.3-0.6 s per conv pipeline,
-    /// most of a denoiser's build), and Vulkan lets pipelines of one device be created
-    /// concurrently, so a plan's dozen or so variants are made side by side rather than in turn.
+    /// optimises the SPIR-V before its shader cache is consulted; that is most of a denoiser's
+    /// build, docs/PERF.md session 10), and Vulkan lets pipelines of one device be created
+    /// concurrently, so a plan's variants are made side by side rather than in turn.
     pub fn prepare(&mut self, device: &wgpu::Device, variants: &[ConvVariant]) {
         let mut missing: Vec<ConvVariant> = Vec::new();
         for v in variants {
