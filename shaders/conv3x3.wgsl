@@ -77,8 +77,8 @@ struct Params {
 // * OB + j, a vec4 over the 4 output channels of block ob0 + z * OB + j; then the bias of block j
 // at w + cin4_total * 36 * OB + j.
 @group(0) @binding(0) var<uniform> params: Params;
-@group(0) @binding(1) var src_a: texture_2d_array<f32>;
-@group(0) @binding(2) var src_b: texture_2d_array<f32>;
+@group(0) @binding(1) var src_a: Source;
+@group(0) @binding(2) var src_b: Source;
 @group(0) @binding(3) var<uniform> weights: array<vec4<f32>, CHUNK>;
 @group(0) @binding(4) var dst: texture_storage_2d_array<rgba32float, write>;
 // Partial sums when SPLIT > 1: part p of output block l at ((p * cout4 + l) * height + y) * width
@@ -89,24 +89,35 @@ var<private> part: u32;
 // This invocation's lane in its subgroup (LANES).
 var<private> lane: u32;
 
-fn max4(t: texture_2d_array<f32>, p: vec2<i32>, layer: u32) -> vec4<f32> {
-    let a = textureLoad(t, p, layer, 0);
-    let b = textureLoad(t, p + vec2<i32>(1, 0), layer, 0);
-    let c = textureLoad(t, p + vec2<i32>(0, 1), layer, 0);
-    let d = textureLoad(t, p + vec2<i32>(1, 1), layer, 0);
+// The sources' texture type: sampled textures read at level 0 (GPUs), or read-only storage
+// textures on CPU drivers (kernels::SourceAccess; Kernels::new rewrites this alias and `load`,
+// kernels::STORAGE_SOURCES), where lavapipe's storage-image load skips the sampler's per-lane
+// mip-level set-up.
+alias Source = texture_2d_array<f32>;
+
+// One texel of a source.
+fn load(t: Source, p: vec2<i32>, layer: u32) -> vec4<f32> {
+    return textureLoad(t, p, layer, 0);
+}
+
+fn max4(t: Source, p: vec2<i32>, layer: u32) -> vec4<f32> {
+    let a = load(t, p, layer);
+    let b = load(t, p + vec2<i32>(1, 0), layer);
+    let c = load(t, p + vec2<i32>(0, 1), layer);
+    let d = load(t, p + vec2<i32>(1, 1), layer);
     return max(max(a, b), max(c, d));
 }
 
 // One channel block of a source at output-resolution pixel (x, y); zero outside (padding 1).
-fn fetch(t: texture_2d_array<f32>, mode: u32, x: i32, y: i32, layer: u32) -> vec4<f32> {
+fn fetch(t: Source, mode: u32, x: i32, y: i32, layer: u32) -> vec4<f32> {
     if x < 0 || y < 0 || x >= i32(params.width) || y >= i32(params.height) {
         return vec4<f32>(0.0);
     }
     switch mode {
         case READ_POOL: { return max4(t, vec2<i32>(2 * x, 2 * y), layer); }
-        case READ_UPSAMPLE: { return textureLoad(t, vec2<i32>(x >> 1u, y >> 1u), layer, 0); }
+        case READ_UPSAMPLE: { return load(t, vec2<i32>(x >> 1u, y >> 1u), layer); }
         case READ_POOL_UPSAMPLE: { return max4(t, vec2<i32>(x & ~1, y & ~1), layer); }
-        default: { return textureLoad(t, vec2<i32>(x, y), layer, 0); }
+        default: { return load(t, vec2<i32>(x, y), layer); }
     }
 }
 
@@ -222,7 +233,7 @@ fn add_taps(acc: ptr<function, Tile>, m0: mat4x4<f32>, m1: mat4x4<f32>, m2: mat4
 // when TW = 2, or column 0's blocks 2 and 3 in acc2/acc3 when OB = 4 (never both). Input column
 // ic (x - 1 + ic) feeds output column 0 through tap kx = ic and output column 1 through
 // kx = ic - 1, so a 2-wide tile fetches 4 columns for 2 outputs instead of 6.
-fn accumulate(acc0: ptr<function, Tile>, acc1: ptr<function, Tile>, acc2: ptr<function, Tile>, acc3: ptr<function, Tile>, t: texture_2d_array<f32>, mode: u32, layer: u32, cb: u32, w: u32, x: i32, y0: i32) {
+fn accumulate(acc0: ptr<function, Tile>, acc1: ptr<function, Tile>, acc2: ptr<function, Tile>, acc3: ptr<function, Tile>, t: Source, mode: u32, layer: u32, cb: u32, w: u32, x: i32, y0: i32) {
     for (var ic = 0u; ic < TW + 2u; ic++) {
         let sx = x + i32(ic) - 1;
         // Column ic of the (ROWS + 2)-row input window.
@@ -290,7 +301,7 @@ fn accumulate(acc0: ptr<function, Tile>, acc1: ptr<function, Tile>, acc2: ptr<fu
 // has; kernels::Kernels::new swaps it (kernels::ROWS_STUB, the line below) for
 // conv3x3_rows.wgsl's in the module that runs such tiles: that body is unrolled, and a front
 // end that inlines it before dropping the dead branch spends seconds on every pipeline.
-fn accumulate_rows(acc0: ptr<function, Tile>, acc1: ptr<function, Tile>, acc2: ptr<function, Tile>, acc3: ptr<function, Tile>, acc4: ptr<function, Tile>, acc5: ptr<function, Tile>, acc6: ptr<function, Tile>, acc7: ptr<function, Tile>, t: texture_2d_array<f32>, mode: u32, layer: u32, cb: u32, w: u32, x: i32, y0: i32) {}
+fn accumulate_rows(acc0: ptr<function, Tile>, acc1: ptr<function, Tile>, acc2: ptr<function, Tile>, acc3: ptr<function, Tile>, acc4: ptr<function, Tile>, acc5: ptr<function, Tile>, acc6: ptr<function, Tile>, acc7: ptr<function, Tile>, t: Source, mode: u32, layer: u32, cb: u32, w: u32, x: i32, y0: i32) {}
 
 fn activate(v: vec4<f32>) -> vec4<f32> {
     var a = v;
@@ -515,7 +526,7 @@ fn quad_sub(a: Quad, b: Quad) -> Quad {
 }
 
 // Input row y at columns x - 1 .. x + 2, times B (B^T = [1 0 -1 0; 0 1 1 0; 0 -1 1 0; 0 1 0 -1]).
-fn wino_row(t: texture_2d_array<f32>, mode: u32, x: i32, y: i32, layer: u32) -> Quad {
+fn wino_row(t: Source, mode: u32, x: i32, y: i32, layer: u32) -> Quad {
     let d0 = fetch(t, mode, x - 1, y, layer);
     let d1 = fetch(t, mode, x, y, layer);
     let d2 = fetch(t, mode, x + 1, y, layer);
@@ -560,7 +571,7 @@ fn wino_tile(a: ptr<function, Wino>, b: ptr<function, Wino>, base: u32, j: u32, 
 
 // Add input block `layer` of `t` at weight block `cb` to the tiles whose top-left output is
 // (x, y0): the upper tile in m0 (block 0) and m1 (block 1), the lower (ROWS = 4) in m2 and m3.
-fn wino_accumulate(m0: ptr<function, Wino>, m1: ptr<function, Wino>, m2: ptr<function, Wino>, m3: ptr<function, Wino>, t: texture_2d_array<f32>, mode: u32, layer: u32, cb: u32, w: u32, x: i32, y0: i32) {
+fn wino_accumulate(m0: ptr<function, Wino>, m1: ptr<function, Wino>, m2: ptr<function, Wino>, m3: ptr<function, Wino>, t: Source, mode: u32, layer: u32, cb: u32, w: u32, x: i32, y0: i32) {
     let base = w + cb * 64u * OB;
     let e0 = wino_row(t, mode, x, y0 - 1, layer);
     let e1 = wino_row(t, mode, x, y0, layer);

@@ -18,7 +18,7 @@ struct Column {
     v9: vec4<f32>,
 }
 
-fn column(t: texture_2d_array<f32>, mode: u32, x: i32, y0: i32, layer: u32) -> Column {
+fn column(t: Source, mode: u32, x: i32, y0: i32, layer: u32) -> Column {
     var c: Column;
     c.v0 = fetch(t, mode, x, y0 + -1, layer);
     c.v1 = fetch(t, mode, x, y0 + 0, layer);
@@ -187,7 +187,7 @@ fn taps_4_3(s: Spread) -> Taps {
 // `accumulate`'s column loop but took 3x as long to compile cold; the column loop with two
 // rows at a time gained nothing. Two columns share each fetched column and weight twice, so a
 // 4- or 8-row tile is the fast shape, and a short tile keeps the compile near the loop's.
-fn accumulate_rows(acc0: ptr<function, Tile>, acc1: ptr<function, Tile>, acc2: ptr<function, Tile>, acc3: ptr<function, Tile>, acc4: ptr<function, Tile>, acc5: ptr<function, Tile>, acc6: ptr<function, Tile>, acc7: ptr<function, Tile>, t: texture_2d_array<f32>, mode: u32, layer: u32, cb: u32, w: u32, x: i32, y0: i32) {
+fn accumulate_rows(acc0: ptr<function, Tile>, acc1: ptr<function, Tile>, acc2: ptr<function, Tile>, acc3: ptr<function, Tile>, acc4: ptr<function, Tile>, acc5: ptr<function, Tile>, acc6: ptr<function, Tile>, acc7: ptr<function, Tile>, t: Source, mode: u32, layer: u32, cb: u32, w: u32, x: i32, y0: i32) {
     let k0 = column(t, mode, x - 1, y0, layer);
     let k1 = column(t, mode, x, y0, layer);
     let k2 = column(t, mode, x + 1, y0, layer);

@@ -3,7 +3,7 @@
 use rae_core::cpu::{self, Chw};
 use rae_core::denoiser::read_texture;
 use rae_core::graph::Read;
-use rae_core::kernels::{self, ConvPlan, ConvSpec, Kernels, Tile, WeightMemory, blocks};
+use rae_core::kernels::{self, ConvPlan, ConvSpec, Kernels, SourceAccess, Tile, WeightMemory, blocks};
 use rae_core::{Denoiser, FrameInputs, Weights};
 use wgpu::util::DeviceExt;
 
@@ -40,7 +40,8 @@ fn upload(t: &Chw) -> wgpu::Texture {
             sample_count: 1,
             dimension: wgpu::TextureDimension::D2,
             format: kernels::ACTIVATION_FORMAT,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING,
+            // Sampled on GPUs, read-only storage on CPU drivers (kernels::SourceAccess).
+            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::STORAGE_BINDING,
             view_formats: &[],
         },
         wgpu::util::TextureDataOrder::LayerMajor,
@@ -52,13 +53,21 @@ fn array_view(t: &wgpu::Texture) -> wgpu::TextureView {
     t.create_view(&wgpu::TextureViewDescriptor { dimension: Some(wgpu::TextureViewDimension::D2Array), ..Default::default() })
 }
 
-/// One conv3x3.wgsl dispatch over cat(read(a), read(b)) at `w x h`.
+/// One conv3x3.wgsl dispatch over cat(read(a), read(b)) at `w x h`, its sources read as suits
+/// the device.
 #[allow(clippy::too_many_arguments)]
 fn gpu_conv(a: (&Chw, Read), b: Option<(&Chw, Read)>, weight: &[f32], bias: &[f32], leaky: bool, w: usize, h: usize, tile: Tile, memory: WeightMemory) -> Chw {
+    let sources = SourceAccess::for_device_type(gpu().device.adapter_info().device_type);
+    gpu_conv_with(a, b, weight, bias, leaky, w, h, tile, memory, sources)
+}
+
+/// [`gpu_conv`] with the sources read as `sources` says.
+#[allow(clippy::too_many_arguments)]
+fn gpu_conv_with(a: (&Chw, Read), b: Option<(&Chw, Read)>, weight: &[f32], bias: &[f32], leaky: bool, w: usize, h: usize, tile: Tile, memory: WeightMemory, sources: SourceAccess) -> Chw {
     let g = gpu();
     let dev = &g.device;
     let cout = bias.len();
-    let mut kernels = Kernels::new(dev, kernels::Precision::F32, memory);
+    let mut kernels = Kernels::with_sources(dev, kernels::Precision::F32, memory, sources);
     let cb = b.map_or(0, |b| b.0.c);
     let spec = ConvSpec {
         name: "test",
@@ -347,6 +356,26 @@ fn four_block_tiles_shrink_to_the_conv() {
     assert_eq!(blocks(WeightMemory::Uniform, 64, 3), 1);
     assert_eq!(blocks(WeightMemory::Uniform, 120, 16), 2);
     assert_eq!(blocks(WeightMemory::Storage, 120, 16), 4);
+}
+
+#[test]
+fn sampled_and_storage_sources_give_the_same_convs() {
+    // The same texels whether the sources are sampled textures or read-only storage textures:
+    // every read mode, one and two sources, a direct and a lanes tile; bit-identical.
+    let (a, b) = (tensor(6, 38, 26, 900), tensor(5, 19, 13, 901));
+    let (up, skip) = (tensor(6, 6, 11, 902), tensor(5, 12, 22, 903));
+    let (weight, bias) = (noise(11 * 11 * 9, 904), noise(11, 905));
+    let lanes = Tile::lanes(4, 2, 1).filter(|_| kernels::lanes_supported(&gpu().device));
+    for tile in [Some(Tile::new(4, 1).unwrap()), lanes].into_iter().flatten() {
+        let run = |sources| {
+            let pooled = gpu_conv_with((&a, Read::Pool), Some((&b, Read::Direct)), &weight, &bias, true, 13, 19, tile, WeightMemory::Uniform, sources);
+            let upsampled = gpu_conv_with((&up, Read::Upsample), Some((&skip, Read::PoolUpsample)), &weight, &bias, false, 22, 12, tile, WeightMemory::Uniform, sources);
+            (pooled.data, upsampled.data)
+        };
+        assert_eq!(run(SourceAccess::Sampled), run(SourceAccess::Storage), "{tile}");
+    }
+    assert_eq!(SourceAccess::for_device_type(wgpu::DeviceType::Cpu), SourceAccess::Storage);
+    assert_eq!(SourceAccess::for_device_type(wgpu::DeviceType::DiscreteGpu), SourceAccess::Sampled);
 }
 
 #[test]

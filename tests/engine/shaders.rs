@@ -1,13 +1,13 @@
 //! Every WGSL file parses and validates with naga: no GPU needed, a broken shader fails here.
 
-use rae_core::kernels::{ROWS_STUB, SHADERS, STORAGE_WEIGHTS, UNIFORM_WEIGHTS, WITHOUT_SUBGROUPS, shader_source};
+use rae_core::kernels::{ROWS_STUB, SHADERS, STORAGE_SOURCES, STORAGE_WEIGHTS, UNIFORM_WEIGHTS, WITHOUT_SUBGROUPS, shader_source};
 
 #[test]
 fn every_shader_validates_with_naga() {
     assert!(SHADERS.len() >= 3);
     // The sources as written (conv3x3_rows.wgsl inside conv3x3.wgsl, the only way it is
     // used), and the rewrites kernels::Kernels::new makes (f16 storage textures, storage-buffer
-    // weights; no subgroups, validated without the capability).
+    // weights, storage-texture sources; no subgroups, validated without the capability).
     let conv = shader_source("conv3x3");
     assert!(conv.contains(UNIFORM_WEIGHTS), "the weight declaration Kernels::new rewrites");
     assert!(conv.contains(ROWS_STUB), "the empty accumulate_rows Kernels::conv replaces");
@@ -16,8 +16,13 @@ fn every_shader_validates_with_naga() {
         src.replace(from, to)
     });
     assert!(WITHOUT_SUBGROUPS.iter().all(|(from, _)| !without_subgroups.contains(from)), "no subgroup operation is left");
+    let storage_sources = STORAGE_SOURCES.iter().fold(conv.to_string(), |src, (from, to)| {
+        assert!(src.contains(from), "conv3x3.wgsl has {from}");
+        src.replace(from, to)
+    });
     let rewritten = [
         ("conv3x3 (two-column lanes)", conv.replace(ROWS_STUB, shader_source("conv3x3_rows"))),
+        ("conv3x3 (storage sources, two-column lanes, f16)", storage_sources.replace(ROWS_STUB, shader_source("conv3x3_rows")).replace("rgba32float", "rgba16float")),
         ("conv3x3 (f16, storage weights)", conv.replace("rgba32float", "rgba16float").replace(UNIFORM_WEIGHTS, STORAGE_WEIGHTS)),
         ("conv3x3 (without subgroups)", without_subgroups),
     ];

@@ -100,15 +100,41 @@ impl WeightMemory {
     }
 }
 
+/// How the conv reads its two sources (the activations it convolves).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum SourceAccess {
+    /// Sampled textures, `textureLoad` at level 0: GPUs, where both paths go through the
+    /// texture units (the H100 numbers in docs/PERF.md were measured so).
+    Sampled,
+    /// Read-only storage textures ([`STORAGE_SOURCES`]): CPU drivers. Lavapipe's sampler sets
+    /// up every texel fetch with per-lane mip-level offsets; its storage-image load does not,
+    /// and the default tile's fastest 256x256 frames take 0.82x the time (docs/PERF.md, session 10).
+    Storage,
+}
+
+impl SourceAccess {
+    /// The kind that suits an adapter: storage textures on CPU drivers, sampled elsewhere.
+    pub fn for_device_type(t: wgpu::DeviceType) -> Self {
+        if t == wgpu::DeviceType::Cpu { SourceAccess::Storage } else { SourceAccess::Sampled }
+    }
+}
+
 /// The weight declaration of conv3x3.wgsl (uniform chunks).
 pub const UNIFORM_WEIGHTS: &str = "var<uniform> weights: array<vec4<f32>, CHUNK>;";
 /// What [`UNIFORM_WEIGHTS`] becomes for [`WeightMemory::Storage`].
 pub const STORAGE_WEIGHTS: &str = "var<storage, read> weights: array<vec4<f32>>;";
 
+/// The rewrites of conv3x3.wgsl for [`SourceAccess::Storage`]: the sources' type alias and the
+/// one function that reads them (a storage texture is read without a level).
+pub const STORAGE_SOURCES: [(&str, &str); 2] = [
+    ("alias Source = texture_2d_array<f32>;", "alias Source = texture_storage_2d_array<rgba32float, read>;"),
+    ("return textureLoad(t, p, layer, 0);", "return textureLoad(t, p, layer);"),
+];
+
 /// conv3x3.wgsl's empty `accumulate_rows`, which the conv module that runs two-column lanes
 /// tiles has replaced by conv3x3_rows.wgsl (and no other module: its unrolled body costs the
 /// driver's front end seconds per pipeline even where no call reaches it).
-pub const ROWS_STUB: &str = "fn accumulate_rows(acc0: ptr<function, Tile>, acc1: ptr<function, Tile>, acc2: ptr<function, Tile>, acc3: ptr<function, Tile>, acc4: ptr<function, Tile>, acc5: ptr<function, Tile>, acc6: ptr<function, Tile>, acc7: ptr<function, Tile>, t: texture_2d_array<f32>, mode: u32, layer: u32, cb: u32, w: u32, x: i32, y0: i32) {}";
+pub const ROWS_STUB: &str = "fn accumulate_rows(acc0: ptr<function, Tile>, acc1: ptr<function, Tile>, acc2: ptr<function, Tile>, acc3: ptr<function, Tile>, acc4: ptr<function, Tile>, acc5: ptr<function, Tile>, acc6: ptr<function, Tile>, acc7: ptr<function, Tile>, t: Source, mode: u32, layer: u32, cb: u32, w: u32, x: i32, y0: i32) {}";
 
 /// The rewrites of conv3x3.wgsl for devices without [`wgpu::Features::SUBGROUP`] (naga refuses
 /// subgroup operations anywhere in a module there): its subgroup operations become plain
@@ -262,6 +288,19 @@ fn texture_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
     }
 }
 
+/// The layout entry of a conv source read as `sources` says.
+fn source_entry(binding: u32, sources: SourceAccess, format: wgpu::TextureFormat) -> wgpu::BindGroupLayoutEntry {
+    match sources {
+        SourceAccess::Sampled => texture_entry(binding),
+        SourceAccess::Storage => wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::StorageTexture { access: wgpu::StorageTextureAccess::ReadOnly, format, view_dimension: wgpu::TextureViewDimension::D2Array },
+            count: None,
+        },
+    }
+}
+
 fn storage_texture_entry(binding: u32, format: wgpu::TextureFormat) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
@@ -371,17 +410,31 @@ pub struct Kernels {
 }
 
 impl Kernels {
-    /// Compile the modules and the fixed pipelines for activations stored in `precision` and
-    /// conv weights read from `memory`.
+    /// Compile the modules and the fixed pipelines for activations stored in `precision`, conv
+    /// weights read from `memory` and conv sources read as suits the device
+    /// ([`SourceAccess::for_device_type`]).
     ///
-    /// The storage texel format and a binding's address space are the two things WGSL cannot
-    /// take as override constants, so for f16 the kernels' `rgba32float` storage declarations
-    /// are rewritten to `rgba16float`, and for storage weights the conv's one uniform weight
-    /// declaration ([`UNIFORM_WEIGHTS`]) to [`STORAGE_WEIGHTS`]; everything else (the clamp to
-    /// the f16 range) is an override.
+    /// The storage texel format, a binding's address space and a texture's type are the things
+    /// WGSL cannot take as override constants, so for f16 the kernels' `rgba32float` storage
+    /// declarations are rewritten to `rgba16float`, for storage weights the conv's one uniform
+    /// weight declaration ([`UNIFORM_WEIGHTS`]) to [`STORAGE_WEIGHTS`], and for storage-texture
+    /// sources the conv's `Source` alias and `load` ([`STORAGE_SOURCES`]); everything else (the
+    /// clamp to the f16 range) is an override.
     pub fn new(device: &wgpu::Device, precision: Precision, memory: WeightMemory) -> Self {
+        Self::with_sources(device, precision, memory, SourceAccess::for_device_type(device.adapter_info().device_type))
+    }
+
+    /// [`Kernels::new`] with the conv's sources read as `sources` says (rewritten by
+    /// [`STORAGE_SOURCES`] for storage textures, before the f16 rewrite).
+    pub fn with_sources(device: &wgpu::Device, precision: Precision, memory: WeightMemory, sources: SourceAccess) -> Self {
         let source = |name: &str| {
             let mut src = shader_source(name).to_string();
+            if sources == SourceAccess::Storage && name == "conv3x3" {
+                for (from, to) in STORAGE_SOURCES {
+                    assert!(src.contains(from), "conv3x3.wgsl has {from}");
+                    src = src.replace(from, to);
+                }
+            }
             if precision == Precision::F16 {
                 src = src.replace("rgba32float", "rgba16float");
             }
@@ -405,8 +458,8 @@ impl Kernels {
             "conv3x3",
             &[
                 dynamic_entry(0, wgpu::BufferBindingType::Uniform, std::mem::size_of::<ConvParams>() as u64),
-                texture_entry(1),
-                texture_entry(2),
+                source_entry(1, sources, precision.format()),
+                source_entry(2, sources, precision.format()),
                 match memory {
                     WeightMemory::Uniform => dynamic_entry(3, wgpu::BufferBindingType::Uniform, WEIGHT_CHUNK_BYTES),
                     WeightMemory::Storage => dynamic_entry(3, wgpu::BufferBindingType::Storage { read_only: true }, 16),
