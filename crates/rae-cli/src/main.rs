@@ -59,9 +59,10 @@ enum Command {
         #[arg(long)]
         csv: Option<PathBuf>,
         /// Conv register tile, as `bench --tile` takes it (one): `auto` (tuned on GPUs,
-        /// lanes16x4 on CPU drivers), `tuned`, or a fixed tile. On lavapipe `lanes8x4w2` runs a
-        /// 256x256 frame in about 0.8x the time of `auto` but builds its pipelines ~2 s longer
-        /// (and compiles them ~4x longer into an empty shader cache): for long sequences.
+        /// lanes16x4 on CPU drivers), `tuned`, or a fixed tile. On lavapipe `lanes8x4w2` and
+        /// `lanes4x4w2` run a 256x256 frame in about 0.8-0.9x the time of `auto` but build their
+        /// pipelines 1-2 s longer (and compile them longer into an empty shader cache, up to
+        /// 4x): for long sequences.
         #[arg(long, default_value = "auto")]
         tile: String,
     },
