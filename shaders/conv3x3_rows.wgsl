@@ -49,28 +49,21 @@ struct Rows {
     d: vec4<f32>,
 }
 
+// Input lane k of one tap: the weights `w` (column k of the tap's 4x4: input lane k to the 4
+// outputs) times the lane's value in each of the four input texels, added to the accumulators.
+fn mac_lane(p: Rows, w: vec4<f32>, u: f32, v: f32, s: f32, t: f32) -> Rows {
+    return Rows(fma(w, vec4<f32>(u), p.a), fma(w, vec4<f32>(v), p.b), fma(w, vec4<f32>(s), p.c), fma(w, vec4<f32>(t), p.d));
+}
+
 // One tap's 4x4 weights `m` on the four accumulators, from input texels u, v (column 0's
 // rows) and s, t (column 1's), interleaved: each weight scalar feeds four accumulators while
 // it is in a register, and each accumulator's products come in `mac`'s order (input lane x,
 // y, z, w).
 fn mac_rows(p: Rows, m: mat4x4<f32>, u: vec4<f32>, v: vec4<f32>, s: vec4<f32>, t: vec4<f32>) -> Rows {
-    var a = fma(m[0], vec4<f32>(u.x), p.a);
-    var b = fma(m[0], vec4<f32>(v.x), p.b);
-    var c = fma(m[0], vec4<f32>(s.x), p.c);
-    var d = fma(m[0], vec4<f32>(t.x), p.d);
-    a = fma(m[1], vec4<f32>(u.y), a);
-    b = fma(m[1], vec4<f32>(v.y), b);
-    c = fma(m[1], vec4<f32>(s.y), c);
-    d = fma(m[1], vec4<f32>(t.y), d);
-    a = fma(m[2], vec4<f32>(u.z), a);
-    b = fma(m[2], vec4<f32>(v.z), b);
-    c = fma(m[2], vec4<f32>(s.z), c);
-    d = fma(m[2], vec4<f32>(t.z), d);
-    a = fma(m[3], vec4<f32>(u.w), a);
-    b = fma(m[3], vec4<f32>(v.w), b);
-    c = fma(m[3], vec4<f32>(s.w), c);
-    d = fma(m[3], vec4<f32>(t.w), d);
-    return Rows(a, b, c, d);
+    var q = mac_lane(p, m[0], u.x, v.x, s.x, t.x);
+    q = mac_lane(q, m[1], u.y, v.y, s.y, t.y);
+    q = mac_lane(q, m[2], u.z, v.z, s.z, t.z);
+    return mac_lane(q, m[3], u.w, v.w, s.w, t.w);
 }
 
 // Rows r, r + 1 of one block in columns 0 (a, b) and 1 (c, d) over all nine taps, from input
