@@ -9,8 +9,16 @@ if ! ls /usr/share/vulkan/icd.d/lvp_icd*.json >/dev/null 2>&1; then
   DEBIAN_FRONTEND=noninteractive as_root apt-get install -y -qq mesa-vulkan-drivers >/dev/null
 fi
 
-# Mesa wants a private runtime dir; keep its shader cache inside target/.
+# lavapipe at 512-bit vectors where the CPU has AVX-512 (0.7x the frame time here): what
+# rae-cli and rae-trace ask for themselves (rae_core::gpu::prefer_wide_cpu_vectors); exported
+# so that the test processes, which open lavapipe directly, run the same code.
+if [ -z "${LP_NATIVE_VECTOR_WIDTH:-}" ] && grep -qw avx512f /proc/cpuinfo 2>/dev/null; then
+  export LP_NATIVE_VECTOR_WIDTH=512
+fi
+
+# Mesa wants a private runtime dir; keep its shader cache inside target/, one per vector width
+# (Mesa 22.3's cache does not key on it and would serve shaders compiled for the other).
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp/rae-xdg-$(id -u)}"
 mkdir -p -m 0700 "$XDG_RUNTIME_DIR"
-export MESA_SHADER_CACHE_DIR="${MESA_SHADER_CACHE_DIR:-$PWD/target/mesa_shader_cache}"
+export MESA_SHADER_CACHE_DIR="${MESA_SHADER_CACHE_DIR:-$PWD/target/mesa_shader_cache-${LP_NATIVE_VECTOR_WIDTH:-default}}"
 export OMP_WAIT_POLICY=PASSIVE

@@ -59,10 +59,9 @@ enum Command {
         #[arg(long)]
         csv: Option<PathBuf>,
         /// Conv register tile, as `bench --tile` takes it (one): `auto` (tuned on GPUs,
-        /// lanes16x4 on CPU drivers), `tuned`, or a fixed tile. On lavapipe `lanes8x4w2` and
-        /// `lanes4x4w2` run a 256x256 frame in about 0.8-0.9x the time of `auto` but build their
-        /// pipelines 1-2 s longer (and compile them longer into an empty shader cache, up to
-        /// 4x): for long sequences.
+        /// lanes4x2w2 on CPU drivers), `tuned`, or a fixed tile. On lavapipe `lanes8x4w2` and
+        /// `lanes4x4w2` run a 256x256 frame 3-5% faster than `auto` but compile 2.6x as long
+        /// into an empty shader cache: for long sequences.
         #[arg(long, default_value = "auto")]
         tile: String,
     },
@@ -109,11 +108,10 @@ enum Command {
         /// blocks 1, 2, 4 (4 with one column); columns 1, 2; workgroups 8, 16, 32, 64 wide;
         /// input blocks split 1 to 16 ways), the same prefixed `lanes` (weights loaded across
         /// the subgroup, devices with subgroups of 8 or more lanes; 4 blocks also in 2 columns,
-        /// two columns at most 8 rows, e.g. lanes4x4w2: faster frames on lavapipe, slower
-        /// pipeline builds) or
+        /// two columns at most 8 rows, e.g. lanes4x2w2, the CPU drivers' default) or
         /// winoROWSxBLOCKS[gGROUPX] (Winograd F(2x2, 3x3); rows 2, 4) for one tile everywhere,
         /// `tuned` (each conv timed with every candidate on this device while building), or
-        /// `auto` (tuned on GPUs; on CPU drivers lanes16x4, or 16x4 without subgroups: what
+        /// `auto` (tuned on GPUs; on CPU drivers lanes4x2w2, or 16x4 without subgroups: what
         /// `denoise` uses).
         #[arg(long, value_delimiter = ',', default_value = "auto")]
         tile: Vec<String>,
@@ -478,6 +476,8 @@ fn verify(files: &[PathBuf]) -> Result<()> {
 }
 
 fn main() -> Result<()> {
+    // SAFETY: first thing in main, before any thread (clap's, wgpu's, rayon's) exists.
+    unsafe { rae_core::gpu::prefer_wide_cpu_vectors() };
     match Cli::parse().command {
         Command::Denoise { input, output, weights, models, frames, reset_at, png, half, allow_nonfinite, precision, csv, tile } => {
             let frames = frames.as_deref().map(denoise::parse_range).transpose()?;

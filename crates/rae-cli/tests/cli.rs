@@ -393,3 +393,24 @@ fn bench_interleave_prints_a_row_per_combination_against_the_first() {
         assert!(fastest > 0.0 && fastest <= median && ratio > 0.0, "{text}");
     }
 }
+
+#[test]
+fn lavapipe_gets_wide_vectors_unless_the_user_chose_a_width() {
+    // rae-cli asks lavapipe for 512-bit vectors where the CPU has AVX-512 and the variable is
+    // unset (rae_core::gpu::prefer_wide_cpu_vectors); a width the user set is kept.
+    let avx512 = std::fs::read_to_string("/proc/cpuinfo").is_ok_and(|s| s.split_whitespace().any(|f| f == "avx512f"));
+    let lavapipe = |width: Option<&str>| {
+        let mut cmd = rae();
+        cmd.arg("devices").env_remove("LP_NATIVE_VECTOR_WIDTH");
+        if let Some(w) = width {
+            cmd.env("LP_NATIVE_VECTOR_WIDTH", w);
+        }
+        let out = cmd.output().unwrap();
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        String::from_utf8(out.stdout).unwrap().lines().find(|l| l.contains("llvmpipe") && l.contains("Vulkan")).map(str::to_string)
+    };
+    let Some(default) = lavapipe(None) else { return }; // no lavapipe on this machine
+    assert_eq!(default.contains("512 bits"), avx512, "{default}");
+    let chosen = lavapipe(Some("256")).expect("lavapipe");
+    assert!(chosen.contains("256 bits"), "{chosen}");
+}

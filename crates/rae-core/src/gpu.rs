@@ -12,6 +12,50 @@ pub struct Gpu {
     pub queue: wgpu::Queue,
 }
 
+/// Mesa's llvmpipe (lavapipe) variable for the width of its vectors in bits; a subgroup is that
+/// many bits of 32-bit lanes.
+pub const LAVAPIPE_VECTOR_WIDTH: &str = "LP_NATIVE_VECTOR_WIDTH";
+
+/// Ask lavapipe for 512-bit vectors (16-lane subgroups) when the CPU has AVX-512F and
+/// `LP_NATIVE_VECTOR_WIDTH` is unset; returns whether it set the variable.
+///
+/// Mesa 22.3 compiles for 256 bits on every AVX2 CPU, AVX-512 or not. On this project's
+/// machines (AMD EPYC with AVX-512) a 256x256 frame of the default network takes about 0.7x
+/// the time at 512 bits with bit-identical output (docs/PERF.md, "Lavapipe, session 11"): half
+/// the instructions for the same work, where the unrolled conv bodies were bound by the CPU's
+/// front end. The driver reads the variable once, when the Vulkan loader opens it, so this must
+/// run before the first [`Gpu::new`] or [`adapters`]. Other drivers ignore it.
+///
+/// Mesa's shader cache does not key on the width: shaders compiled at one width are served at
+/// the other (correct, but at the speed they were compiled for). Clear the cache
+/// (`MESA_SHADER_CACHE_DIR`, by default `~/.cache/mesa_shader_cache`) after changing it.
+///
+/// # Safety
+///
+/// Sets a process environment variable, so no other thread may be reading or writing the
+/// environment: call it first thing in `main`, before any thread starts
+/// ([`std::env::set_var`]'s contract).
+pub unsafe fn prefer_wide_cpu_vectors() -> bool {
+    if std::env::var_os(LAVAPIPE_VECTOR_WIDTH).is_some() || !cpu_has_avx512() {
+        return false;
+    }
+    // SAFETY: the caller guarantees no other thread touches the environment.
+    unsafe { std::env::set_var(LAVAPIPE_VECTOR_WIDTH, "512") };
+    true
+}
+
+/// Whether the CPU has AVX-512F (the 512-bit vectors lavapipe can use).
+fn cpu_has_avx512() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        std::arch::is_x86_feature_detected!("avx512f")
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        false
+    }
+}
+
 /// The adapters wgpu sees under the current `WGPU_BACKEND`.
 pub fn adapters() -> Vec<wgpu::Adapter> {
     let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());

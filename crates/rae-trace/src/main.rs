@@ -161,6 +161,8 @@ fn live(choice: &SceneChoice, weights: &Path, frames: u32, size: (u32, u32), out
 }
 
 fn main() -> Result<()> {
+    // SAFETY: first thing in main, before any thread (the renderer's, wgpu's) exists.
+    unsafe { rae_core::gpu::prefer_wide_cpu_vectors() };
     match Cli::parse().command {
         Command::Render { scene, frames, spp, ref_spp, size, seed, max_depth, half, out } => {
             let (width, height) = size;
