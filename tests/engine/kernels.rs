@@ -262,8 +262,8 @@ fn conv_lanes_tiles_match_cpu() {
     assert_eq!(run(lanes(4, 2, 2)), run(Tile::with_cols(4, 2, 2).unwrap()), "lanes4x2w2 against 4x2w2");
     assert_eq!(run(lanes(4, 4, 2)), run(lanes(4, 4, 1)), "two columns against one");
     assert_eq!(lanes(16, 4, 1).to_string(), "lanes16x4");
-    assert_eq!(Some(Tile::CPU_LANES), Tile::lanes(4, 2, 2), "the CPU drivers' tile is one the kernel has");
-    assert_eq!(Tile::CPU_LANES.to_string(), "lanes4x2w2");
+    assert_eq!(Some(Tile::CPU_LANES), Tile::lanes(8, 2, 2), "the CPU drivers' tile is one the kernel has");
+    assert_eq!(Tile::CPU_LANES.to_string(), "lanes8x2w2");
     assert_eq!(lanes(8, 4, 2).to_string(), "lanes8x4w2");
     assert_eq!(Tile::with_cols(8, 2, 2).unwrap().with_lanes(), Tile::lanes(8, 2, 2));
     assert_eq!(Tile::lanes(16, 3, 1), None);

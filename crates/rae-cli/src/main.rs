@@ -59,9 +59,8 @@ enum Command {
         #[arg(long)]
         csv: Option<PathBuf>,
         /// Conv register tile, as `bench --tile` takes it (one): `auto` (tuned on GPUs,
-        /// lanes4x2w2 on CPU drivers), `tuned`, or a fixed tile. On lavapipe `lanes8x4w2` and
-        /// `lanes4x4w2` run a 256x256 frame 3-5% faster than `auto` but compile 2.6x as long
-        /// into an empty shader cache: for long sequences.
+        /// lanes8x2w2 on CPU drivers), `tuned`, or a fixed tile. On lavapipe `lanes4x2w2` compiles
+        /// into an empty shader cache in 0.37x the time for frames about 1.07x as long.
         #[arg(long, default_value = "auto")]
         tile: String,
     },
@@ -108,10 +107,10 @@ enum Command {
         /// blocks 1, 2, 4 (4 with one column); columns 1, 2; workgroups 8, 16, 32, 64 wide;
         /// input blocks split 1 to 16 ways), the same prefixed `lanes` (weights loaded across
         /// the subgroup, devices with subgroups of 8 or more lanes; 4 blocks also in 2 columns,
-        /// two columns at most 8 rows, e.g. lanes4x2w2, the CPU drivers' default) or
+        /// two columns at most 8 rows, e.g. lanes8x2w2, the CPU drivers' default) or
         /// winoROWSxBLOCKS[gGROUPX] (Winograd F(2x2, 3x3); rows 2, 4) for one tile everywhere,
         /// `tuned` (each conv timed with every candidate on this device while building), or
-        /// `auto` (tuned on GPUs; on CPU drivers lanes4x2w2, or 16x4 without subgroups: what
+        /// `auto` (tuned on GPUs; on CPU drivers lanes8x2w2, or 16x4 without subgroups: what
         /// `denoise` uses).
         #[arg(long, value_delimiter = ',', default_value = "auto")]
         tile: Vec<String>,

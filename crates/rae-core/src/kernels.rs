@@ -623,7 +623,7 @@ pub const LANES_W2_MAX_ROWS: u32 = 8;
 /// (a 2-column tile fetches 4 input columns for 2 outputs, a 1-column tile 3 for 1). A Winograd
 /// tile (2 columns, 2 or 4 rows) multiplies 16 times per 2x2 outputs and input channel where the
 /// direct one multiplies 36 times, for 16 weights per channel pair instead of 9 and a few
-/// additions. CPU drivers run [`Tile::cpu`] (4 x 2 in two columns, weights loaded across the
+/// additions. CPU drivers run [`Tile::cpu`] (8 x 2 in two columns, weights loaded across the
 /// subgroup), where every input fetch is a call into the driver and the two columns share it
 /// (docs/PERF.md); GPUs tune per conv ([`crate::TileChoice`]) and fall back to the default
 /// (16 x 2) where they cannot time candidates; `rae-cli bench --tile` sweeps any of them.
@@ -656,13 +656,13 @@ impl Tile {
     /// session 6); [`Tile::cpu`] adds weights across lanes where the device has them.
     pub const CPU: Tile = Tile { rows: CONV_ROWS, blocks: 4, cols: 1, group_x: WORKGROUP, method: Method::Direct, split: 1 };
 
-    /// The tile of CPU drivers with subgroups: 4 rows x 2 blocks x 2 columns, weights loaded
-    /// across the subgroup. On lavapipe it took 0.83x the frame time of `lanes16x4` (the
-    /// default before it) at 512-bit vectors and 0.94x at 256 bits, and compiles in about half
-    /// the time (an empty shader cache: 14 s against 27 for the first 64x64 frame); the 8-row
-    /// and 4-block two-column tiles ran 3-5% faster but compile in 37-38 s (docs/PERF.md,
-    /// session 11).
-    pub const CPU_LANES: Tile = Tile { rows: 4, blocks: 2, cols: 2, group_x: WORKGROUP, method: Method::Lanes, split: 1 };
+    /// The tile of CPU drivers with subgroups: 8 rows x 2 blocks x 2 columns, weights loaded
+    /// across the subgroup. On lavapipe at 512-bit vectors it took 0.78x the frame time of
+    /// `lanes16x4` (the default before it; 0.84-0.86x at 256 bits) and 0.93x that of `lanes4x2w2`,
+    /// with the same warm build time; compiling into an empty shader cache takes longer (the
+    /// first 64x64 frame in 38 s, against 27 for `lanes16x4` and 14 for `lanes4x2w2`), once
+    /// per machine and driver (docs/PERF.md, session 11).
+    pub const CPU_LANES: Tile = Tile { rows: 8, blocks: 2, cols: 2, group_x: WORKGROUP, method: Method::Lanes, split: 1 };
 
     /// The tile of CPU drivers on `device`: [`Tile::CPU_LANES`] where the device has subgroups
     /// of 8 or more lanes ([`lanes_supported`]), else [`Tile::CPU`].
