@@ -23,7 +23,9 @@ pub const LAVAPIPE_VECTOR_WIDTH: &str = "LP_NATIVE_VECTOR_WIDTH";
 /// machines (AMD EPYC with AVX-512) a 256x256 frame of the default network takes about 0.7x
 /// the time at 512 bits with bit-identical output (docs/PERF.md, "Lavapipe, session 11"): half
 /// the instructions for the same work, where the unrolled conv bodies were bound by the CPU's
-/// front end. The driver reads the variable once, when the Vulkan loader opens it, so this must
+/// front end. Tiles without weights across the lanes (`16x4`, for devices without subgroups)
+/// run 2x slower at 512 bits, their per-lane weight gathers twice as wide; lavapipe has
+/// subgroups, so [`crate::Tile::cpu`] never picks one there. The driver reads the variable once, when the Vulkan loader opens it, so this must
 /// run before the first [`Gpu::new`] or [`adapters`]. Other drivers ignore it.
 ///
 /// Mesa's shader cache does not key on the width: shaders compiled at one width are served at

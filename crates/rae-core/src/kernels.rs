@@ -653,7 +653,7 @@ impl Default for Tile {
 impl Tile {
     /// The tile of CPU drivers without subgroups: 16 rows x 4 blocks (2 or 1 where a conv's
     /// weights or outputs are fewer), 0.83-0.93x the time of 16 x 2 on lavapipe (docs/PERF.md,
-    /// session 6); [`Tile::cpu`] adds weights across lanes where the device has them.
+    /// session 6); [`Tile::cpu`] picks [`Tile::CPU_LANES`] instead where the device has subgroups.
     pub const CPU: Tile = Tile { rows: CONV_ROWS, blocks: 4, cols: 1, group_x: WORKGROUP, method: Method::Direct, split: 1 };
 
     /// The tile of CPU drivers with subgroups: 8 rows x 2 blocks x 2 columns, weights loaded
