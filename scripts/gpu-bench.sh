@@ -5,9 +5,10 @@
 # Checks the goldens on the GPU, times 1080p and 720p in f32 and f16 over conv tiles x weight
 # memories (GPU-resident frames by timestamps, and host round trips), per-stage times, the sample
 # sequence end to end, and PyTorch/cuDNN on the same weights. Everything goes to $2/log.txt.
-# TILES, MEMORIES, STAGE_TILES override the sweep; SKIP_TORCH=1 leaves PyTorch out. With several
-# builds the sweep runs ROUNDS (default 2) interleaved rounds of each, for side-by-side ratios;
-# everything else uses the first.
+# TILES, MEMORIES, SOURCES (e.g. sampled,storage; builds before session 12 have no --sources),
+# STAGE_TILES override the sweep; SKIP_TORCH=1 leaves PyTorch out. With several builds the sweep
+# runs ROUNDS (default 2) interleaved rounds of each, for side-by-side ratios; everything else
+# uses the first.
 set -uo pipefail
 out=${1:?output folder}
 shift
@@ -17,6 +18,8 @@ rounds=${ROUNDS:-1}
 [ ${#builds[@]} -gt 1 ] && rounds=${ROUNDS:-2}
 tiles=${TILES:-tuned,16x2,4x1}
 memories=${MEMORIES:-storage,uniform}
+sources=()
+[ -n "${SOURCES:-}" ] && sources=(--sources "$SOURCES")
 mkdir -p "$out"
 log="$out/log.txt"
 # Vulkan loader: the image has the NVIDIA driver's ICD but no libvulkan (device README).
@@ -35,7 +38,7 @@ w=models/rae-default.safetensors
     for r in $(seq "$rounds"); do
         for b in "${builds[@]}"; do
             echo "== tiles x weight memory: $b, round $r"
-            "$b" bench "$w" --sizes 1920x1080,1280x720 --frames 20 --precision f32,f16 --tile "$tiles" --weights-memory "$memories" --peak-gflops 66900 | grep -E "^ +(size|[0-9]+x[0-9]+) "
+            "$b" bench "$w" --sizes 1920x1080,1280x720 --frames 20 --precision f32,f16 --tile "$tiles" --weights-memory "$memories" ${sources[@]+"${sources[@]}"} --peak-gflops 66900 | grep -E "^ +(size|[0-9]+x[0-9]+) "
         done
     done
     echo "== stages"

@@ -164,7 +164,7 @@ pub fn run(o: &Options) -> Result<()> {
     prepare_output(&o.input, &out_dir)?;
 
     let gpu = Gpu::new()?;
-    let mut d = Denoiser::with_options(&gpu.device, &gpu.queue, &weights, seq.width, seq.height, rae_core::Options { precision: o.precision, tiles: o.tiles, weights: None })?;
+    let mut d = Denoiser::with_options(&gpu.device, &gpu.queue, &weights, seq.width, seq.height, rae_core::Options { precision: o.precision, tiles: o.tiles, ..Default::default() })?;
     let used: Vec<&str> = weights.arch.required_buffers().iter().map(|b| b.name()).collect();
     println!("input:   {} ({}, {} frames {}..{}, {}x{})", o.input.display(), seq.layout, seq.numbers.len(), seq.numbers[0], seq.numbers[seq.numbers.len() - 1], seq.width, seq.height);
     println!("buffers: {:?}{}", seq.slots.iter().map(|s| s.name()).collect::<Vec<_>>(), if seq.has_reference() { " (reference used for error only)" } else { "" });

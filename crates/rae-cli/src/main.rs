@@ -10,7 +10,7 @@ use clap::{Parser, Subcommand};
 use rae_core::frame::parse_size;
 use rae_core::golden::{Golden, Tolerance};
 use rae_core::graph::Graph;
-use rae_core::{Denoiser, Gpu, GpuFrameIo, Options, Precision, Tile, TileChoice, WeightMemory, Weights};
+use rae_core::{Denoiser, Gpu, GpuFrameIo, Options, Precision, SourceAccess, Tile, TileChoice, WeightMemory, Weights};
 
 #[derive(Parser)]
 #[command(name = "rae-cli", version, about = "Recurrent denoising autoencoder for path-traced sequences, on wgpu")]
@@ -118,6 +118,11 @@ enum Command {
         /// dispatch per conv) or `auto` (uniform on CPU drivers, storage on GPUs).
         #[arg(long, value_delimiter = ',', default_value = "auto")]
         weights_memory: Vec<String>,
+        /// How the convs read their input activations: `sampled` (sampled textures, read at
+        /// level 0), `storage` (read-only storage textures) or `auto` (storage on CPU drivers,
+        /// where lavapipe's sampler sets up every fetch with a level; sampled on GPUs).
+        #[arg(long, value_delimiter = ',', default_value = "auto")]
+        sources: Vec<String>,
         /// Build every combination first, then time them in turn, one frame each per round, for
         /// `--frames` rounds: a side-by-side table (median and fastest ms per frame, and the
         /// median of each round's ratio to the first combination) that a machine whose speed
@@ -175,6 +180,15 @@ fn parse_tile(s: &str) -> Result<TileChoice> {
         .with_context(|| format!("tile `{s}`: the kernel has 1, 2, 4, 8 or 16 rows, 1, 2 or 4 blocks (4 with one column, except lanes tiles), 1 or 2 columns (lanes tiles with 2 at most 8 rows), workgroups 8, 16, 32 or 64 wide and splits of 1 to 16"))
 }
 
+fn parse_sources(s: &str) -> Result<Option<SourceAccess>> {
+    match s {
+        "auto" => Ok(None),
+        "sampled" => Ok(Some(SourceAccess::Sampled)),
+        "storage" => Ok(Some(SourceAccess::Storage)),
+        _ => bail!("sources `{s}`: sampled, storage or auto"),
+    }
+}
+
 fn parse_memory(s: &str) -> Result<Option<WeightMemory>> {
     match s {
         "auto" => Ok(None),
@@ -198,8 +212,7 @@ fn median(v: &mut [f64]) -> f64 {
     v[v.len() / 2]
 }
 
-#[allow(clippy::too_many_arguments)]
-fn bench(path: &Path, sizes: &[(u32, u32)], frames: usize, layers: bool, precisions: &[PrecisionArg], tiles: &[TileChoice], memories: &[Option<WeightMemory>], peak: Option<f64>) -> Result<()> {
+fn bench(path: &Path, sizes: &[(u32, u32)], frames: usize, layers: bool, sweep: &Sweep, peak: Option<f64>) -> Result<()> {
     let weights = Weights::load(path)?;
     let gpu = Gpu::new()?;
     let flop_px = 2.0 * Graph::new(&weights.arch).macs_per_pixel();
@@ -210,20 +223,20 @@ fn bench(path: &Path, sizes: &[(u32, u32)], frames: usize, layers: bool, precisi
     println!("resident: GPU timestamps around a frame on GPU buffers (the path of a renderer that records rae into its own encoder), frames submitted back to back; pipelined: wall time per frame of that run; GFLOP/s from resident where the device has encoder timestamps, else from gpu");
     println!("peak MiB: the buffers and textures the denoiser holds (frames allocate nothing); alloc MiB: the device allocator's live total, wgpu's own included, where the backend reports it");
     println!("precisions: f32, f16 (f16 = rgba16float activations, f32 arithmetic; SHADER_F16 {})", gpu.device.features().contains(wgpu::Features::SHADER_F16));
-    println!("tile: the conv tile (rows x output blocks per invocation), `tuned` per conv on this device; weights: uniform chunks or one storage buffer; build: seconds to build the denoiser (compiling, tuning)");
+    println!("tile: the conv tile (rows x output blocks per invocation), `tuned` per conv on this device; weights: uniform chunks or one storage buffer; sources: the convs' inputs as sampled or storage textures; build: seconds to build the denoiser (compiling, tuning)");
     println!(
-        "{:>10} {:>9} {:>5} {:>7} {:>6} {:>10} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>7} {:>9} {:>9}",
-        "size", "precision", "tile", "weights", "build", "total ms", "upload", "gpu", "download", "resident", "pipelined", "GFLOP/s", "of peak", "peak MiB", "alloc MiB"
+        "{:>10} {:>9} {:>5} {:>7} {:>7} {:>6} {:>10} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>7} {:>9} {:>9}",
+        "size", "precision", "tile", "weights", "sources", "build", "total ms", "upload", "gpu", "download", "resident", "pipelined", "GFLOP/s", "of peak", "peak MiB", "alloc MiB"
     );
     for &(w, h) in sizes {
         let s = format!("{w}x{h}");
         let n = (w * h) as usize;
         let (wave, one) = bench_buffers(w, h);
         let frame = rae_core::FrameInputs { color: &wave, albedo: Some(&wave), normal: Some(&wave), depth: Some(&one), roughness: Some(&one) };
-        for (p, memory, tiles) in combinations(precisions, memories, tiles) {
-            let precision = Precision::from(p);
+        for options in sweep.combinations() {
+            let (precision, tiles) = (options.precision, options.tiles);
             let built = Instant::now();
-            let mut d = Denoiser::with_options(&gpu.device, &gpu.queue, &weights, w, h, Options { precision, tiles, weights: memory })
+            let mut d = Denoiser::with_options(&gpu.device, &gpu.queue, &weights, w, h, options)
                 .with_context(|| format!("building the {} denoiser at {s}", precision.name()))?;
             let build_s = built.elapsed().as_secs_f64();
             let mut out = vec![0.0; 3 * n];
@@ -252,10 +265,11 @@ fn bench(path: &Path, sizes: &[(u32, u32)], frames: usize, layers: bool, precisi
             let share = peak.map_or("-".to_string(), |p| format!("{:.1}%", 100.0 * gflops / p));
             let (res, pipe) = timed.map_or(("-".to_string(), "-".to_string()), |(r, p)| (format!("{r:.2}"), format!("{p:.2}")));
             println!(
-                "{s:>10} {:>9} {:>5} {:>7} {build_s:>6.1} {:>10.2} {:>9.2} {g:>9.2} {:>9.2} {res:>9} {pipe:>9} {gflops:>9.1} {share:>7} {mib:>9.1} {alloc:>9}",
+                "{s:>10} {:>9} {:>5} {:>7} {:>7} {build_s:>6.1} {:>10.2} {:>9.2} {g:>9.2} {:>9.2} {res:>9} {pipe:>9} {gflops:>9.1} {share:>7} {mib:>9.1} {alloc:>9}",
                 precision.name(),
                 tile_name(tiles),
                 d.weight_memory().name(),
+                d.source_access().name(),
                 median(&mut total),
                 median(&mut up),
                 median(&mut down)
@@ -268,9 +282,23 @@ fn bench(path: &Path, sizes: &[(u32, u32)], frames: usize, layers: bool, precisi
     Ok(())
 }
 
-/// Every precision x weight memory x tile that `bench` times, in its table's order.
-fn combinations<'a>(precisions: &'a [PrecisionArg], memories: &'a [Option<WeightMemory>], tiles: &'a [TileChoice]) -> impl Iterator<Item = (PrecisionArg, Option<WeightMemory>, TileChoice)> + 'a {
-    precisions.iter().flat_map(move |p| memories.iter().flat_map(move |m| tiles.iter().map(move |t| (*p, *m, *t))))
+/// What `bench` times: every precision x weight memory x source access x tile.
+struct Sweep {
+    precisions: Vec<PrecisionArg>,
+    memories: Vec<Option<WeightMemory>>,
+    sources: Vec<Option<SourceAccess>>,
+    tiles: Vec<TileChoice>,
+}
+
+impl Sweep {
+    /// The denoiser options of every combination, in the table's order.
+    fn combinations(&self) -> impl Iterator<Item = Options> + '_ {
+        self.precisions.iter().flat_map(move |&p| {
+            self.memories.iter().flat_map(move |&weights| {
+                self.sources.iter().flat_map(move |&sources| self.tiles.iter().map(move |&tiles| Options { precision: p.into(), tiles, weights, sources }))
+            })
+        })
+    }
 }
 
 /// Deterministic, smooth-but-noisy host buffers of a `w` x `h` frame (color, then the one-channel
@@ -286,13 +314,13 @@ fn bench_buffers(w: u32, h: u32) -> (Vec<f32>, Vec<f32>) {
 /// and timed round-robin, one frame each per round, so that slow and fast spells of a shared
 /// machine fall on all of them alike; the ratio column is the median over rounds of each
 /// round's time over the first combination's in that round.
-fn bench_interleaved(path: &Path, sizes: &[(u32, u32)], rounds: usize, precisions: &[PrecisionArg], tiles: &[TileChoice], memories: &[Option<WeightMemory>]) -> Result<()> {
+fn bench_interleaved(path: &Path, sizes: &[(u32, u32)], rounds: usize, sweep: &Sweep) -> Result<()> {
     let weights = Weights::load(path)?;
     let gpu = Gpu::new()?;
     let rounds = rounds.max(1);
     println!("adapter: {}; weights: {}; interleaved: {rounds} rounds of one frame per combination, after 2 warm-up frames each", gpu.describe(), path.display());
     println!("ms: a frame from host slices to host slices (the `total` of bench); vs first: median over rounds of the ratio to the first combination in the same round");
-    println!("{:>10} {:>9} {:>12} {:>7} {:>10} {:>10} {:>9}", "size", "precision", "tile", "weights", "median ms", "fastest", "vs first");
+    println!("{:>10} {:>9} {:>12} {:>7} {:>7} {:>10} {:>10} {:>9}", "size", "precision", "tile", "weights", "sources", "median ms", "fastest", "vs first");
     for &(w, h) in sizes {
         let s = format!("{w}x{h}");
         let (wave, one) = bench_buffers(w, h);
@@ -300,9 +328,9 @@ fn bench_interleaved(path: &Path, sizes: &[(u32, u32)], rounds: usize, precision
         let mut out = vec![0.0; wave.len()];
         // Build (and warm up) every combination before timing any.
         let mut runs = Vec::new();
-        for (p, memory, tiles) in combinations(precisions, memories, tiles) {
-            let precision = Precision::from(p);
-            let mut d = Denoiser::with_options(&gpu.device, &gpu.queue, &weights, w, h, Options { precision, tiles, weights: memory })
+        for options in sweep.combinations() {
+            let (precision, tiles) = (options.precision, options.tiles);
+            let mut d = Denoiser::with_options(&gpu.device, &gpu.queue, &weights, w, h, options)
                 .with_context(|| format!("building the {} denoiser at {s}", precision.name()))?;
             for _ in 0..2 {
                 d.denoise_into(&frame, &mut out)?;
@@ -321,10 +349,11 @@ fn bench_interleaved(path: &Path, sizes: &[(u32, u32)], rounds: usize, precision
             let mut ratio: Vec<f64> = ms.iter().zip(&first).map(|(a, b)| a / b).collect();
             let fastest = ms.iter().copied().fold(f64::INFINITY, f64::min);
             println!(
-                "{s:>10} {:>9} {:>12} {:>7} {:>10.2} {fastest:>10.2} {:>9.3}",
+                "{s:>10} {:>9} {:>12} {:>7} {:>7} {:>10.2} {fastest:>10.2} {:>9.3}",
                 precision.name(),
                 tile_name(*tiles),
                 d.weight_memory().name(),
+                d.source_access().name(),
                 median(ms),
                 median(&mut ratio)
             );
@@ -486,14 +515,14 @@ fn main() -> Result<()> {
         Command::Info { file, size } => info(&file, &size),
         Command::Devices => devices(),
         Command::Verify { golden } => verify(&golden),
-        Command::Bench { weights, sizes, frames, layers, precision, peak_gflops, tile, weights_memory, interleave } => {
-            let tiles = tile.iter().map(|t| parse_tile(t)).collect::<Result<Vec<_>>>()?;
-            let memories = weights_memory.iter().map(|m| parse_memory(m)).collect::<Result<Vec<_>>>()?;
-            if interleave {
-                bench_interleaved(&weights, &sizes, frames, &precision, &tiles, &memories)
-            } else {
-                bench(&weights, &sizes, frames, layers, &precision, &tiles, &memories, peak_gflops)
-            }
+        Command::Bench { weights, sizes, frames, layers, precision, peak_gflops, tile, weights_memory, sources, interleave } => {
+            let sweep = Sweep {
+                precisions: precision,
+                memories: weights_memory.iter().map(|m| parse_memory(m)).collect::<Result<_>>()?,
+                sources: sources.iter().map(|s| parse_sources(s)).collect::<Result<_>>()?,
+                tiles: tile.iter().map(|t| parse_tile(t)).collect::<Result<_>>()?,
+            };
+            if interleave { bench_interleaved(&weights, &sizes, frames, &sweep) } else { bench(&weights, &sizes, frames, layers, &sweep, peak_gflops) }
         }
     }
 }

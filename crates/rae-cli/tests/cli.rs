@@ -376,6 +376,25 @@ fn bench_and_info_refuse_a_bad_size_before_opening_a_device() {
 }
 
 #[test]
+fn bench_times_sampled_and_storage_sources() {
+    // The sources column says what each denoiser was built with; `auto` is storage textures on
+    // lavapipe (sampled on GPUs). A small tile: each source kind is its own compile.
+    let out = rae()
+        .args(["bench", &fixture("weights_full.safetensors"), "--sizes", "32x32", "--frames", "1", "--precision", "f32", "--tile", "2x1", "--sources", "sampled,storage,auto"])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = String::from_utf8(out.stdout).unwrap();
+    let header: Vec<&str> = text.lines().find(|l| l.trim_start().starts_with("size ")).expect("a header").split_whitespace().collect();
+    let col = header.iter().position(|&h| h == "sources").expect("a sources column");
+    let rows: Vec<Vec<&str>> = text.lines().map(|l| l.split_whitespace().collect::<Vec<_>>()).filter(|f| f.first() == Some(&"32x32")).collect();
+    assert_eq!(rows.iter().map(|f| f[col]).collect::<Vec<_>>(), ["sampled", "storage", "storage"], "{text}");
+    let bad = rae().args(["bench", &fixture("weights_full.safetensors"), "--sizes", "32x32", "--sources", "buffer"]).output().unwrap();
+    assert!(!bad.status.success());
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("sources `buffer`"), "{}", String::from_utf8_lossy(&bad.stderr));
+}
+
+#[test]
 fn bench_interleave_prints_a_row_per_combination_against_the_first() {
     // Three combinations timed round-robin, the first its own reference (the CPU tile under
     // two names: lavapipe compiles each distinct pipeline for seconds).
@@ -387,9 +406,9 @@ fn bench_interleave_prints_a_row_per_combination_against_the_first() {
     let text = String::from_utf8(out.stdout).unwrap();
     let rows: Vec<Vec<&str>> = text.lines().map(|l| l.split_whitespace().collect::<Vec<_>>()).filter(|f| f.first() == Some(&"32x32")).collect();
     assert_eq!(rows.iter().map(|f| f[2]).collect::<Vec<_>>(), ["16x4", "auto", "16x4"], "{text}");
-    assert_eq!(rows[0][6], "1.000", "{text}");
+    assert_eq!(rows[0][7], "1.000", "{text}");
     for f in &rows {
-        let (median, fastest, ratio): (f64, f64, f64) = (f[4].parse().unwrap(), f[5].parse().unwrap(), f[6].parse().unwrap());
+        let (median, fastest, ratio): (f64, f64, f64) = (f[5].parse().unwrap(), f[6].parse().unwrap(), f[7].parse().unwrap());
         assert!(fastest > 0.0 && fastest <= median && ratio > 0.0, "{text}");
     }
 }

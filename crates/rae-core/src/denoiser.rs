@@ -35,7 +35,7 @@ use std::time::Instant;
 use crate::error::{Error, Result};
 use crate::frame::{FrameInputs, FrameTimings};
 use crate::graph::{Graph, Read, Value};
-use crate::kernels::{ConvPlan, ConvSpec, Kernels, Method, OutputParams, PrepParams, Precision, Tile, WORKGROUP, WeightMemory, blocks};
+use crate::kernels::{ConvPlan, ConvSpec, Kernels, Method, OutputParams, PrepParams, Precision, SourceAccess, Tile, WORKGROUP, WeightMemory, blocks};
 use crate::model::{Arch, InputBuffer, Transfer};
 use crate::weights::Weights;
 
@@ -176,6 +176,8 @@ pub struct Options {
     pub tiles: TileChoice,
     /// Where the conv reads weights; `None`: by adapter type ([`WeightMemory::for_device_type`]).
     pub weights: Option<WeightMemory>,
+    /// How the conv reads its sources; `None`: by adapter type ([`SourceAccess::for_device_type`]).
+    pub sources: Option<SourceAccess>,
 }
 
 /// Runs one model at one frame size, frame after frame, keeping the hidden state on the GPU.
@@ -246,9 +248,10 @@ impl Denoiser {
 
     /// [`Self::new`] with every choice spelled out: storage precision and the conv tile.
     pub fn with_options(device: &wgpu::Device, queue: &wgpu::Queue, weights: &Weights, width: u32, height: u32, options: Options) -> Result<Self> {
-        let Options { precision, tiles, weights: memory } = options;
+        let Options { precision, tiles, weights: memory, sources } = options;
         let device_type = device.adapter_info().device_type;
         let memory = memory.unwrap_or(WeightMemory::for_device_type(device_type));
+        let sources = sources.unwrap_or(SourceAccess::for_device_type(device_type));
         let arch = weights.arch.clone();
         let multiple = 1u32 << arch.levels();
         let limits = device.limits();
@@ -261,7 +264,7 @@ impl Denoiser {
             return Err(size_err(format!("exceeds the device's texture limit {}", limits.max_texture_dimension_2d)));
         }
         let graph = Graph::new(&arch);
-        let mut kernels = Kernels::new(device, precision, memory);
+        let mut kernels = Kernels::with_sources(device, precision, memory, sources);
         let format = precision.format();
         let mut textures = Vec::new();
         let mut bytes = 0u64;
@@ -758,6 +761,11 @@ impl Denoiser {
     /// Where the convs read their weights.
     pub fn weight_memory(&self) -> WeightMemory {
         self.kernels.weight_memory()
+    }
+
+    /// How the convs read their sources.
+    pub fn source_access(&self) -> SourceAccess {
+        self.kernels.source_access()
     }
 
     /// Textures held (for memory reports and tests).

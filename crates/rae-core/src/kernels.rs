@@ -117,6 +117,14 @@ impl SourceAccess {
     pub fn for_device_type(t: wgpu::DeviceType) -> Self {
         if t == wgpu::DeviceType::Cpu { SourceAccess::Storage } else { SourceAccess::Sampled }
     }
+
+    /// Name for tables and command lines.
+    pub fn name(self) -> &'static str {
+        match self {
+            SourceAccess::Sampled => "sampled",
+            SourceAccess::Storage => "storage",
+        }
+    }
 }
 
 /// The weight declaration of conv3x3.wgsl (uniform chunks).
@@ -407,6 +415,7 @@ pub struct Kernels {
     conv: HashMap<ConvVariant, wgpu::ComputePipeline>,
     precision: Precision,
     memory: WeightMemory,
+    sources: SourceAccess,
 }
 
 impl Kernels {
@@ -523,6 +532,7 @@ impl Kernels {
             conv: HashMap::new(),
             precision,
             memory,
+            sources,
         }
     }
 
@@ -534,6 +544,11 @@ impl Kernels {
     /// Where the conv reads its weights.
     pub fn weight_memory(&self) -> WeightMemory {
         self.memory
+    }
+
+    /// How the conv reads its sources.
+    pub fn source_access(&self) -> SourceAccess {
+        self.sources
     }
 
     /// The conv pipeline for a variant, created on first use.

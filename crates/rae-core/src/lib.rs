@@ -19,7 +19,7 @@ pub mod model;
 pub mod weights;
 
 pub use denoiser::{Denoiser, GpuFrameIo, IoBinding, Options, TileChoice};
-pub use kernels::{Method, Precision, Tile, WeightMemory};
+pub use kernels::{Method, Precision, SourceAccess, Tile, WeightMemory};
 pub use error::{Error, Result};
 pub use frame::{FrameInputs, FrameTimings};
 pub use gpu::Gpu;
