@@ -12,7 +12,7 @@ mod state;
 mod weights;
 
 use std::path::PathBuf;
-use std::sync::OnceLock;
+use std::sync::Mutex;
 
 pub use rae_core::golden::{Golden, Tolerance};
 use rae_core::Gpu;
@@ -22,14 +22,33 @@ pub fn fixture(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../tests/fixtures").join(name)
 }
 
-/// One device shared by every GPU test of this binary (lavapipe in CI).
-pub fn gpu() -> &'static Gpu {
-    static GPU: OnceLock<Gpu> = OnceLock::new();
-    GPU.get_or_init(|| {
+/// Devices no running test holds.
+static IDLE: Mutex<Vec<&'static Gpu>> = Mutex::new(Vec::new());
+
+/// A test thread's device, back to [`IDLE`] when the thread ends.
+struct Lease(&'static Gpu);
+
+impl Drop for Lease {
+    fn drop(&mut self) {
+        IDLE.lock().unwrap_or_else(|e| e.into_inner()).push(self.0);
+    }
+}
+
+thread_local! {
+    static LEASE: Lease = Lease(IDLE.lock().unwrap_or_else(|e| e.into_inner()).pop().unwrap_or_else(|| {
         let gpu = Gpu::new().unwrap_or_else(|e| panic!("{e}"));
         eprintln!("GPU tests run on {}", gpu.describe());
-        gpu
-    })
+        Box::leak(Box::new(gpu))
+    }));
+}
+
+/// The device of this test (lavapipe in CI): one per test running at the same time, reused by
+/// later tests. Lavapipe compiles a pipeline at its first dispatch, on its device's one queue
+/// thread, so tests sharing one device would compile one after another while the other core
+/// idles (most of the suite's time in CI goes to compiling); libtest runs each test on a
+/// thread of its own, and a device per running test compiles side by side.
+pub fn gpu() -> &'static Gpu {
+    LEASE.with(|l| l.0)
 }
 
 /// Load a golden fixture by file name.
