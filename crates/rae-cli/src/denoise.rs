@@ -7,6 +7,7 @@ use std::time::Duration;
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
 use rae_core::io::{self, Sequence, Slot};
+use rae_core::gpu::CompileHelper;
 use rae_core::{Denoiser, Gpu, InputBuffer, Precision, TileChoice, Weights, metrics};
 
 /// What `denoise` was asked to do.
@@ -35,6 +36,8 @@ pub struct Options {
     pub csv: Option<PathBuf>,
     /// The conv tile (`--tile`).
     pub tiles: TileChoice,
+    /// No second device compiling kernels for a slow first frame ([`CompileHelper`]).
+    pub no_helper: bool,
 }
 
 /// Parse `A..B`, `A..`, `..B` or `A` (inclusive frame numbers).
@@ -164,7 +167,8 @@ pub fn run(o: &Options) -> Result<()> {
     prepare_output(&o.input, &out_dir)?;
 
     let gpu = Gpu::new()?;
-    let mut d = Denoiser::with_options(&gpu.device, &gpu.queue, &weights, seq.width, seq.height, rae_core::Options { precision: o.precision, tiles: o.tiles, ..Default::default() })?;
+    let options = rae_core::Options { precision: o.precision, tiles: o.tiles, ..Default::default() };
+    let mut d = Denoiser::with_options(&gpu.device, &gpu.queue, &weights, seq.width, seq.height, options)?;
     let used: Vec<&str> = weights.arch.required_buffers().iter().map(|b| b.name()).collect();
     println!("input:   {} ({}, {} frames {}..{}, {}x{})", o.input.display(), seq.layout, seq.numbers.len(), seq.numbers[0], seq.numbers[seq.numbers.len() - 1], seq.width, seq.height);
     println!("buffers: {:?}{}", seq.slots.iter().map(|s| s.name()).collect::<Vec<_>>(), if seq.has_reference() { " (reference used for error only)" } else { "" });
@@ -173,14 +177,19 @@ pub fn run(o: &Options) -> Result<()> {
     println!("tile:    {} at full resolution ({})", d.conv_tiles()[0], match o.tiles { TileChoice::Auto => "auto", TileChoice::Tuned | TileChoice::TunedAmong(_) => "tuned", TileChoice::Fixed(_) => "--tile" });
     println!("output:  {}", out_dir.display());
 
-    let bar = ProgressBar::new(indices.len() as u64);
-    bar.set_style(ProgressStyle::with_template("{bar:40} {pos}/{len} frames  {per_sec}  ETA {eta}").expect("valid template"));
     let n = (seq.width * seq.height * 3) as usize;
     let mut out = vec![0f32; n];
     let (mut up, mut gpu_t, mut down) = (Vec::new(), Vec::new(), Vec::new());
     let mut reports = Vec::new();
     let mut prev: Option<(Vec<f32>, Vec<f32>, Vec<f32>)> = None; // (noisy, rae, reference)
     let (mut temporal_noisy, mut temporal_rae) = (Vec::new(), Vec::new());
+    let bar = ProgressBar::new(indices.len() as u64);
+    bar.set_style(ProgressStyle::with_template("{bar:40} {pos}/{len} frames  {per_sec}  ETA {eta}").expect("valid template"));
+    // On lavapipe a first frame into an empty shader cache compiles on one core: a second device
+    // compiles from the other end if the frame is slow to come.
+    let said = bar.clone();
+    let note = move || said.suspend(|| eprintln!("compiling kernels into the driver's shader cache (first use on this machine), on a second device too"));
+    let helper = if o.no_helper { None } else { CompileHelper::start(&gpu, &weights, seq.width, seq.height, options, note) };
     for &i in &indices {
         let mut frame = seq.load(i)?;
         if let Some((buffer, path, count)) = frame.nonfinite.first()
@@ -193,6 +202,9 @@ pub fn run(o: &Options) -> Result<()> {
             prev = None;
         }
         let t = d.denoise_into(&frame.inputs(), &mut out).with_context(|| format!("frame {}", frame.number))?;
+        if let Some(h) = &helper {
+            h.first_frame_done();
+        }
         up.push(ms(t.upload));
         gpu_t.push(ms(t.gpu));
         down.push(ms(t.download));
@@ -227,6 +239,9 @@ pub fn run(o: &Options) -> Result<()> {
         bar.inc(1);
     }
     bar.finish_and_clear();
+    if let Some(h) = helper {
+        h.finish();
+    }
 
     println!();
     println!("time per frame (median of {}, frame 0 includes shader compilation): upload {:.2} ms, GPU {:.1} ms, download {:.2} ms", reports.len(), median(up), median(gpu_t), median(down));

@@ -63,6 +63,11 @@ enum Command {
         /// into an empty shader cache in 0.37x the time for frames about 1.07x as long.
         #[arg(long, default_value = "auto")]
         tile: String,
+        /// On CPU drivers, do not compile kernels on a second device while a slow first frame
+        /// compiles them (lavapipe compiles at first use, one core per device; the helper starts
+        /// only if the first frame takes over a second, i.e. into an empty shader cache).
+        #[arg(long)]
+        no_compile_helper: bool,
     },
     /// Print a weights file's architecture, inputs, parameter count and cost per pixel.
     Info {
@@ -507,10 +512,10 @@ fn main() -> Result<()> {
     // SAFETY: first thing in main, before any thread (clap's, wgpu's, rayon's) exists.
     unsafe { rae_core::gpu::prefer_wide_cpu_vectors() };
     match Cli::parse().command {
-        Command::Denoise { input, output, weights, models, frames, reset_at, png, half, allow_nonfinite, precision, csv, tile } => {
+        Command::Denoise { input, output, weights, models, frames, reset_at, png, half, allow_nonfinite, precision, csv, tile, no_compile_helper } => {
             let frames = frames.as_deref().map(denoise::parse_range).transpose()?;
             let tiles = parse_tile(&tile)?;
-            denoise::run(&denoise::Options { input, output, weights, models, frames, reset_at, png, half, allow_nonfinite, precision: precision.into(), csv, tiles })
+            denoise::run(&denoise::Options { input, output, weights, models, frames, reset_at, png, half, allow_nonfinite, precision: precision.into(), csv, tiles, no_helper: no_compile_helper })
         }
         Command::Info { file, size } => info(&file, &size),
         Command::Devices => devices(),

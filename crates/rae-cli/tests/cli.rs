@@ -138,6 +138,44 @@ fn per_buffer_sequence_is_denoised_with_error_report() {
     }
 }
 
+/// The RGB pixels of an EXR written by `denoise`.
+fn pixels(path: &Path) -> Vec<[f32; 3]> {
+    read_first_rgba_layer_from_file(
+        path,
+        |res, _| vec![[0f32; 3]; res.width() * res.height()],
+        |px: &mut Vec<[f32; 3]>, pos, (r, g, b, _a): (f32, f32, f32, f32)| px[pos.y() * W + pos.x()] = [r, g, b],
+    )
+    .unwrap()
+    .layer_data
+    .channel_data
+    .pixels
+}
+
+#[test]
+fn a_cold_first_frame_gets_a_compile_helper_and_the_same_frames() {
+    // Into an empty shader cache the first frame compiles for seconds (lavapipe compiles at a
+    // pipeline's first dispatch), so a second device starts compiling from the other end and
+    // says so; its dispatches must not touch the frames. A run without it, on the cache the
+    // first one filled, gives the same pixels.
+    let tmp = tempfile::tempdir().unwrap();
+    let seq = seq_dir(&tmp);
+    per_buffer_sequence(&seq, 2);
+    let cache = tmp.path().join("cache");
+    let run = |out: &str, extra: &[&str]| {
+        let o = rae().env("MESA_SHADER_CACHE_DIR", &cache).arg("denoise").arg(&seq).args(["--weights", &fixture("weights_full.safetensors"), "-o"]).arg(tmp.path().join(out)).args(extra).output().unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        String::from_utf8_lossy(&o.stderr).into_owned()
+    };
+    let cold = run("cold", &[]);
+    assert!(cold.contains("on a second device"), "the helper started: {cold}");
+    let plain = run("plain", &["--no-compile-helper"]);
+    assert!(!plain.contains("on a second device"), "{plain}");
+    for f in ["denoised_0000.exr", "denoised_0001.exr"] {
+        let (a, b) = (pixels(&tmp.path().join("cold").join(f)), pixels(&tmp.path().join("plain").join(f)));
+        assert!(a.iter().zip(&b).all(|(x, y)| x.map(f32::to_bits) == y.map(f32::to_bits)), "{f}: the helper changed the output");
+    }
+}
+
 #[test]
 fn frame_range_selects_frames() {
     let tmp = tempfile::tempdir().unwrap();

@@ -577,6 +577,42 @@ impl Denoiser {
         Ok(())
     }
 
+    /// Dispatch every pipeline of a frame once, last stage first, on whatever the buffers hold,
+    /// and wait: a helper that compiles pipelines for another denoiser's first frame
+    /// ([`crate::gpu::CompileHelper`]). Its output is meaningless, so the hidden state is
+    /// reset after it.
+    pub fn compile_backwards(&mut self) -> Result<()> {
+        if self.host.is_none() {
+            self.host = Some(self.make_host_io()?);
+        }
+        let host = self.host.as_ref().expect("made above");
+        let parity = self.parity;
+        let mut encoder = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("rae compile") });
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("rae compile"), timestamp_writes: None });
+            pass.set_pipeline(&self.kernels.output);
+            pass.set_bind_group(0, &host.binding.output, &[]);
+            pass.dispatch_workgroups(1, 1, 1);
+            let pools: Vec<_> = self.graph.pools.iter().zip(&self.pool_groups[parity]).collect();
+            for (i, group) in self.conv_groups[parity].iter().enumerate().rev() {
+                if let Some((p, g)) = pools.iter().find(|(p, _)| p.after == i) {
+                    let (w, h) = (self.pwidth >> p.level, self.pheight >> p.level);
+                    pass.set_pipeline(&self.kernels.pool);
+                    pass.set_bind_group(0, *g, &[]);
+                    pass.dispatch_workgroups(w.div_ceil(WORKGROUP), h.div_ceil(WORKGROUP), blocks(p.channels));
+                }
+                self.convs.record(&mut pass, i, true, group);
+            }
+            pass.set_pipeline(&self.kernels.prep);
+            pass.set_bind_group(0, &host.binding.prep, &[]);
+            pass.dispatch_workgroups(1, 1, 1);
+        }
+        self.queue.submit(Some(encoder.finish()));
+        self.device.poll(wgpu::PollType::wait_indefinitely()).map_err(|e| Error::Gpu(e.to_string()))?;
+        self.reset_pending = true;
+        Ok(())
+    }
+
     /// Denoise one frame from host slices; returns RGB radiance (`width * height * 3`).
     pub fn denoise(&mut self, frame: &FrameInputs) -> Result<Vec<f32>> {
         let mut out = vec![0.0; self.width as usize * self.height as usize * 3];

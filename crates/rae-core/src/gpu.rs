@@ -120,3 +120,62 @@ impl Gpu {
         format!("{} ({:?}, {:?})", i.name, i.backend, i.device_type)
     }
 }
+
+/// A second device that compiles a denoiser's pipelines from the other end while its first
+/// frame runs, on CPU drivers and only when that frame is slow to come.
+///
+/// Lavapipe compiles a pipeline with LLVM at its first dispatch, on its device's one queue
+/// thread, and keeps the result in Mesa's shader cache on disk. Into an empty cache a
+/// denoiser's first frame compiles its pipelines first stage first on one core for tens of
+/// seconds while the other core idles. The helper builds the same denoiser on a second device of
+/// the same adapter and dispatches its stages last stage first
+/// ([`crate::Denoiser::compile_backwards`]) on the other core: the two meet in the middle and the
+/// frame finds the rest in the cache. With a warm cache the first frame comes in a fraction of a
+/// second, sooner than the helper could even build, so the helper starts only if the frame has
+/// not come after [`CompileHelper::DELAY`].
+pub struct CompileHelper {
+    done: std::sync::mpsc::Sender<()>,
+    watcher: std::thread::JoinHandle<()>,
+}
+
+impl CompileHelper {
+    /// How long a first frame may take before the helper starts.
+    pub const DELAY: std::time::Duration = std::time::Duration::from_secs(1);
+
+    /// Watch for a slow first frame of a denoiser like `weights` x `options` at `width` x
+    /// `height` on `gpu`, calling `on_start` (on the helper's thread) if the helper starts;
+    /// `None` unless `gpu` is a CPU driver (GPU drivers compile when a pipeline is made, on the
+    /// threads that make it).
+    pub fn start(gpu: &Gpu, weights: &crate::Weights, width: u32, height: u32, options: crate::Options, on_start: impl FnOnce() + Send + 'static) -> Option<Self> {
+        let info = gpu.adapter.get_info();
+        if info.device_type != wgpu::DeviceType::Cpu {
+            return None;
+        }
+        let weights = weights.clone();
+        let (done, first_frame) = std::sync::mpsc::channel::<()>();
+        let watcher = std::thread::spawn(move || {
+            if first_frame.recv_timeout(Self::DELAY) != Err(std::sync::mpsc::RecvTimeoutError::Timeout) {
+                return;
+            }
+            // A second device on the same adapter (a fresh instance finds it by name), or none.
+            let Some(adapter) = adapters().into_iter().find(|a| a.get_info().name == info.name && a.get_info().backend == info.backend) else {
+                return;
+            };
+            on_start();
+            // Failures only cost the first frame its speed-up: the frame compiles everything.
+            let _ = Gpu::from_adapter(adapter).and_then(|g| crate::Denoiser::with_options(&g.device, &g.queue, &weights, width, height, options)?.compile_backwards());
+        });
+        Some(Self { done, watcher })
+    }
+
+    /// The first frame has come: a helper not started yet never starts.
+    pub fn first_frame_done(&self) {
+        let _ = self.done.send(());
+    }
+
+    /// Wait for the helper to finish (its last dispatches find the frame's pipelines in the cache).
+    pub fn finish(self) {
+        let _ = self.done.send(());
+        let _ = self.watcher.join();
+    }
+}

@@ -138,6 +138,7 @@ fn live(choice: &SceneChoice, weights: &Path, frames: u32, size: (u32, u32), out
     println!("{name} at {w}x{h}, denoising on {}", gpu.describe());
     println!("{:>5} {:>10} {:>12}", "frame", "trace ms", "denoise ms");
     let settings = Settings { width: w, height: h, spp: 1, ref_spp: 0, seed: 0, max_depth: 8 };
+    let mut helper = None;
     for f in 0..frames {
         let t0 = Instant::now();
         let fb = render_frame(&scene, f, frames, &settings);
@@ -151,11 +152,23 @@ fn live(choice: &SceneChoice, weights: &Path, frames: u32, size: (u32, u32), out
             depth: Some(&fb.depth),
             roughness: Some(&fb.roughness),
         };
+        // On a CPU driver a first frame into an empty shader cache compiles on one core; a
+        // second device compiles from the other end if it is slow to come.
+        if f == 0 {
+            let note = || eprintln!("compiling kernels into the driver's shader cache (first use on this machine), on a second device too");
+            helper = rae_core::gpu::CompileHelper::start(&gpu, &weights, w, h, rae_core::Options::default(), note);
+        }
         let denoised = denoiser.denoise(&frame)?;
+        if let Some(h) = &helper {
+            h.first_frame_done();
+        }
         let t2 = Instant::now();
         println!("{f:>5} {:>10.1} {:>12.1}", (t1 - t0).as_secs_f64() * 1e3, (t2 - t1).as_secs_f64() * 1e3);
         output::write_rgb(&output::frame_path(out, "color", f), w as usize, h as usize, &fb.color, output::Precision::F32)?;
         output::write_rgb(&output::frame_path(out, "denoised", f), w as usize, h as usize, &denoised, output::Precision::F32)?;
+    }
+    if let Some(h) = helper {
+        h.finish();
     }
     Ok(())
 }
