@@ -188,7 +188,7 @@ pub fn run(o: &Options) -> Result<()> {
     // On lavapipe a first frame into an empty shader cache compiles on one core: a second device
     // compiles from the other end if the frame is slow to come.
     let said = bar.clone();
-    let note = move || said.suspend(|| eprintln!("compiling kernels into the driver's shader cache (first use on this machine), on a second device too"));
+    let note = move || said.suspend(|| eprintln!("the first frame is slow to come: compiling kernels on a second device too (lavapipe compiles at first use, into Mesa's shader cache)"));
     let helper = if o.no_helper { None } else { CompileHelper::start(&gpu, &weights, seq.width, seq.height, options, note) };
     for &i in &indices {
         let mut frame = seq.load(i)?;

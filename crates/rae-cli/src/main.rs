@@ -65,7 +65,8 @@ enum Command {
         tile: String,
         /// On CPU drivers, do not compile kernels on a second device while a slow first frame
         /// compiles them (lavapipe compiles at first use, one core per device; the helper starts
-        /// only if the first frame takes over a second, i.e. into an empty shader cache).
+        /// only if the first frame takes longer than a warm one could, i.e. into an empty shader
+        /// cache).
         #[arg(long)]
         no_compile_helper: bool,
     },

@@ -577,10 +577,11 @@ impl Denoiser {
         Ok(())
     }
 
-    /// Dispatch every pipeline of a frame once, last stage first, on whatever the buffers hold,
-    /// and wait: a helper that compiles pipelines for another denoiser's first frame
-    /// ([`crate::gpu::CompileHelper`]). Its output is meaningless, so the hidden state is
-    /// reset after it.
+    /// Dispatch every pipeline of a frame once, last stage first, with one workgroup each, and
+    /// wait: a helper that compiles pipelines for another denoiser's first frame
+    /// ([`crate::gpu::CompileHelper`]; CPU drivers compile at a pipeline's first dispatch, and
+    /// one workgroup costs no arithmetic to speak of at any frame size). What it writes is
+    /// meaningless, so the hidden state is reset after it.
     pub fn compile_backwards(&mut self) -> Result<()> {
         if self.host.is_none() {
             self.host = Some(self.make_host_io()?);
@@ -595,13 +596,12 @@ impl Denoiser {
             pass.dispatch_workgroups(1, 1, 1);
             let pools: Vec<_> = self.graph.pools.iter().zip(&self.pool_groups[parity]).collect();
             for (i, group) in self.conv_groups[parity].iter().enumerate().rev() {
-                if let Some((p, g)) = pools.iter().find(|(p, _)| p.after == i) {
-                    let (w, h) = (self.pwidth >> p.level, self.pheight >> p.level);
+                if let Some((_, g)) = pools.iter().find(|(p, _)| p.after == i) {
                     pass.set_pipeline(&self.kernels.pool);
                     pass.set_bind_group(0, *g, &[]);
-                    pass.dispatch_workgroups(w.div_ceil(WORKGROUP), h.div_ceil(WORKGROUP), blocks(p.channels));
+                    pass.dispatch_workgroups(1, 1, 1);
                 }
-                self.convs.record(&mut pass, i, true, group);
+                self.convs.record_compile(&mut pass, i, group);
             }
             pass.set_pipeline(&self.kernels.prep);
             pass.set_bind_group(0, &host.binding.prep, &[]);

@@ -130,17 +130,26 @@ impl Gpu {
 /// seconds while the other core idles. The helper builds the same denoiser on a second device of
 /// the same adapter and dispatches its stages last stage first
 /// ([`crate::Denoiser::compile_backwards`]) on the other core: the two meet in the middle and the
-/// frame finds the rest in the cache. With a warm cache the first frame comes in a fraction of a
-/// second, sooner than the helper could even build, so the helper starts only if the frame has
-/// not come after [`CompileHelper::DELAY`].
+/// frame finds the rest in the cache. With a warm cache the first frame comes about as soon as
+/// any other, sooner than the helper could even build, so the helper starts only if the frame
+/// has not come after [`CompileHelper::delay`]: a second plus the frame's arithmetic at
+/// [`CompileHelper::SLOW_FLOPS`].
 pub struct CompileHelper {
     done: std::sync::mpsc::Sender<()>,
     watcher: std::thread::JoinHandle<()>,
 }
 
 impl CompileHelper {
-    /// How long a first frame may take before the helper starts.
-    pub const DELAY: std::time::Duration = std::time::Duration::from_secs(1);
+    /// A rate (FLOP/s) below any CPU driver's for a warm frame: lavapipe runs the default
+    /// network at 55-75 GFLOP/s on this project's 2-core machine at 512 bits, 40-55 at 256.
+    pub const SLOW_FLOPS: f64 = 25e9;
+
+    /// How long the first frame of a denoiser doing `frame_flops` may take before the helper
+    /// starts: 1 s plus `frame_flops` at [`Self::SLOW_FLOPS`] (1.1 s at 128x128, 6.4 s at 720p
+    /// for the default network), so that a warm cache never starts it.
+    pub fn delay(frame_flops: f64) -> std::time::Duration {
+        std::time::Duration::from_secs_f64(1.0 + frame_flops / Self::SLOW_FLOPS)
+    }
 
     /// Watch for a slow first frame of a denoiser like `weights` x `options` at `width` x
     /// `height` on `gpu`, calling `on_start` (on the helper's thread) if the helper starts;
@@ -151,10 +160,13 @@ impl CompileHelper {
         if info.device_type != wgpu::DeviceType::Cpu {
             return None;
         }
+        let multiple = 1u32 << weights.arch.levels();
+        let pixels = width.next_multiple_of(multiple) as f64 * height.next_multiple_of(multiple) as f64;
+        let delay = Self::delay(2.0 * crate::graph::Graph::new(&weights.arch).macs_per_pixel() * pixels);
         let weights = weights.clone();
         let (done, first_frame) = std::sync::mpsc::channel::<()>();
         let watcher = std::thread::spawn(move || {
-            if first_frame.recv_timeout(Self::DELAY) != Err(std::sync::mpsc::RecvTimeoutError::Timeout) {
+            if first_frame.recv_timeout(delay) != Err(std::sync::mpsc::RecvTimeoutError::Timeout) {
                 return;
             }
             // A second device on the same adapter (a fresh instance finds it by name), or none.

@@ -1119,4 +1119,20 @@ impl ConvPlan {
             pass.dispatch_workgroups(*x, *y, *z);
         }
     }
+
+    /// Dispatch conv `i`'s pipelines (and its split-K reduce) with one workgroup each, on a
+    /// reset frame's parameters: what makes a driver that compiles at first dispatch compile
+    /// them, at no cost in arithmetic ([`crate::Denoiser::compile_backwards`]).
+    pub fn record_compile(&self, pass: &mut wgpu::ComputePass, i: usize, group: &wgpu::BindGroup) {
+        let c = &self.convs[i];
+        pass.set_pipeline(&c.pipeline);
+        if let Some(g) = c.groups.first() {
+            pass.set_bind_group(0, group, &[g.params[1], g.weights]);
+            pass.dispatch_workgroups(1, 1, 1);
+        }
+        if let Some((pipeline, _)) = &c.reduce {
+            pass.set_pipeline(pipeline);
+            pass.dispatch_workgroups(1, 1, 1);
+        }
+    }
 }

@@ -155,7 +155,7 @@ fn live(choice: &SceneChoice, weights: &Path, frames: u32, size: (u32, u32), out
         // On a CPU driver a first frame into an empty shader cache compiles on one core; a
         // second device compiles from the other end if it is slow to come.
         if f == 0 {
-            let note = || eprintln!("compiling kernels into the driver's shader cache (first use on this machine), on a second device too");
+            let note = || eprintln!("the first frame is slow to come: compiling kernels on a second device too (lavapipe compiles at first use, into Mesa's shader cache)");
             helper = rae_core::gpu::CompileHelper::start(&gpu, &weights, w, h, rae_core::Options::default(), note);
         }
         let denoised = denoiser.denoise(&frame)?;
