@@ -145,7 +145,7 @@ impl CompileHelper {
     pub const SLOW_FLOPS: f64 = 25e9;
 
     /// How long the first frame of a denoiser doing `frame_flops` may take before the helper
-    /// starts: 1 s plus `frame_flops` at [`Self::SLOW_FLOPS`] (1.1 s at 128x128, 6.4 s at 720p
+    /// starts: 1 s plus `frame_flops` at [`Self::SLOW_FLOPS`] (1.1 s at 128x128, 6.6 s at 720p
     /// for the default network), so that a warm cache never starts it.
     pub fn delay(frame_flops: f64) -> std::time::Duration {
         std::time::Duration::from_secs_f64(1.0 + frame_flops / Self::SLOW_FLOPS)
