@@ -81,9 +81,12 @@ fn per_buffer_sequence(dir: &Path, frames: u32) {
     }
 }
 
+/// `rae-cli denoise` on `input` with the fixture weights. Without the compile helper: the tests
+/// run two at a time on two cores, where a helper finds no idle core and only adds compiling
+/// (a_cold_first_frame_gets_a_compile_helper_and_the_same_frames tests it).
 fn denoise(input: &Path, extra: &[&str]) -> (bool, String, String) {
     let mut cmd = rae();
-    cmd.arg("denoise").arg(input).args(["--weights", &fixture("weights_full.safetensors")]).args(extra);
+    cmd.arg("denoise").arg(input).args(["--weights", &fixture("weights_full.safetensors"), "--no-compile-helper"]).args(extra);
     let out = cmd.output().unwrap();
     (out.status.success(), String::from_utf8_lossy(&out.stdout).into(), String::from_utf8_lossy(&out.stderr).into())
 }
@@ -216,7 +219,7 @@ fn blender_multilayer_exr_is_read_and_a_missing_buffer_is_named() {
     let (ok, _, err) = denoise(&seq, &[]);
     assert!(!ok && err.contains("`roughness`"), "{err}");
     // The paper-variant fixture uses color, albedo and normal.
-    let out = rae().arg("denoise").arg(&seq).args(["--weights", &fixture("weights_paper_tiny.safetensors")]).output().unwrap();
+    let out = rae().arg("denoise").arg(&seq).args(["--weights", &fixture("weights_paper_tiny.safetensors"), "--no-compile-helper"]).output().unwrap();
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(out.status.success(), "{text}{}", String::from_utf8_lossy(&out.stderr));
     assert!(text.contains("multi-layer EXR"), "{text}");
@@ -351,7 +354,7 @@ fn weights_that_do_not_fit_are_an_error() {
     let out = rae().arg("denoise").arg(&seq).args(["--weights", bad.to_str().unwrap()]).output().unwrap();
     assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("bad.safetensors"));
     // The color-only fixture fits.
-    let out = rae().arg("denoise").arg(&seq).args(["--weights", &fixture("weights_color_tiny.safetensors")]).output().unwrap();
+    let out = rae().arg("denoise").arg(&seq).args(["--weights", &fixture("weights_color_tiny.safetensors"), "--no-compile-helper"]).output().unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
 }
 
@@ -360,7 +363,7 @@ fn the_shipped_model_that_fits_is_chosen() {
     // The model with the most inputs among those whose buffers the sequence has.
     let tmp = tempfile::tempdir().unwrap();
     let chosen = |dir: &Path| -> String {
-        let out = rae().arg("denoise").arg(dir).output().unwrap();
+        let out = rae().arg("denoise").arg(dir).arg("--no-compile-helper").output().unwrap();
         let text = String::from_utf8_lossy(&out.stdout).to_string();
         assert!(out.status.success(), "{text}{}", String::from_utf8_lossy(&out.stderr));
         text
