@@ -115,14 +115,7 @@ fn per_buffer_sequence_is_denoised_with_error_report() {
     let written = listing(&tmp.path().join("seq-denoised"));
     assert_eq!(written, ["denoised_0000.exr", "denoised_0000.png", "denoised_0001.exr", "denoised_0001.png", "denoised_0002.exr", "denoised_0002.png"]);
     assert_eq!(listing(&seq), before, "inputs untouched");
-    let img = read_first_rgba_layer_from_file(
-        tmp.path().join("seq-denoised/denoised_0001.exr"),
-        |res, _| vec![[0f32; 3]; res.width() * res.height()],
-        |px: &mut Vec<[f32; 3]>, pos, (r, g, b, _a): (f32, f32, f32, f32)| px[pos.y() * W + pos.x()] = [r, g, b],
-    )
-    .unwrap();
-    assert_eq!(img.layer_data.size, Vec2(W, H));
-    assert!(img.layer_data.channel_data.pixels.iter().flatten().all(|v| v.is_finite() && *v >= 0.0));
+    assert!(pixels(&tmp.path().join("seq-denoised/denoised_0001.exr")).iter().flatten().all(|v| v.is_finite() && *v >= 0.0));
     // A second run goes to a new folder beside the input; --csv writes one row per frame whose
     // errors are the ones printed.
     let csv = tmp.path().join("times.csv");
@@ -141,17 +134,16 @@ fn per_buffer_sequence_is_denoised_with_error_report() {
     }
 }
 
-/// The RGB pixels of an EXR written by `denoise`.
+/// The RGB pixels of a W x H EXR written by `denoise`.
 fn pixels(path: &Path) -> Vec<[f32; 3]> {
-    read_first_rgba_layer_from_file(
+    let img = read_first_rgba_layer_from_file(
         path,
         |res, _| vec![[0f32; 3]; res.width() * res.height()],
         |px: &mut Vec<[f32; 3]>, pos, (r, g, b, _a): (f32, f32, f32, f32)| px[pos.y() * W + pos.x()] = [r, g, b],
     )
-    .unwrap()
-    .layer_data
-    .channel_data
-    .pixels
+    .unwrap();
+    assert_eq!(img.layer_data.size, Vec2(W, H), "{}", path.display());
+    img.layer_data.channel_data.pixels
 }
 
 #[test]
