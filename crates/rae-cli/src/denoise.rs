@@ -189,7 +189,7 @@ pub fn run(o: &Options) -> Result<()> {
     // compiles from the other end if the frame is slow to come.
     let said = bar.clone();
     let note = move || said.suspend(|| eprintln!("the first frame is slow to come: compiling kernels on a second device too (lavapipe compiles at first use, into Mesa's shader cache)"));
-    let helper = if o.no_helper { None } else { CompileHelper::start(&gpu, &weights, seq.width, seq.height, options, note) };
+    let mut helper = if o.no_helper { None } else { CompileHelper::start(&gpu, &weights, seq.width, seq.height, options, note) };
     for &i in &indices {
         let mut frame = seq.load(i)?;
         if let Some((buffer, path, count)) = frame.nonfinite.first()
@@ -202,7 +202,7 @@ pub fn run(o: &Options) -> Result<()> {
             prev = None;
         }
         let t = d.denoise_into(&frame.inputs(), &mut out).with_context(|| format!("frame {}", frame.number))?;
-        if let Some(h) = &helper {
+        if let Some(h) = &mut helper {
             h.first_frame_done();
         }
         up.push(ms(t.upload));

@@ -135,7 +135,8 @@ impl Gpu {
 /// has not come after [`CompileHelper::delay`]: a second plus the frame's arithmetic at
 /// [`CompileHelper::SLOW_FLOPS`].
 pub struct CompileHelper {
-    done: std::sync::mpsc::Sender<()>,
+    /// Dropped when the first frame has come (the watcher then sees its channel closed).
+    done: Option<std::sync::mpsc::Sender<()>>,
     watcher: std::thread::JoinHandle<()>,
 }
 
@@ -177,17 +178,18 @@ impl CompileHelper {
             // Failures only cost the first frame its speed-up: the frame compiles everything.
             let _ = Gpu::from_adapter(adapter).and_then(|g| crate::Denoiser::with_options(&g.device, &g.queue, &weights, width, height, options)?.compile_backwards());
         });
-        Some(Self { done, watcher })
+        Some(Self { done: Some(done), watcher })
     }
 
-    /// The first frame has come: a helper not started yet never starts.
-    pub fn first_frame_done(&self) {
-        let _ = self.done.send(());
+    /// The first frame has come: a helper not started yet never starts (cheap to call after
+    /// every frame).
+    pub fn first_frame_done(&mut self) {
+        self.done = None;
     }
 
     /// Wait for the helper to finish (its last dispatches find the frame's pipelines in the cache).
-    pub fn finish(self) {
-        let _ = self.done.send(());
+    pub fn finish(mut self) {
+        self.done = None;
         let _ = self.watcher.join();
     }
 }

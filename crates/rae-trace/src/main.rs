@@ -159,7 +159,7 @@ fn live(choice: &SceneChoice, weights: &Path, frames: u32, size: (u32, u32), out
             helper = rae_core::gpu::CompileHelper::start(&gpu, &weights, w, h, rae_core::Options::default(), note);
         }
         let denoised = denoiser.denoise(&frame)?;
-        if let Some(h) = &helper {
+        if let Some(h) = &mut helper {
             h.first_frame_done();
         }
         let t2 = Instant::now();
