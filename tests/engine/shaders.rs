@@ -1,6 +1,6 @@
 //! Every WGSL file parses and validates with naga: no GPU needed, a broken shader fails here.
 
-use rae_core::kernels::{ROWS_STUB, SHADERS, STORAGE_SOURCES, STORAGE_WEIGHTS, UNIFORM_WEIGHTS, WITHOUT_SUBGROUPS, shader_source};
+use rae_core::kernels::{MMA_ENABLE, ROWS_STUB, SHADERS, STORAGE_SOURCES, STORAGE_WEIGHTS, UNIFORM_WEIGHTS, WITHOUT_SUBGROUPS, mma_source, shader_source};
 
 #[test]
 fn every_shader_validates_with_naga() {
@@ -26,7 +26,20 @@ fn every_shader_validates_with_naga() {
         ("conv3x3 (f16, storage weights)", conv.replace("rgba32float", "rgba16float").replace(UNIFORM_WEIGHTS, STORAGE_WEIGHTS)),
         ("conv3x3 (without subgroups)", without_subgroups),
     ];
-    let all = SHADERS.iter().filter(|(n, _)| *n != "conv3x3_rows").map(|&(n, s)| (n, s.to_string())).chain(rewritten);
+    // conv3x3_mma.wgsl as written (`mma_emulated`) and with the cooperative-matrix entry point
+    // (conv3x3_mma_coop.wgsl, only used inside it), both with storage-texture sources and f16.
+    let mma = shader_source("conv3x3_mma");
+    assert!(mma.contains(MMA_ENABLE), "the enable mma_source extends");
+    let storage_mma = |src: String| STORAGE_SOURCES.iter().fold(src, |src, (from, to)| {
+        assert!(src.contains(from), "conv3x3_mma.wgsl has {from}");
+        src.replace(from, to)
+    });
+    let mma_rewritten = [
+        ("conv3x3_mma (matrix units)", mma_source(true)),
+        ("conv3x3_mma (matrix units, storage sources, f16)", storage_mma(mma_source(true)).replace("rgba32float", "rgba16float")),
+        ("conv3x3_mma (emulated, storage sources, f16)", storage_mma(mma_source(false)).replace("rgba32float", "rgba16float")),
+    ];
+    let all = SHADERS.iter().filter(|(n, _)| !["conv3x3_rows", "conv3x3_mma_coop"].contains(n)).map(|&(n, s)| (n, s.to_string())).chain(rewritten).chain(mma_rewritten);
     for (name, source) in all {
         let source = source.as_str();
         let module = naga::front::wgsl::parse_str(source).unwrap_or_else(|e| panic!("{name}.wgsl: {}", e.emit_to_string(source)));
@@ -34,7 +47,32 @@ fn every_shader_validates_with_naga() {
         naga::valid::Validator::new(naga::valid::ValidationFlags::all(), caps)
             .validate(&module)
             .unwrap_or_else(|e| panic!("{name}.wgsl: {}", e.emit_to_string(source)));
-        assert!(module.entry_points.iter().any(|e| e.name == "main"), "{name}.wgsl has no `main`");
+        let entry = if name.starts_with("conv3x3_mma") { "mma_emulated" } else { "main" };
+        assert!(module.entry_points.iter().any(|e| e.name == entry), "{name}.wgsl has no `{entry}`");
+    }
+}
+
+#[test]
+fn the_matrix_unit_kernel_translates_to_spirv() {
+    // What wgpu does with conv3x3_mma.wgsl on a device with cooperative matrices (none here):
+    // the module validates, the entry point `mma` uses cooperative matrices, and naga's SPIR-V
+    // writer emits it with the cooperative-matrix capability and the Vulkan memory model, once
+    // for every tile width (the override NT), as the pipeline's constants set it.
+    let source = mma_source(true);
+    let module = naga::front::wgsl::parse_str(&source).unwrap_or_else(|e| panic!("{}", e.emit_to_string(&source)));
+    assert!(module.entry_points.iter().any(|e| e.name == "mma"), "the cooperative entry point");
+    assert!(module.types.iter().any(|(_, t)| matches!(t.inner, naga::TypeInner::CooperativeMatrix { .. })), "cooperative matrix types");
+    let info = naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all()).validate(&module).unwrap_or_else(|e| panic!("{}", e.emit_to_string(&source)));
+    for nt in 1..=4 {
+        let constants: naga::back::PipelineConstants = [("NT".to_string(), nt as f64)].into_iter().collect();
+        let (module, info) = naga::back::pipeline_constants::process_overrides(&module, &info, None, &constants).unwrap();
+        let options = naga::back::spv::Options { lang_version: (1, 3), ..Default::default() };
+        let pipeline = naga::back::spv::PipelineOptions { shader_stage: naga::ShaderStage::Compute, entry_point: "mma".to_string() };
+        let words = naga::back::spv::write_vec(&module, &info, &options, Some(&pipeline)).unwrap_or_else(|e| panic!("NT = {nt}: {e}"));
+        // OpCapability CooperativeMatrixKHR (6022) and OpMemoryModel Logical Vulkan (3).
+        let has = |op: u32, operands: &[u32]| words.windows(1 + operands.len()).any(|w| w[0] == ((1 + operands.len() as u32) << 16 | op) && w[1..] == *operands);
+        assert!(has(17, &[6022]), "NT = {nt}: OpCapability CooperativeMatrixKHR");
+        assert!(has(14, &[0, 3]), "NT = {nt}: OpMemoryModel Logical Vulkan");
     }
 }
 

@@ -117,7 +117,11 @@ enum Command {
         /// winoROWSxBLOCKS[gGROUPX] (Winograd F(2x2, 3x3); rows 2, 4) for one tile everywhere,
         /// `tuned` (each conv timed with every candidate on this device while building), or
         /// `auto` (tuned on GPUs; on CPU drivers lanes8x2w2, or 16x4 without subgroups: what
-        /// `denoise` uses).
+        /// `denoise` uses). `mma16`, `mma32`, `mma48`, `mma64`: the matrix-unit kernel (f16
+        /// products summed in f32, 16 to 64 output channels per workgroup; tensor cores where
+        /// wgpu's cooperative matrices have 16x16x16 f16 -> f32, emulated and slow elsewhere;
+        /// storage weights and SHADER_F16), `tuned-mma`: `tuned` with those among the candidates
+        /// where the device has matrix units.
         #[arg(long, value_delimiter = ',', default_value = "auto")]
         tile: Vec<String>,
         /// Where the convs read weights: `uniform` (64 KiB chunks), `storage` (one buffer, a
@@ -160,7 +164,16 @@ fn parse_tile(s: &str) -> Result<TileChoice> {
     match s {
         "auto" => return Ok(TileChoice::Auto),
         "tuned" => return Ok(TileChoice::Tuned),
+        "tuned-mma" => return Ok(TileChoice::TunedMma),
         _ => {}
+    }
+    if let Some(channels) = s.strip_prefix("mma") {
+        return channels
+            .parse()
+            .ok()
+            .and_then(Tile::mma)
+            .map(TileChoice::Fixed)
+            .with_context(|| format!("tile `{s}`: matrix-unit tiles are mma16, mma32, mma48 or mma64 (output channels per workgroup)"));
     }
     let bad = || format!("tile `{s}` is not [wino|lanes]ROWSxBLOCKS[wCOLS][gGROUPX][kSPLIT], tuned or auto");
     let (winograd, s2) = s.strip_prefix("wino").map_or((false, s), |r| (true, r));
@@ -209,6 +222,7 @@ fn tile_name(t: TileChoice) -> String {
     match t {
         TileChoice::Auto => "auto".into(),
         TileChoice::Tuned | TileChoice::TunedAmong(_) => "tuned".into(),
+        TileChoice::TunedMma => "tuned-mma".into(),
         TileChoice::Fixed(t) => t.to_string(),
     }
 }

@@ -128,7 +128,21 @@ pub enum TileChoice {
     Tuned,
     /// [`TileChoice::Tuned`] among these candidates only (fewer pipelines to compile).
     TunedAmong(&'static [Tile]),
+    /// [`TileChoice::Tuned`] with the matrix-unit tiles [`MMA_TILES`] among the candidates
+    /// where the device has matrix units ([`crate::kernels::matrix_units_supported`]) and the
+    /// weights are in a storage buffer: convs that pick one compute f16 products summed in f32
+    /// ([`Tile::mma`]). Opt-in: never what [`TileChoice::Auto`] picks.
+    TunedMma,
 }
+
+/// The matrix-unit tiles [`TileChoice::TunedMma`] adds to [`TUNE_TILES`]: 16 to 64 output
+/// channels per workgroup.
+pub const MMA_TILES: [Tile; 4] = [
+    Tile { rows: 4, blocks: 4, cols: 1, group_x: 8, method: Method::Mma, split: 1 },
+    Tile { rows: 4, blocks: 8, cols: 1, group_x: 8, method: Method::Mma, split: 1 },
+    Tile { rows: 4, blocks: 12, cols: 1, group_x: 8, method: Method::Mma, split: 1 },
+    Tile { rows: 4, blocks: 16, cols: 1, group_x: 8, method: Method::Mma, split: 1 },
+];
 
 /// The tiles [`TileChoice::Tuned`] times.
 pub const TUNE_TILES: [Tile; 33] = [
@@ -340,7 +354,14 @@ impl Denoiser {
             TileChoice::Auto if device_type == wgpu::DeviceType::Cpu => vec![Tile::cpu(device)],
             TileChoice::Auto | TileChoice::Tuned if timestamps => tune(device, queue, &mut kernels, &specs, &node_views, &TUNE_TILES)?,
             TileChoice::TunedAmong(candidates) if timestamps && !candidates.is_empty() => tune(device, queue, &mut kernels, &specs, &node_views, candidates)?,
-            TileChoice::Auto | TileChoice::Tuned | TileChoice::TunedAmong(_) => vec![Tile::default()],
+            TileChoice::TunedMma if timestamps => {
+                let mut candidates = TUNE_TILES.to_vec();
+                if kernels.matrix_units() && memory == WeightMemory::Storage {
+                    candidates.extend(MMA_TILES);
+                }
+                tune(device, queue, &mut kernels, &specs, &node_views, &candidates)?
+            }
+            TileChoice::Auto | TileChoice::Tuned | TileChoice::TunedAmong(_) | TileChoice::TunedMma => vec![Tile::default()],
         };
         let convs = ConvPlan::new(device, &mut kernels, &specs, &tiles)?;
         debug_assert_eq!(bytes, activation_bytes(&graph, pwidth, pheight, precision));

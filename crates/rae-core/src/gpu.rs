@@ -58,6 +58,21 @@ fn cpu_has_avx512() -> bool {
     }
 }
 
+/// Whether an adapter has what [`crate::Method::Mma`] runs on in matrix units: wgpu's
+/// cooperative matrices with a 16 x 16 x 16 configuration of f16 products summed in f32, and
+/// subgroups of exactly 32 lanes (conv3x3_mma_coop.wgsl counts a workgroup's subgroups in 32s).
+/// [`Gpu`] enables [`wgpu::Features::EXPERIMENTAL_COOPERATIVE_MATRIX`] only where this holds,
+/// and [`crate::kernels::matrix_units_supported`] trusts a device with the feature to have it.
+pub fn has_matrix_units(adapter: &wgpu::Adapter) -> bool {
+    let info = adapter.get_info();
+    adapter.features().contains(wgpu::Features::EXPERIMENTAL_COOPERATIVE_MATRIX | wgpu::Features::SHADER_F16 | wgpu::Features::SUBGROUP)
+        && info.subgroup_min_size == 32
+        && info.subgroup_max_size == 32
+        && adapter.cooperative_matrix_properties().iter().any(|m| {
+            (m.m_size, m.n_size, m.k_size) == (16, 16, 16) && m.ab_type == wgpu::CooperativeScalarType::F16 && m.cr_type == wgpu::CooperativeScalarType::F32
+        })
+}
+
 /// The adapters wgpu sees under the current `WGPU_BACKEND`.
 pub fn adapters() -> Vec<wgpu::Adapter> {
     let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
@@ -98,17 +113,26 @@ impl Gpu {
         Self::from_adapter(adapter)
     }
 
-    /// Open a device on a given adapter.
+    /// Open a device on a given adapter, with wgpu's experimental cooperative matrices where
+    /// the adapter has the configuration [`crate::Method::Mma`] runs on ([`has_matrix_units`]).
     pub fn from_adapter(adapter: wgpu::Adapter) -> Result<Self> {
-        let optional = wgpu::Features::SHADER_F16
+        let mut optional = wgpu::Features::SHADER_F16
             | wgpu::Features::TIMESTAMP_QUERY
             | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS
             | wgpu::Features::TIMESTAMP_QUERY_INSIDE_PASSES
             | wgpu::Features::SUBGROUP;
+        let matrix_units = has_matrix_units(&adapter);
+        if matrix_units {
+            optional |= wgpu::Features::EXPERIMENTAL_COOPERATIVE_MATRIX;
+        }
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("rae"),
             required_features: adapter.features() & optional,
             required_limits: adapter.limits(),
+            // SAFETY: the one experimental feature asked for is cooperative matrices, and only
+            // conv3x3_mma_coop.wgsl uses them (wgpu warns its experimental features may have
+            // bugs; the golden tests hold that kernel's output to PyTorch's on such devices).
+            experimental_features: if matrix_units { unsafe { wgpu::ExperimentalFeatures::enabled() } } else { wgpu::ExperimentalFeatures::disabled() },
             ..Default::default()
         }))?;
         Ok(Self { adapter, device, queue })

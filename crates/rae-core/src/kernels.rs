@@ -11,6 +11,8 @@ use crate::graph::Read;
 pub const SHADERS: &[(&str, &str)] = &[
     ("conv3x3", include_str!("../../../shaders/conv3x3.wgsl")),
     ("conv3x3_rows", include_str!("../../../shaders/conv3x3_rows.wgsl")),
+    ("conv3x3_mma", include_str!("../../../shaders/conv3x3_mma.wgsl")),
+    ("conv3x3_mma_coop", include_str!("../../../shaders/conv3x3_mma_coop.wgsl")),
     ("prep", include_str!("../../../shaders/prep.wgsl")),
     ("output", include_str!("../../../shaders/output.wgsl")),
     ("pool", include_str!("../../../shaders/pool.wgsl")),
@@ -158,6 +160,30 @@ pub const WITHOUT_SUBGROUPS: [(&str, &str); 3] = [
 /// weights are spread over lanes 0 to 7).
 pub fn lanes_supported(device: &wgpu::Device) -> bool {
     device.features().contains(wgpu::Features::SUBGROUP) && device.adapter_info().subgroup_min_size >= 8
+}
+
+/// The enable directive of conv3x3_mma.wgsl that [`mma_source`] extends.
+pub const MMA_ENABLE: &str = "enable f16;";
+
+/// conv3x3_mma.wgsl as a device runs it: with conv3x3_mma_coop.wgsl's entry point `mma` and
+/// the cooperative-matrix enable where `matrix_units` ([`matrix_units_supported`]), else as
+/// written (only `mma_emulated`: naga refuses cooperative matrix types in a module on a device
+/// without the feature).
+pub fn mma_source(matrix_units: bool) -> String {
+    let base = shader_source("conv3x3_mma");
+    if !matrix_units {
+        return base.to_string();
+    }
+    assert!(base.contains(MMA_ENABLE), "conv3x3_mma.wgsl has kernels::MMA_ENABLE");
+    format!("{}\n{}", base.replacen(MMA_ENABLE, "enable f16;\nenable wgpu_cooperative_matrix;", 1), shader_source("conv3x3_mma_coop"))
+}
+
+/// Whether a device runs [`Method::Mma`] in matrix units: it has wgpu's cooperative matrices
+/// ([`crate::Gpu`] enables them only where [`crate::gpu::has_matrix_units`]: 16 x 16 x 16
+/// f16 -> f32 and 32-lane subgroups; a device opened elsewhere with the feature must have the
+/// same) and SHADER_F16. Elsewhere, with SHADER_F16, Mma tiles run `mma_emulated`.
+pub fn matrix_units_supported(device: &wgpu::Device) -> bool {
+    device.features().contains(wgpu::Features::EXPERIMENTAL_COOPERATIVE_MATRIX | wgpu::Features::SHADER_F16 | wgpu::Features::SUBGROUP)
 }
 
 /// Texture format of activations at f32 (weights-independent tests upload in it).
@@ -369,23 +395,29 @@ pub enum Method {
     /// subgroups of at least 8 lanes, [`lanes_supported`]). On lavapipe a weight load is
     /// otherwise a lane-by-lane gather.
     Lanes,
+    /// conv3x3_mma.wgsl: an implicit matrix product in 16 x 16 x 16 tiles of f16 products
+    /// summed in f32, in the device's matrix units (tensor cores, [`matrix_units_supported`])
+    /// or emulated where it has none ([`Tile::mma`]).
+    Mma,
 }
 
 impl Method {
     /// Weights per input-output channel pair: 9 taps, or 16 transformed ones for Winograd.
     pub fn taps(self) -> u32 {
         match self {
-            Method::Direct | Method::Lanes => 9,
+            Method::Direct | Method::Lanes | Method::Mma => 9,
             Method::Winograd => 16,
         }
     }
 
-    /// The entry point in conv3x3.wgsl.
+    /// The entry point in conv3x3.wgsl (conv3x3_mma.wgsl's `mma`, or `mma_emulated` on devices
+    /// without matrix units, for [`Method::Mma`]).
     pub fn entry_point(self) -> &'static str {
         match self {
             Method::Direct => "main",
             Method::Winograd => "winograd",
             Method::Lanes => "lanes",
+            Method::Mma => "mma",
         }
     }
 }
@@ -411,6 +443,11 @@ pub struct Kernels {
     conv_source: String,
     /// The conv module with conv3x3_rows.wgsl, made when a two-column lanes tile first needs it.
     conv_rows_module: Option<wgpu::ShaderModule>,
+    /// conv3x3_mma.wgsl ([`mma_source`]) as rewritten for this precision and device, made when
+    /// an Mma tile first needs it.
+    mma_module: Option<wgpu::ShaderModule>,
+    /// The device runs Mma tiles in matrix units ([`matrix_units_supported`]).
+    matrix_units: bool,
     conv_pipeline_layout: wgpu::PipelineLayout,
     conv: HashMap<ConvVariant, wgpu::ComputePipeline>,
     precision: Precision,
@@ -436,6 +473,7 @@ impl Kernels {
     /// [`Kernels::new`] with the conv's sources read as `sources` says (rewritten by
     /// [`STORAGE_SOURCES`] for storage textures, before the f16 rewrite).
     pub fn with_sources(device: &wgpu::Device, precision: Precision, memory: WeightMemory, sources: SourceAccess) -> Self {
+        let matrix_units = matrix_units_supported(device);
         let source = |name: &str| {
             let mut src = shader_source(name).to_string();
             if sources == SourceAccess::Storage && name == "conv3x3" {
@@ -522,6 +560,8 @@ impl Kernels {
             conv_module: module("conv3x3"),
             conv_source: source("conv3x3"),
             conv_rows_module: None,
+            mma_module: None,
+            matrix_units,
             conv_layout,
             prep_layout,
             output_layout,
@@ -551,6 +591,11 @@ impl Kernels {
         self.sources
     }
 
+    /// Whether Mma tiles run in the device's matrix units (else emulated).
+    pub fn matrix_units(&self) -> bool {
+        self.matrix_units
+    }
+
     /// The conv pipeline for a variant, created on first use.
     pub fn conv(&mut self, device: &wgpu::Device, v: ConvVariant) -> wgpu::ComputePipeline {
         self.prepare(device, &[v]);
@@ -572,6 +617,20 @@ impl Kernels {
         }
         if missing.is_empty() {
             return;
+        }
+        // Mma tiles run conv3x3_mma.wgsl, rewritten as conv3x3.wgsl is (sources, f16 storage).
+        if missing.iter().any(|v| v.method == Method::Mma) && self.mma_module.is_none() {
+            let mut src = mma_source(self.matrix_units);
+            if self.sources == SourceAccess::Storage {
+                for (from, to) in STORAGE_SOURCES {
+                    assert!(src.contains(from), "conv3x3_mma.wgsl has {from}");
+                    src = src.replace(from, to);
+                }
+            }
+            if self.precision == Precision::F16 {
+                src = src.replace("rgba32float", "rgba16float");
+            }
+            self.mma_module = Some(shader_module(device, "conv3x3_mma", src));
         }
         // Two-column lanes tiles run in the module with conv3x3_rows.wgsl ([`ROWS_STUB`]).
         if missing.iter().any(|v| v.runs_rows()) && self.conv_rows_module.is_none() {
@@ -599,6 +658,24 @@ impl Kernels {
 
     /// Create one conv pipeline (its module made by [`Kernels::prepare`]).
     fn create_conv(&self, device: &wgpu::Device, v: ConvVariant) -> wgpu::ComputePipeline {
+        if v.method == Method::Mma {
+            let constants = [
+                ("MODE_A", v.read_a as u32 as f64),
+                ("MODE_B", v.read_b as u32 as f64),
+                ("SOURCE_B", if v.source_b { 1.0 } else { 0.0 }),
+                ("LEAKY", if v.leaky { 1.0 } else { 0.0 }),
+                ("NT", v.ob as f64),
+                ("STORE_MAX", self.precision.store_max() as f64),
+            ];
+            return device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some("conv3x3_mma"),
+                layout: Some(&self.conv_pipeline_layout),
+                module: self.mma_module.as_ref().expect("made by prepare"),
+                entry_point: Some(if self.matrix_units { "mma" } else { "mma_emulated" }),
+                compilation_options: wgpu::PipelineCompilationOptions { constants: &constants, zero_initialize_workgroup_memory: false },
+                cache: None,
+            });
+        }
         let module = if v.runs_rows() { self.conv_rows_module.as_ref().expect("made by prepare") } else { &self.conv_module };
         let constants = [
             ("MODE_A", v.read_a as u32 as f64),
@@ -716,6 +793,17 @@ impl Tile {
         (rows_ok && [1, 2, 4].contains(&blocks) && (1..=2).contains(&cols)).then_some(Tile { rows, blocks, cols, group_x: WORKGROUP, method: Method::Lanes, split: 1 })
     }
 
+    /// A matrix-unit tile ([`Method::Mma`]): workgroups of 4 rows x 64 pixels x `channels`
+    /// output channels (16, 32, 48 or 64), if the kernel has it. Inputs and weights are rounded
+    /// to f16 for the products (inputs clamped to +-65504), which are summed in f32: with f16
+    /// activations that adds the weights' rounding to the storage's; with f32 activations it is
+    /// a TF32-like mode (10-bit mantissas in), not f32 arithmetic. Needs storage weights
+    /// ([`WeightMemory::Storage`]) and SHADER_F16; runs in matrix units where the device has
+    /// them ([`matrix_units_supported`]), else emulated (correct, slow: for tests).
+    pub fn mma(channels: u32) -> Option<Self> {
+        [16, 32, 48, 64].contains(&channels).then_some(Tile { rows: 4, blocks: channels / 4, cols: 1, group_x: WORKGROUP, method: Method::Mma, split: 1 })
+    }
+
     /// Weights per input-output channel pair ([`Method::taps`]).
     pub fn taps(&self) -> u32 {
         self.method.taps()
@@ -741,9 +829,11 @@ impl Tile {
 impl std::fmt::Display for Tile {
     /// `ROWSxBLOCKS`, with `wCOLS` appended for a 2-column tile (`8x1w2`) and `gGROUPX` for a
     /// workgroup other than 8 x 8 and `kSPLIT` for a split tile (`8x1g32k4`); Winograd tiles are
-    /// `wino` and `ROWSxBLOCKS` (`wino4x1g32`).
+    /// `wino` and `ROWSxBLOCKS` (`wino4x1g32`); Mma tiles are `mma` and their output channels
+    /// (`mma32`).
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self.method {
+            Method::Mma => return write!(f, "mma{}", 4 * self.blocks),
             Method::Direct => {}
             Method::Winograd => write!(f, "wino")?,
             Method::Lanes => write!(f, "lanes")?,
@@ -809,16 +899,7 @@ pub fn pack_group(spec: &ConvSpec, ob0: usize, ob: usize, method: Method) -> Vec
     let cin = ca + cb;
     debug_assert_eq!(weight.len(), cout * cin * 9);
     let (ba, bb) = (blocks(ca) as usize, blocks(cb) as usize);
-    // Input channel of (input block, lane), or None for padding.
-    let channel = |ib: usize, lane: usize| -> Option<usize> {
-        if ib < ba {
-            let c = 4 * ib + lane;
-            (c < ca).then_some(c)
-        } else {
-            let c = 4 * (ib - ba) + lane;
-            (c < cb).then_some(ca + c)
-        }
-    };
+    let channel = |ib: usize, lane: usize| input_channel(spec, ib, lane);
     let taps = method.taps() as usize;
     // The weights of one channel pair as the kernel multiplies them.
     let pair = |o: usize, i: usize| -> [f32; 16] {
@@ -847,6 +928,55 @@ pub fn pack_group(spec: &ConvSpec, ob0: usize, ob: usize, method: Method) -> Vec
     for j in 0..ob {
         out.push(std::array::from_fn(|l| bias.get(4 * (ob0 + j) + l).copied().unwrap_or(0.0)));
     }
+    out
+}
+
+/// The input channel of `cat(a, b)` at lane `lane` of input block `ib` (source a's channels
+/// padded to a multiple of 4, then source b's), or `None` for a padding lane.
+fn input_channel(spec: &ConvSpec, ib: usize, lane: usize) -> Option<usize> {
+    let ba = blocks(spec.ca) as usize;
+    if ib < ba {
+        let c = 4 * ib + lane;
+        (c < spec.ca).then_some(c)
+    } else {
+        let c = 4 * (ib - ba) + lane;
+        (c < spec.cb).then_some(spec.ca + c)
+    }
+}
+
+/// f16 values of one Mma group's weights ([`Method::Mma`]): output channels `n0 .. n0 + 16 *
+/// nt` of a conv over `cat(a, b)`, laid out as conv3x3_mma.wgsl reads them. For chunk c (input
+/// blocks 4c .. 4c + 3, in [`pack_group`]'s block order) and tap t = ky * 3 + kx, `nt` tiles of
+/// 16 x 16 `[k][n]` (input channel of block 4c + k / 4, lane k % 4; output channel n0 + 16 tile
+/// + n); then the bias as hi = f16(b) for the 16 * nt channels and lo = f16(b - hi) for them.
+/// Padding is zero.
+pub fn pack_mma(spec: &ConvSpec, n0: usize, nt: usize) -> Vec<half::f16> {
+    let (weight, cout, cin) = (spec.weight, spec.cout, spec.ca + spec.cb);
+    debug_assert_eq!(weight.len(), cout * cin * 9);
+    let chunks = (blocks(spec.ca) + blocks(spec.cb)).div_ceil(4) as usize;
+    let mut out = Vec::with_capacity(chunks * 9 * nt * 256 + 32 * nt);
+    for c in 0..chunks {
+        // The input channel of each row k of this chunk's tiles.
+        let rows: Vec<Option<usize>> = (0..16).map(|k| input_channel(spec, 4 * c + k / 4, k % 4)).collect();
+        for t in 0..9 {
+            for tile in 0..nt {
+                for i in &rows {
+                    for n in 0..16 {
+                        let o = n0 + 16 * tile + n;
+                        let v = match *i {
+                            Some(i) if o < cout => weight[(o * cin + i) * 9 + t],
+                            _ => 0.0,
+                        };
+                        out.push(half::f16::from_f32(v));
+                    }
+                }
+            }
+        }
+    }
+    let bias: Vec<f32> = (0..16 * nt).map(|n| spec.bias.get(n0 + n).copied().unwrap_or(0.0)).collect();
+    let hi: Vec<half::f16> = bias.iter().map(|&b| half::f16::from_f32(b)).collect();
+    out.extend(&hi);
+    out.extend(bias.iter().zip(&hi).map(|(&b, h)| half::f16::from_f32(b - h.to_f32())));
     out
 }
 
@@ -957,6 +1087,51 @@ impl ConvPlan {
             let tile = tiles[if tiles.len() == 1 { 0 } else { i }];
             let (cin4_a, cin4_b) = (blocks(s.ca), blocks(s.cb));
             let cin4 = cin4_a + cin4_b;
+            if tile.method == Method::Mma {
+                let unsupported = |reason: String| crate::Error::UnsupportedTile { tile: tile.to_string(), reason };
+                if memory != WeightMemory::Storage {
+                    return Err(unsupported("Mma tiles read their weights from a storage buffer (weights memory `storage`)".into()));
+                }
+                if !device.features().contains(wgpu::Features::SHADER_F16) {
+                    return Err(unsupported(format!("Mma tiles need SHADER_F16, which {} lacks", device.adapter_info().name)));
+                }
+                // Tiles of 16 output channels, at most as many per group as the conv has.
+                let tiles16 = s.cout.div_ceil(16) as u32;
+                let nt = (tile.blocks / 4).clamp(1, tiles16);
+                let stride = cin4.div_ceil(4) * 9 * nt * 256 + 32 * nt;
+                let group_count = tiles16.div_ceil(nt);
+                binding = binding.max(group_count as u64 * stride as u64 * 2);
+                let mut group = Group { params: [0; 2], weights: 0, count: group_count };
+                for reset in 0..2 {
+                    let p = ConvParams {
+                        width: s.width,
+                        height: s.height,
+                        cin4_a,
+                        cin4_b: if reset == 1 && s.b_is_hidden { 0 } else { cin4_b },
+                        cin4_total: cin4,
+                        ob0: 0,
+                        cout4: blocks(s.cout),
+                        slope: s.slope,
+                        group_stride: stride,
+                        _pad: [0; 3],
+                    };
+                    params.resize(params.len().next_multiple_of(align), 0);
+                    group.params[reset] = params.len() as u32;
+                    params.extend_from_slice(bytemuck::bytes_of(&p));
+                }
+                weights.resize(weights.len().next_multiple_of(align), 0);
+                group.weights = weights.len() as u32;
+                for g in 0..group_count {
+                    let packed = pack_mma(s, (16 * nt * g) as usize, nt as usize);
+                    debug_assert_eq!(packed.len() as u32, stride);
+                    weights.extend_from_slice(bytemuck::cast_slice(&packed));
+                }
+                let variant = ConvVariant { read_a: s.read_a, read_b: s.read_b, source_b: s.cb > 0, leaky: s.leaky, ob: nt, rows: 1, cols: 1, group_x: WORKGROUP, method: Method::Mma, split: 1, reduce: false };
+                // Workgroups of 4 rows x 64 pixels (conv3x3_mma.wgsl's ROWS and PIXELS).
+                pending.push((variant, (s.width.div_ceil(64), s.height.div_ceil(4)), 1, vec![group], None));
+                used.push(Tile::mma(16 * nt).expect("16 to 64 channels"));
+                continue;
+            }
             let taps = tile.taps();
             let ob = match memory {
                 WeightMemory::Uniform => blocks_per_invocation(cin4, taps).ok_or_else(|| crate::Error::Arch {

@@ -1,0 +1,248 @@
+// 3x3 convolution as a matrix product for matrix units (tensor cores): the same convolution
+// as conv3x3.wgsl (zero padding, bias, optional LeakyReLU, sources cat(a, b) read direct,
+// pooled, upsampled or both), computed as an implicit GEMM in 16 x 16 x 16 tiles with f16
+// multiplicands and f32 sums.
+//
+// A workgroup of 128 invocations (4 subgroups of 32) computes 4 output rows x 64 pixels x
+// 16 * NT output channels. For each chunk of 16 input channels it stages the 6 x 66 input
+// window of its tile into workgroup memory as f16 (`win`, pixel-major: a pixel's 16 channels
+// are adjacent), and then every subgroup adds, for each of the 9 taps, the products of its
+// row's 4 pixel tiles (A: 16 pixels x 16 channels, read from `win` at the tap's offset) with
+// the tap's NT weight tiles (B: 16 input x 16 output channels, read from the weight buffer):
+// 4 * NT accumulators of 16 x 16 f32. At the end each accumulator goes through `stage` to the
+// output texture with the bias, the activation and the clamp.
+//
+// Two entry points share the staging, the indexing and the store: `mma` (conv3x3_mma_coop.wgsl,
+// appended by kernels::Kernels where the device has 16 x 16 x 16 f16 -> f32 cooperative
+// matrices) and `mma_emulated` below, which computes the same products with each invocation
+// holding 8 elements of each accumulator: it runs anywhere with SHADER_F16, so the tests check
+// the staging, the weight layout and the store on CPU drivers, and only the matrix operations
+// themselves are left to a device that has them.
+//
+// Rounding: inputs and weights are rounded to f16 (inputs clamped to +-65504 first), products
+// are exact in f32 and summed in f32. In f32 storage this is a TF32-like mode (10-bit
+// mantissas in, f32 sums), not f32 arithmetic; kernels::Tile::mma documents it.
+
+enable f16;
+
+const READ_DIRECT: u32 = 0u;
+const READ_POOL: u32 = 1u;
+const READ_UPSAMPLE: u32 = 2u;
+const READ_POOL_UPSAMPLE: u32 = 3u;
+
+override MODE_A: u32 = 0u;
+override MODE_B: u32 = 0u;
+override LEAKY: bool = true;
+override SOURCE_B: bool = true;
+// Largest magnitude stored: f32::MAX for f32 activations, 65504 for f16.
+override STORE_MAX: f32 = 3.4028234e38;
+// 16-channel output tiles per workgroup: 1 to 4.
+override NT: u32 = 2u;
+
+// Pixels per subgroup row (4 tiles of 16), rows per workgroup (one per subgroup), and the
+// staged window: (ROWS + 2) x (PIXELS + 2) pixels of 16 channels.
+const PIXELS: u32 = 64u;
+const ROWS: u32 = 4u;
+const WIN_W: u32 = 66u;
+const WIN_H: u32 = 6u;
+// Texels (4 channels) staged per chunk: WIN_H * WIN_W * 4.
+const WIN_TEXELS: u32 = 1584u;
+// Elements of one 16 x 16 tile.
+const TILE: u32 = 256u;
+
+struct Params {
+    width: u32,
+    height: u32,
+    cin4_a: u32,
+    cin4_b: u32,
+    cin4_total: u32,
+    ob0: u32,
+    cout4: u32,
+    slope: f32,
+    group_stride: u32,
+}
+
+// Weights of group z (16 * NT output channels from 4 * params.ob0 + z * 16 * NT), f16 from
+// w = z * group_stride: for chunk c (input blocks 4c .. 4c + 3) and tap t = ky * 3 + kx, NT
+// tiles of 16 x 16 at w + ((c * 9 + t) * NT + nt) * 256, row k (input channel 16c + k, in the
+// order of kernels::pack_group's blocks) and column n (output channel); then the bias as two
+// f16 halves, hi and lo (hi + lo is the f32 bias to 22 bits): 16 * NT hi, then 16 * NT lo.
+@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(1) var src_a: Source;
+@group(0) @binding(2) var src_b: Source;
+@group(0) @binding(3) var<storage, read> weights: array<f16>;
+@group(0) @binding(4) var dst: texture_storage_2d_array<rgba32float, write>;
+
+// The input window of one chunk, [row][column][channel]; an A tile of pixels p .. p + 15 of a
+// window row is 16 x 16 row-major at stride 16.
+var<workgroup> win: array<f16, 6336>;
+// One 16 x 16 f32 accumulator per subgroup on its way to the output, row-major.
+var<workgroup> stage: array<f32, 1024>;
+
+alias Source = texture_2d_array<f32>;
+
+// One texel of a source.
+fn load(t: Source, p: vec2<i32>, layer: u32) -> vec4<f32> {
+    return textureLoad(t, p, layer, 0);
+}
+
+fn max4(t: Source, p: vec2<i32>, layer: u32) -> vec4<f32> {
+    let a = load(t, p, layer);
+    let b = load(t, p + vec2<i32>(1, 0), layer);
+    let c = load(t, p + vec2<i32>(0, 1), layer);
+    let d = load(t, p + vec2<i32>(1, 1), layer);
+    return max(max(a, b), max(c, d));
+}
+
+// One channel block of a source at output-resolution pixel (x, y); zero outside (padding 1).
+fn fetch(t: Source, mode: u32, x: i32, y: i32, layer: u32) -> vec4<f32> {
+    if x < 0 || y < 0 || x >= i32(params.width) || y >= i32(params.height) {
+        return vec4<f32>(0.0);
+    }
+    switch mode {
+        case READ_POOL: { return max4(t, vec2<i32>(2 * x, 2 * y), layer); }
+        case READ_UPSAMPLE: { return load(t, vec2<i32>(x >> 1u, y >> 1u), layer); }
+        case READ_POOL_UPSAMPLE: { return max4(t, vec2<i32>(x & ~1, y & ~1), layer); }
+        default: { return load(t, vec2<i32>(x, y), layer); }
+    }
+}
+
+// Chunks of 16 input channels (4 blocks; the last one padded with zero weights).
+fn chunks() -> u32 {
+    return (params.cin4_total + 3u) / 4u;
+}
+
+// Stage chunk c of the window whose top-left output pixel is (x0, y0): input block 4c + j at
+// window pixel (r, q) is the source texel at (x0 + q - 1, y0 + r - 1). Blocks past cin4_a +
+// cin4_b (padding, or a reset frame's hidden state) are zero.
+fn stage_chunk(li: u32, c: u32, x0: u32, y0: u32) {
+    for (var i = li; i < WIN_TEXELS; i += 128u) {
+        let j = i % 4u;
+        let pixel = i / 4u;
+        let x = i32(x0 + pixel % WIN_W) - 1;
+        let y = i32(y0 + pixel / WIN_W) - 1;
+        let ib = 4u * c + j;
+        var v = vec4<f32>(0.0);
+        if ib < params.cin4_a {
+            v = fetch(src_a, MODE_A, x, y, ib);
+        } else if SOURCE_B && ib < params.cin4_a + params.cin4_b {
+            v = fetch(src_b, MODE_B, x, y, ib - params.cin4_a);
+        }
+        // f16 has no room past 65504: clamp rather than overflow to infinity.
+        let h = vec4<f16>(clamp(v, vec4<f32>(-65504.0), vec4<f32>(65504.0)));
+        let o = pixel * 16u + 4u * j;
+        win[o] = h.x;
+        win[o + 1u] = h.y;
+        win[o + 2u] = h.z;
+        win[o + 3u] = h.w;
+    }
+}
+
+// Where subgroup sg's A tile mt (pixels 16 mt .. 16 mt + 15 of its row) starts in `win` for
+// tap (ky, kx).
+fn a_at(sg: u32, mt: u32, ky: u32, kx: u32) -> u32 {
+    return ((sg + ky) * WIN_W + mt * 16u + kx) * 16u;
+}
+
+// Where weight tile nt of chunk c and tap t starts, for the group at w.
+fn b_at(w: u32, c: u32, t: u32, nt: u32) -> u32 {
+    return w + ((c * 9u + t) * NT + nt) * TILE;
+}
+
+fn activate(v: vec4<f32>) -> vec4<f32> {
+    var a = v;
+    if LEAKY {
+        a = select(v * params.slope, v, v >= vec4<f32>(0.0));
+    }
+    return clamp(a, vec4<f32>(-STORE_MAX), vec4<f32>(STORE_MAX));
+}
+
+// Store the accumulator subgroup sg left in `stage` (tile mt, nt): 16 pixels x 4 blocks, two
+// texels per lane, each with its bias, activated; pixels past the level's edge and blocks past
+// the conv's outputs are dropped. z is the workgroup's group.
+fn emit(sg: u32, lane: u32, mt: u32, nt: u32, x0: u32, y0: u32, z: u32) {
+    let y = y0 + sg;
+    let bias_at = z * params.group_stride + chunks() * 9u * NT * TILE;
+    for (var k = lane; k < 64u; k += 32u) {
+        let p = k / 4u;
+        let j = k % 4u;
+        let x = x0 + mt * 16u + p;
+        let n = nt * 16u + 4u * j;
+        let block = params.ob0 + 4u * NT * z + n / 4u;
+        if x < params.width && y < params.height && block < params.cout4 {
+            let s = sg * TILE + p * 16u + 4u * j;
+            let hi = vec4<f32>(f32(weights[bias_at + n]), f32(weights[bias_at + n + 1u]), f32(weights[bias_at + n + 2u]), f32(weights[bias_at + n + 3u]));
+            let lo_at = bias_at + 16u * NT + n;
+            let lo = vec4<f32>(f32(weights[lo_at]), f32(weights[lo_at + 1u]), f32(weights[lo_at + 2u]), f32(weights[lo_at + 3u]));
+            let v = vec4<f32>(stage[s], stage[s + 1u], stage[s + 2u], stage[s + 3u]) + (hi + lo);
+            textureStore(dst, vec2<u32>(x, y), block, activate(v));
+        }
+    }
+}
+
+// ---- Emulated matrix operations: entry point `mma_emulated` ----
+
+// The 4 output channels n .. n + 3 of B's row k at b, widened.
+fn b_row4(b: u32, k: u32, n: u32) -> vec4<f32> {
+    let at = b + k * 16u + n;
+    return vec4<f32>(f32(weights[at]), f32(weights[at + 1u]), f32(weights[at + 2u]), f32(weights[at + 3u]));
+}
+
+// Lane `lane` of a subgroup holds row p = lane % 16 (a pixel) of each of its 4 * NT
+// accumulators, at columns (output channels) 4q .. 4q + 3 and 8 + 4q .. 8 + 4q + 3 with
+// q = lane / 16: accumulator (mt, nt) at acc[(mt * NT + nt) * 2] and [.. + 1].
+@compute @workgroup_size(128, 1, 1)
+fn mma_emulated(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
+    let x0 = wg.x * PIXELS;
+    let y0 = wg.y * ROWS;
+    let w = wg.z * params.group_stride;
+    let sg = li / 32u;
+    let lane = li % 32u;
+    let p = lane % 16u;
+    let n = 4u * (lane / 16u);
+    var acc: array<vec4<f32>, 32>;
+    for (var i = 0u; i < 32u; i++) {
+        acc[i] = vec4<f32>(0.0);
+    }
+    for (var c = 0u; c < chunks(); c++) {
+        // The previous chunk's products are done before its window is overwritten.
+        workgroupBarrier();
+        stage_chunk(li, c, x0, y0);
+        workgroupBarrier();
+        for (var t = 0u; t < 9u; t++) {
+            for (var mt = 0u; mt < 4u; mt++) {
+                let row = a_at(sg, mt, t / 3u, t % 3u) + p * 16u;
+                for (var nt = 0u; nt < NT; nt++) {
+                    let b = b_at(w, c, t, nt);
+                    var lo = acc[(mt * NT + nt) * 2u];
+                    var hi = acc[(mt * NT + nt) * 2u + 1u];
+                    for (var k = 0u; k < 16u; k++) {
+                        let a = vec4<f32>(f32(win[row + k]));
+                        lo = fma(a, b_row4(b, k, n), lo);
+                        hi = fma(a, b_row4(b, k, n + 8u), hi);
+                    }
+                    acc[(mt * NT + nt) * 2u] = lo;
+                    acc[(mt * NT + nt) * 2u + 1u] = hi;
+                }
+            }
+        }
+    }
+    for (var mt = 0u; mt < 4u; mt++) {
+        for (var nt = 0u; nt < NT; nt++) {
+            workgroupBarrier();
+            let s = sg * TILE + p * 16u + n;
+            let lo = acc[(mt * NT + nt) * 2u];
+            let hi = acc[(mt * NT + nt) * 2u + 1u];
+            stage[s] = lo.x;
+            stage[s + 1u] = lo.y;
+            stage[s + 2u] = lo.z;
+            stage[s + 3u] = lo.w;
+            stage[s + 8u] = hi.x;
+            stage[s + 9u] = hi.y;
+            stage[s + 10u] = hi.z;
+            stage[s + 11u] = hi.w;
+            workgroupBarrier();
+            emit(sg, lane, mt, nt, x0, y0, wg.z);
+        }
+    }
+}
