@@ -244,20 +244,39 @@ fn bench(path: &Path, sizes: &[(u32, u32)], frames: usize, layers: bool, sweep: 
     println!("peak MiB: the buffers and textures the denoiser holds (frames allocate nothing); alloc MiB: the device allocator's live total, wgpu's own included, where the backend reports it");
     println!("precisions: f32, f16 (f16 = rgba16float activations, f32 arithmetic; SHADER_F16 {})", gpu.device.features().contains(wgpu::Features::SHADER_F16));
     println!("tile: the conv tile (rows x output blocks per invocation), `tuned` per conv on this device; weights: uniform chunks or one storage buffer; sources: the convs' inputs as sampled or storage textures; build: seconds to build the denoiser (compiling, tuning)");
+    println!("err: the last timed frame's largest difference from the same frames in f32 with the {} tile, over that frame's largest value", reference_tile(&gpu.device));
+    println!("matrix units (mma tiles on tensor cores): {}", if rae_core::kernels::matrix_units_supported(&gpu.device) { "yes" } else { "no (mma tiles emulated)" });
     println!(
-        "{:>10} {:>9} {:>5} {:>7} {:>7} {:>6} {:>10} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>7} {:>9} {:>9}",
-        "size", "precision", "tile", "weights", "sources", "build", "total ms", "upload", "gpu", "download", "resident", "pipelined", "GFLOP/s", "of peak", "peak MiB", "alloc MiB"
+        "{:>10} {:>9} {:>9} {:>7} {:>7} {:>6} {:>10} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>7} {:>9} {:>9} {:>8}",
+        "size", "precision", "tile", "weights", "sources", "build", "total ms", "upload", "gpu", "download", "resident", "pipelined", "GFLOP/s", "of peak", "peak MiB", "alloc MiB", "err"
     );
     for &(w, h) in sizes {
         let s = format!("{w}x{h}");
         let n = (w * h) as usize;
         let (wave, one) = bench_buffers(w, h);
         let frame = rae_core::FrameInputs { color: &wave, albedo: Some(&wave), normal: Some(&wave), depth: Some(&one), roughness: Some(&one) };
+        // The frames every combination's error is taken against: as many, in f32, direct tiles.
+        let reference = {
+            let options = Options { tiles: TileChoice::Fixed(reference_tile(&gpu.device)), ..Default::default() };
+            let mut d = Denoiser::with_options(&gpu.device, &gpu.queue, &weights, w, h, options).with_context(|| format!("building the reference denoiser at {s}"))?;
+            let mut out = vec![0.0; 3 * n];
+            for _ in 0..2 + frames.max(1) {
+                d.denoise_into(&frame, &mut out)?;
+            }
+            out
+        };
         for options in sweep.combinations() {
             let (precision, tiles) = (options.precision, options.tiles);
             let built = Instant::now();
-            let mut d = Denoiser::with_options(&gpu.device, &gpu.queue, &weights, w, h, options)
-                .with_context(|| format!("building the {} denoiser at {s}", precision.name()))?;
+            let mut d = match Denoiser::with_options(&gpu.device, &gpu.queue, &weights, w, h, options) {
+                Ok(d) => d,
+                // A tile this combination cannot run (e.g. mma with uniform weights): say so and go on.
+                Err(e @ rae_core::Error::UnsupportedTile { .. }) => {
+                    println!("{s:>10} {:>9} {:>9} {:>7} {:>7} unsupported: {e}", precision.name(), tile_name(tiles), options.weights.map_or("auto", |m| m.name()), options.sources.map_or("auto", |m| m.name()));
+                    continue;
+                }
+                Err(e) => return Err(e).with_context(|| format!("building the {} denoiser at {s}", precision.name())),
+            };
             let build_s = built.elapsed().as_secs_f64();
             let mut out = vec![0.0; 3 * n];
             for _ in 0..2 {
@@ -274,6 +293,7 @@ fn bench(path: &Path, sizes: &[(u32, u32)], frames: usize, layers: bool, sweep: 
             }
             let (pw, ph) = d.padded_size();
             let g = median(&mut gpu_t);
+            let err = relative_difference(&out, &reference);
             let timed = if resident { Some(resident_frames(&gpu, &mut d, &frame, frames.max(1))?) } else { None };
             let rate_ms = timed.map_or(g, |(r, _)| r);
             let gflops = flop_px * (pw * ph) as f64 / (rate_ms * 1e-3) / 1e9;
@@ -285,7 +305,7 @@ fn bench(path: &Path, sizes: &[(u32, u32)], frames: usize, layers: bool, sweep: 
             let share = peak.map_or("-".to_string(), |p| format!("{:.1}%", 100.0 * gflops / p));
             let (res, pipe) = timed.map_or(("-".to_string(), "-".to_string()), |(r, p)| (format!("{r:.2}"), format!("{p:.2}")));
             println!(
-                "{s:>10} {:>9} {:>5} {:>7} {:>7} {build_s:>6.1} {:>10.2} {:>9.2} {g:>9.2} {:>9.2} {res:>9} {pipe:>9} {gflops:>9.1} {share:>7} {mib:>9.1} {alloc:>9}",
+                "{s:>10} {:>9} {:>9} {:>7} {:>7} {build_s:>6.1} {:>10.2} {:>9.2} {g:>9.2} {:>9.2} {res:>9} {pipe:>9} {gflops:>9.1} {share:>7} {mib:>9.1} {alloc:>9} {err:>8.1e}",
                 precision.name(),
                 tile_name(tiles),
                 d.weight_memory().name(),
@@ -300,6 +320,20 @@ fn bench(path: &Path, sizes: &[(u32, u32)], frames: usize, layers: bool, sweep: 
         }
     }
     Ok(())
+}
+
+/// The tile of `bench`'s reference frames: the CPU drivers' default there (no tuning, no
+/// compiling past what `auto` does), the plain direct tile on GPUs.
+fn reference_tile(device: &wgpu::Device) -> Tile {
+    if device.adapter_info().device_type == wgpu::DeviceType::Cpu { Tile::cpu(device) } else { Tile::default() }
+}
+
+/// Largest |a - b| over the largest |b| (at least 1): how far a frame is from a reference, on
+/// the image's scale.
+fn relative_difference(a: &[f32], b: &[f32]) -> f64 {
+    let scale = b.iter().fold(1.0f32, |m, v| m.max(v.abs()));
+    let worst = a.iter().zip(b).fold(0.0f32, |m, (x, y)| if (x - y).is_nan() { f32::INFINITY } else { m.max((x - y).abs()) });
+    (worst / scale) as f64
 }
 
 /// What `bench` times: every precision x weight memory x source access x tile.
