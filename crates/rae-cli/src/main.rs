@@ -525,6 +525,9 @@ fn devices() -> Result<()> {
         for m in a.cooperative_matrix_properties() {
             println!("    cooperative matrix {}x{}x{} {:?} -> {:?}", m.m_size, m.n_size, m.k_size, m.ab_type, m.cr_type);
         }
+        if rae_core::gpu::has_matrix_units(&a) {
+            println!("    matrix units: mma tiles run on them (--tile mma32, tuned-mma)");
+        }
     }
     Ok(())
 }

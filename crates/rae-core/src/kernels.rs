@@ -178,6 +178,12 @@ pub fn mma_source(matrix_units: bool) -> String {
     format!("{}\n{}", base.replacen(MMA_ENABLE, "enable f16;\nenable wgpu_cooperative_matrix;", 1), shader_source("conv3x3_mma_coop"))
 }
 
+/// Workgroup memory of conv3x3_mma.wgsl: its input window (6 x 66 pixels x 16 f16 channels)
+/// and one 16 x 16 f32 tile per subgroup (4); more than WebGPU's default limit (16 KiB), so a
+/// device opened with default limits cannot run Mma tiles ([`crate::Gpu`] asks for the
+/// adapter's).
+pub const MMA_WORKGROUP_BYTES: u32 = 6 * 66 * 16 * 2 + 4 * 256 * 4;
+
 /// Whether a device runs [`Method::Mma`] in matrix units: it has wgpu's cooperative matrices
 /// ([`crate::Gpu`] enables them only where [`crate::gpu::has_matrix_units`]: 16 x 16 x 16
 /// f16 -> f32 and 32-lane subgroups; a device opened elsewhere with the feature must have the
@@ -1094,6 +1100,10 @@ impl ConvPlan {
                 }
                 if !device.features().contains(wgpu::Features::SHADER_F16) {
                     return Err(unsupported(format!("Mma tiles need SHADER_F16, which {} lacks", device.adapter_info().name)));
+                }
+                let shared = device.limits().max_compute_workgroup_storage_size;
+                if shared < MMA_WORKGROUP_BYTES {
+                    return Err(unsupported(format!("Mma tiles use {MMA_WORKGROUP_BYTES} bytes of workgroup memory; the device allows {shared}")));
                 }
                 // Tiles of 16 output channels, at most as many per group as the conv has.
                 let tiles16 = s.cout.div_ceil(16) as u32;
