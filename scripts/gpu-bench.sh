@@ -41,6 +41,8 @@ w=models/rae-default.safetensors
     if [ -n "${MMA:-}" ]; then
         echo "== mma: each fixed tile on 64x64 against the direct f32 frames (the err column; emulated if no matrix units)"
         "$cli" bench "$w" --sizes 64x64 --frames 3 --precision f32,f16 --tile 16x2,mma16,mma32,mma48,mma64 --weights-memory storage
+        echo "== mma: the same tiles emulated on this GPU (RAE_MATRIX_UNITS=0), for comparison"
+        RAE_MATRIX_UNITS=0 "$cli" bench "$w" --sizes 64x64 --frames 3 --precision f32 --tile mma32,mma64 --weights-memory storage
         echo "== mma: 1080p and 720p"
         "$cli" bench "$w" --sizes 1920x1080,1280x720 --frames 20 --precision f32,f16 --tile tuned,tuned-mma,mma32,mma64 --weights-memory storage --peak-gflops 66900 | grep -E "^ +(size|[0-9]+x[0-9]+) "
         echo "== mma: stages of tuned-mma (f16, f32)"

@@ -58,6 +58,10 @@ fn cpu_has_avx512() -> bool {
     }
 }
 
+/// Set to `0`, [`Gpu`] does not enable cooperative matrices, so Mma tiles run emulated on a
+/// device that has matrix units: the same tiles' two paths side by side.
+pub const MATRIX_UNITS_VAR: &str = "RAE_MATRIX_UNITS";
+
 /// Whether an adapter has what [`crate::Method::Mma`] runs on in matrix units: wgpu's
 /// cooperative matrices with a 16 x 16 x 16 configuration of f16 products summed in f32, and
 /// subgroups of exactly 32 lanes (conv3x3_mma_coop.wgsl counts a workgroup's subgroups in 32s).
@@ -114,14 +118,16 @@ impl Gpu {
     }
 
     /// Open a device on a given adapter, with wgpu's experimental cooperative matrices where
-    /// the adapter has the configuration [`crate::Method::Mma`] runs on ([`has_matrix_units`]).
+    /// the adapter has the configuration [`crate::Method::Mma`] runs on ([`has_matrix_units`])
+    /// and [`MATRIX_UNITS_VAR`] is not `0`.
     pub fn from_adapter(adapter: wgpu::Adapter) -> Result<Self> {
         let mut optional = wgpu::Features::SHADER_F16
             | wgpu::Features::TIMESTAMP_QUERY
             | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS
             | wgpu::Features::TIMESTAMP_QUERY_INSIDE_PASSES
             | wgpu::Features::SUBGROUP;
-        let matrix_units = has_matrix_units(&adapter);
+        // RAE_MATRIX_UNITS=0 leaves them off: Mma tiles then run emulated, for comparison.
+        let matrix_units = has_matrix_units(&adapter) && std::env::var(MATRIX_UNITS_VAR).map_or(true, |v| v != "0");
         if matrix_units {
             optional |= wgpu::Features::EXPERIMENTAL_COOPERATIVE_MATRIX;
         }

@@ -953,9 +953,9 @@ fn input_channel(spec: &ConvSpec, ib: usize, lane: usize) -> Option<usize> {
 /// f16 values of one Mma group's weights ([`Method::Mma`]): output channels `n0 .. n0 + 16 *
 /// nt` of a conv over `cat(a, b)`, laid out as conv3x3_mma.wgsl reads them. For chunk c (input
 /// blocks 4c .. 4c + 3, in [`pack_group`]'s block order) and tap t = ky * 3 + kx, `nt` tiles of
-/// 16 x 16 `[k][n]` (input channel of block 4c + k / 4, lane k % 4; output channel n0 + 16 tile
-/// + n); then the bias as hi = f16(b) for the 16 * nt channels and lo = f16(b - hi) for them.
-/// Padding is zero.
+/// 16 x 16 `[k][n]` (input channel of block 4c + k / 4, lane k % 4; output channel
+/// n0 + 16 tile + n); then the bias as hi = f16(b) for the 16 * nt channels and lo =
+/// f16(b - hi) for them. Padding is zero.
 pub fn pack_mma(spec: &ConvSpec, n0: usize, nt: usize) -> Vec<half::f16> {
     let (weight, cout, cin) = (spec.weight, spec.cout, spec.ca + spec.cb);
     debug_assert_eq!(weight.len(), cout * cin * 9);
