@@ -188,7 +188,8 @@ pub struct Options {
     pub precision: Precision,
     /// Register tile of the conv kernel.
     pub tiles: TileChoice,
-    /// Where the conv reads weights; `None`: by adapter type ([`WeightMemory::for_device_type`]).
+    /// Where the conv reads weights; `None`: by adapter type ([`WeightMemory::for_device_type`]),
+    /// or storage for a fixed Mma tile ([`Tile::mma`]).
     pub weights: Option<WeightMemory>,
     /// How the conv reads its sources; `None`: by adapter type ([`SourceAccess::for_device_type`]).
     pub sources: Option<SourceAccess>,
@@ -264,7 +265,11 @@ impl Denoiser {
     pub fn with_options(device: &wgpu::Device, queue: &wgpu::Queue, weights: &Weights, width: u32, height: u32, options: Options) -> Result<Self> {
         let Options { precision, tiles, weights: memory, sources } = options;
         let device_type = device.adapter_info().device_type;
-        let memory = memory.unwrap_or(WeightMemory::for_device_type(device_type));
+        // Mma tiles read storage weights: a fixed one picks them where the caller left it open.
+        let memory = memory.unwrap_or(match tiles {
+            TileChoice::Fixed(t) if t.method == Method::Mma => WeightMemory::Storage,
+            _ => WeightMemory::for_device_type(device_type),
+        });
         let sources = sources.unwrap_or(SourceAccess::for_device_type(device_type));
         let arch = weights.arch.clone();
         let multiple = 1u32 << arch.levels();
