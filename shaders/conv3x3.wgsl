@@ -15,28 +15,14 @@
 // invocation); sizes come in the uniform, so one pipeline serves every resolution and width.
 // Entry points: `main` (the direct sum, optionally split-K), `lanes` (the same with each weight
 // loaded once per subgroup, for CPU drivers), `reduce` (split-K's second pass) and `winograd`
-// (Winograd F(2x2, 3x3)); kernels::Method picks.
+// (Winograd F(2x2, 3x3)); kernels::Method picks. What it shares with conv3x3_mma.wgsl (the
+// parameter block, the sources and the output, the read modes, `fetch`, `activate`) is in
+// conv_common.wgsl, appended by kernels::conv_module_source.
 
-// How a source is read at output pixel (x, y).
-const READ_DIRECT: u32 = 0u;        // src[x, y]
-const READ_POOL: u32 = 1u;          // max of src[2x + i, 2y + j]          (src at 2x resolution)
-const READ_UPSAMPLE: u32 = 2u;      // src[x / 2, y / 2]                   (src at 1/2 resolution)
-const READ_POOL_UPSAMPLE: u32 = 3u; // upsample(pool(src)): max of the 2x2 block holding (x, y)
-
-override MODE_A: u32 = 0u;
-override MODE_B: u32 = 0u;
-override LEAKY: bool = true;
-// The conv reads a source b (a concatenation). Half the convs read one source: without the
-// second input-block loop their kernels carry half the multiply-add code, which lavapipe
-// compiles with LLVM at the first dispatch (the sample's cold first frame 0.84x of the time
-// with the loop everywhere); run time is unchanged (docs/PERF.md, session 8).
-override SOURCE_B: bool = true;
 // Output blocks (4 channels each) per invocation: 1, 2, or 4 with TW = 1 (kernels::Tile,
 // kernels::blocks_per_invocation). Every fetched input texel feeds 4 * OB output channels: on
 // lavapipe each fetch is a call into the driver's texel-fetch function, so OB = 4 pays off there.
 override OB: u32 = 2u;
-// Largest magnitude stored: f32::MAX for f32 activations, 65504 for f16 (no infinities).
-override STORE_MAX: f32 = 3.4028234e38;
 
 // Register tile: each invocation computes ROWS output rows (at most 16) x OB output blocks at TW
 // adjacent columns (1 or 2), in named accumulators: no indexable local arrays, which lavapipe would keep in per-lane
@@ -61,26 +47,10 @@ override SPLIT: u32 = 1u;
 // lane-by-lane gather per vec4; here a gather fetches 8 vec4s and each broadcast is a shuffle.
 override LANES: bool = false;
 
-struct Params {
-    width: u32,       // output (= convolution) resolution
-    height: u32,
-    cin4_a: u32,      // channel blocks read from a
-    cin4_b: u32,      // channel blocks read from b (0: no b, or a zeroed hidden state)
-    cin4_total: u32,  // input blocks in the weight layout (a + b)
-    ob0: u32,         // first output block (texture layer) of the group at z = 0
-    cout4: u32,       // output blocks of the conv
-    slope: f32,       // LeakyReLU negative slope
-    group_stride: u32,// vec4s from one group's weights to the next (group z at z * group_stride)
-}
-
 // Weights of group z, from w = z * group_stride: taps at w + ((in block * 9 + tap) * 4 + in lane)
 // * OB + j, a vec4 over the 4 output channels of block ob0 + z * OB + j; then the bias of block j
 // at w + cin4_total * 36 * OB + j.
-@group(0) @binding(0) var<uniform> params: Params;
-@group(0) @binding(1) var src_a: Source;
-@group(0) @binding(2) var src_b: Source;
 @group(0) @binding(3) var<uniform> weights: array<vec4<f32>, CHUNK>;
-@group(0) @binding(4) var dst: texture_storage_2d_array<rgba32float, write>;
 // Partial sums when SPLIT > 1: part p of output block l at ((p * cout4 + l) * height + y) * width
 // + x (kernels::ConvPlan sizes one buffer for its largest split conv; convs run one at a time).
 @group(0) @binding(5) var<storage, read_write> partial: array<vec4<f32>>;
@@ -88,38 +58,6 @@ struct Params {
 var<private> part: u32;
 // This invocation's lane in its subgroup (LANES).
 var<private> lane: u32;
-
-// The sources' texture type: sampled textures read at level 0 (GPUs), or read-only storage
-// textures on CPU drivers (kernels::SourceAccess; Kernels::new rewrites this alias and `load`,
-// kernels::STORAGE_SOURCES), where lavapipe's storage-image load skips the sampler's per-lane
-// mip-level set-up.
-alias Source = texture_2d_array<f32>;
-
-// One texel of a source.
-fn load(t: Source, p: vec2<i32>, layer: u32) -> vec4<f32> {
-    return textureLoad(t, p, layer, 0);
-}
-
-fn max4(t: Source, p: vec2<i32>, layer: u32) -> vec4<f32> {
-    let a = load(t, p, layer);
-    let b = load(t, p + vec2<i32>(1, 0), layer);
-    let c = load(t, p + vec2<i32>(0, 1), layer);
-    let d = load(t, p + vec2<i32>(1, 1), layer);
-    return max(max(a, b), max(c, d));
-}
-
-// One channel block of a source at output-resolution pixel (x, y); zero outside (padding 1).
-fn fetch(t: Source, mode: u32, x: i32, y: i32, layer: u32) -> vec4<f32> {
-    if x < 0 || y < 0 || x >= i32(params.width) || y >= i32(params.height) {
-        return vec4<f32>(0.0);
-    }
-    switch mode {
-        case READ_POOL: { return max4(t, vec2<i32>(2 * x, 2 * y), layer); }
-        case READ_UPSAMPLE: { return load(t, vec2<i32>(x >> 1u, y >> 1u), layer); }
-        case READ_POOL_UPSAMPLE: { return max4(t, vec2<i32>(x & ~1, y & ~1), layer); }
-        default: { return load(t, vec2<i32>(x, y), layer); }
-    }
-}
 
 // The 16 accumulated rows of one output block.
 struct Tile {
@@ -302,14 +240,6 @@ fn accumulate(acc0: ptr<function, Tile>, acc1: ptr<function, Tile>, acc2: ptr<fu
 // conv3x3_rows.wgsl's in the module that runs such tiles: that body is unrolled, and a front
 // end that inlines it before dropping the dead branch spends seconds on every pipeline.
 fn accumulate_rows(acc0: ptr<function, Tile>, acc1: ptr<function, Tile>, acc2: ptr<function, Tile>, acc3: ptr<function, Tile>, acc4: ptr<function, Tile>, acc5: ptr<function, Tile>, acc6: ptr<function, Tile>, acc7: ptr<function, Tile>, t: Source, mode: u32, layer: u32, cb: u32, w: u32, x: i32, y0: i32) {}
-
-fn activate(v: vec4<f32>) -> vec4<f32> {
-    var a = v;
-    if LEAKY {
-        a = select(v * params.slope, v, v >= vec4<f32>(0.0));
-    }
-    return clamp(a, vec4<f32>(-STORE_MAX), vec4<f32>(STORE_MAX));
-}
 
 // One output: activated into dst, or (SPLIT > 1) this part's raw sum into `partial`.
 fn put(x: u32, y: u32, layer: u32, v: vec4<f32>) {

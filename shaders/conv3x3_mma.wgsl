@@ -22,20 +22,12 @@
 // Rounding: inputs and weights are rounded to f16 (inputs clamped to +-65504 first), products
 // are exact in f32 and summed in f32. In f32 storage this is a TF32-like mode (10-bit
 // mantissas in, f32 sums), not f32 arithmetic; kernels::Tile::mma documents it.
+//
+// The parameter block, the sources and the output, the read modes, `fetch` and `activate` are
+// conv_common.wgsl's, appended by kernels::conv_module_source.
 
 enable f16;
 
-const READ_DIRECT: u32 = 0u;
-const READ_POOL: u32 = 1u;
-const READ_UPSAMPLE: u32 = 2u;
-const READ_POOL_UPSAMPLE: u32 = 3u;
-
-override MODE_A: u32 = 0u;
-override MODE_B: u32 = 0u;
-override LEAKY: bool = true;
-override SOURCE_B: bool = true;
-// Largest magnitude stored: f32::MAX for f32 activations, 65504 for f16.
-override STORE_MAX: f32 = 3.4028234e38;
 // 16-channel output tiles per workgroup: 1 to 4.
 override NT: u32 = 2u;
 
@@ -50,62 +42,18 @@ const WIN_TEXELS: u32 = 1584u;
 // Elements of one 16 x 16 tile.
 const TILE: u32 = 256u;
 
-struct Params {
-    width: u32,
-    height: u32,
-    cin4_a: u32,
-    cin4_b: u32,
-    cin4_total: u32,
-    ob0: u32,
-    cout4: u32,
-    slope: f32,
-    group_stride: u32,
-}
-
 // Weights of group z (16 * NT output channels from 4 * params.ob0 + z * 16 * NT), f16 from
 // w = z * group_stride: for chunk c (input blocks 4c .. 4c + 3) and tap t = ky * 3 + kx, NT
 // tiles of 16 x 16 at w + ((c * 9 + t) * NT + nt) * 256, row k (input channel 16c + k, in the
 // order of kernels::pack_group's blocks) and column n (output channel); then the bias as two
 // f16 halves, hi and lo (hi + lo is the f32 bias to 22 bits): 16 * NT hi, then 16 * NT lo.
-@group(0) @binding(0) var<uniform> params: Params;
-@group(0) @binding(1) var src_a: Source;
-@group(0) @binding(2) var src_b: Source;
 @group(0) @binding(3) var<storage, read> weights: array<f16>;
-@group(0) @binding(4) var dst: texture_storage_2d_array<rgba32float, write>;
 
 // The input window of one chunk, [row][column][channel]; an A tile of pixels p .. p + 15 of a
 // window row is 16 x 16 row-major at stride 16.
 var<workgroup> win: array<f16, 6336>;
 // One 16 x 16 f32 accumulator per subgroup on its way to the output, row-major.
 var<workgroup> stage: array<f32, 1024>;
-
-alias Source = texture_2d_array<f32>;
-
-// One texel of a source.
-fn load(t: Source, p: vec2<i32>, layer: u32) -> vec4<f32> {
-    return textureLoad(t, p, layer, 0);
-}
-
-fn max4(t: Source, p: vec2<i32>, layer: u32) -> vec4<f32> {
-    let a = load(t, p, layer);
-    let b = load(t, p + vec2<i32>(1, 0), layer);
-    let c = load(t, p + vec2<i32>(0, 1), layer);
-    let d = load(t, p + vec2<i32>(1, 1), layer);
-    return max(max(a, b), max(c, d));
-}
-
-// One channel block of a source at output-resolution pixel (x, y); zero outside (padding 1).
-fn fetch(t: Source, mode: u32, x: i32, y: i32, layer: u32) -> vec4<f32> {
-    if x < 0 || y < 0 || x >= i32(params.width) || y >= i32(params.height) {
-        return vec4<f32>(0.0);
-    }
-    switch mode {
-        case READ_POOL: { return max4(t, vec2<i32>(2 * x, 2 * y), layer); }
-        case READ_UPSAMPLE: { return load(t, vec2<i32>(x >> 1u, y >> 1u), layer); }
-        case READ_POOL_UPSAMPLE: { return max4(t, vec2<i32>(x & ~1, y & ~1), layer); }
-        default: { return load(t, vec2<i32>(x, y), layer); }
-    }
-}
 
 // Chunks of 16 input channels (4 blocks; the last one padded with zero weights).
 fn chunks() -> u32 {
@@ -147,14 +95,6 @@ fn a_at(sg: u32, mt: u32, ky: u32, kx: u32) -> u32 {
 // Where weight tile nt of chunk c and tap t starts, for the group at w.
 fn b_at(w: u32, c: u32, t: u32, nt: u32) -> u32 {
     return w + ((c * 9u + t) * NT + nt) * TILE;
-}
-
-fn activate(v: vec4<f32>) -> vec4<f32> {
-    var a = v;
-    if LEAKY {
-        a = select(v * params.slope, v, v >= vec4<f32>(0.0));
-    }
-    return clamp(a, vec4<f32>(-STORE_MAX), vec4<f32>(STORE_MAX));
 }
 
 // Store the accumulator subgroup sg left in `stage` (tile mt, nt): 16 pixels x 4 blocks, two

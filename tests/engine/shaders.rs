@@ -1,6 +1,6 @@
 //! Every WGSL file parses and validates with naga: no GPU needed, a broken shader fails here.
 
-use rae_core::kernels::{MMA_ENABLE, ROWS_STUB, SHADERS, STORAGE_SOURCES, STORAGE_WEIGHTS, UNIFORM_WEIGHTS, WITHOUT_SUBGROUPS, mma_source, shader_source};
+use rae_core::kernels::{MMA_ENABLE, ROWS_STUB, SHADERS, STORAGE_SOURCES, STORAGE_WEIGHTS, UNIFORM_WEIGHTS, WITHOUT_SUBGROUPS, conv_module_source, mma_source, shader_source};
 
 #[test]
 fn every_shader_validates_with_naga() {
@@ -8,7 +8,9 @@ fn every_shader_validates_with_naga() {
     // The sources as written (conv3x3_rows.wgsl inside conv3x3.wgsl, the only way it is
     // used), and the rewrites kernels::Kernels::new makes (f16 storage textures, storage-buffer
     // weights, storage-texture sources; no subgroups, validated without the capability).
-    let conv = shader_source("conv3x3");
+    // The conv kernels as modules are made: with conv_common.wgsl appended.
+    let conv = conv_module_source("conv3x3");
+    let conv = conv.as_str();
     assert!(conv.contains(UNIFORM_WEIGHTS), "the weight declaration Kernels::new rewrites");
     assert!(conv.contains(ROWS_STUB), "the empty accumulate_rows Kernels::conv replaces");
     let without_subgroups = WITHOUT_SUBGROUPS.iter().fold(conv.to_string(), |src, (from, to)| {
@@ -39,7 +41,7 @@ fn every_shader_validates_with_naga() {
         ("conv3x3_mma (matrix units, storage sources, f16)", storage_mma(mma_source(true)).replace("rgba32float", "rgba16float")),
         ("conv3x3_mma (emulated, storage sources, f16)", storage_mma(mma_source(false)).replace("rgba32float", "rgba16float")),
     ];
-    let all = SHADERS.iter().filter(|(n, _)| !["conv3x3_rows", "conv3x3_mma_coop"].contains(n)).map(|&(n, s)| (n, s.to_string())).chain(rewritten).chain(mma_rewritten);
+    let all = SHADERS.iter().filter(|(n, _)| !["conv3x3_rows", "conv3x3_mma_coop", "conv_common"].contains(n)).map(|&(n, _)| (n, conv_module_source(n))).chain(rewritten).chain(mma_rewritten);
     for (name, source) in all {
         let source = source.as_str();
         let module = naga::front::wgsl::parse_str(source).unwrap_or_else(|e| panic!("{name}.wgsl: {}", e.emit_to_string(source)));

@@ -13,6 +13,7 @@ pub const SHADERS: &[(&str, &str)] = &[
     ("conv3x3_rows", include_str!("../../../shaders/conv3x3_rows.wgsl")),
     ("conv3x3_mma", include_str!("../../../shaders/conv3x3_mma.wgsl")),
     ("conv3x3_mma_coop", include_str!("../../../shaders/conv3x3_mma_coop.wgsl")),
+    ("conv_common", include_str!("../../../shaders/conv_common.wgsl")),
     ("prep", include_str!("../../../shaders/prep.wgsl")),
     ("output", include_str!("../../../shaders/output.wgsl")),
     ("pool", include_str!("../../../shaders/pool.wgsl")),
@@ -170,9 +171,9 @@ pub const MMA_ENABLE: &str = "enable f16;";
 /// written (only `mma_emulated`: naga refuses cooperative matrix types in a module on a device
 /// without the feature).
 pub fn mma_source(matrix_units: bool) -> String {
-    let base = shader_source("conv3x3_mma");
+    let base = conv_module_source("conv3x3_mma");
     if !matrix_units {
-        return base.to_string();
+        return base;
     }
     assert!(base.contains(MMA_ENABLE), "conv3x3_mma.wgsl has kernels::MMA_ENABLE");
     format!("{}\n{}", base.replacen(MMA_ENABLE, "enable f16;\nenable wgpu_cooperative_matrix;", 1), shader_source("conv3x3_mma_coop"))
@@ -203,6 +204,14 @@ fn shader_module(device: &wgpu::Device, label: &str, source: String) -> wgpu::Sh
 /// Source text of a shader from [`SHADERS`].
 pub fn shader_source(name: &str) -> &'static str {
     SHADERS.iter().find(|(n, _)| *n == name).map(|(_, s)| *s).expect("shader is in the table")
+}
+
+/// A shader's text as a module is made of it: the two conv kernels (`conv3x3`, `conv3x3_mma`)
+/// with conv_common.wgsl appended (their shared parameters, bindings, reads and activation),
+/// any other as written.
+pub fn conv_module_source(name: &str) -> String {
+    let src = shader_source(name);
+    if ["conv3x3", "conv3x3_mma"].contains(&name) { format!("{src}\n{}", shader_source("conv_common")) } else { src.to_string() }
 }
 
 /// Channel blocks (texture layers) needed for `channels`.
@@ -481,7 +490,7 @@ impl Kernels {
     pub fn with_sources(device: &wgpu::Device, precision: Precision, memory: WeightMemory, sources: SourceAccess) -> Self {
         let matrix_units = matrix_units_supported(device);
         let source = |name: &str| {
-            let mut src = shader_source(name).to_string();
+            let mut src = conv_module_source(name);
             if sources == SourceAccess::Storage && name == "conv3x3" {
                 for (from, to) in STORAGE_SOURCES {
                     assert!(src.contains(from), "conv3x3.wgsl has {from}");
@@ -1032,6 +1041,30 @@ struct Group {
     count: u32,
 }
 
+/// Append a dispatch's two parameter blocks (normal frame, then reset frame, whose recurrent
+/// conv reads no hidden-state blocks), each at an `align`-byte offset; returns the offsets.
+fn push_params(params: &mut Vec<u8>, align: usize, s: &ConvSpec, ob0: u32, group_stride: u32) -> [u32; 2] {
+    let (cin4_a, cin4_b) = (blocks(s.ca), blocks(s.cb));
+    std::array::from_fn(|reset| {
+        let p = ConvParams {
+            width: s.width,
+            height: s.height,
+            cin4_a,
+            cin4_b: if reset == 1 && s.b_is_hidden { 0 } else { cin4_b },
+            cin4_total: cin4_a + cin4_b,
+            ob0,
+            cout4: blocks(s.cout),
+            slope: s.slope,
+            group_stride,
+            _pad: [0; 3],
+        };
+        params.resize(params.len().next_multiple_of(align), 0);
+        let at = params.len() as u32;
+        params.extend_from_slice(bytemuck::bytes_of(&p));
+        at
+    })
+}
+
 /// A planned convolution: its pipeline, workgroups and groups, and split-K's second pass.
 struct Planned {
     pipeline: wgpu::ComputePipeline,
@@ -1112,23 +1145,7 @@ impl ConvPlan {
                 let group_count = tiles16.div_ceil(nt);
                 binding = binding.max(group_count as u64 * stride as u64 * 2);
                 let mut group = Group { params: [0; 2], weights: 0, count: group_count };
-                for reset in 0..2 {
-                    let p = ConvParams {
-                        width: s.width,
-                        height: s.height,
-                        cin4_a,
-                        cin4_b: if reset == 1 && s.b_is_hidden { 0 } else { cin4_b },
-                        cin4_total: cin4,
-                        ob0: 0,
-                        cout4: blocks(s.cout),
-                        slope: s.slope,
-                        group_stride: stride,
-                        _pad: [0; 3],
-                    };
-                    params.resize(params.len().next_multiple_of(align), 0);
-                    group.params[reset] = params.len() as u32;
-                    params.extend_from_slice(bytemuck::bytes_of(&p));
-                }
+                group.params = push_params(&mut params, align, s, 0, stride);
                 weights.resize(weights.len().next_multiple_of(align), 0);
                 group.weights = weights.len() as u32;
                 for g in 0..group_count {
@@ -1188,23 +1205,7 @@ impl ConvPlan {
             for first in (0..group_count).step_by(per_dispatch as usize) {
                 let count = per_dispatch.min(group_count - first);
                 let mut group = Group { params: [0; 2], weights: 0, count };
-                for reset in 0..2 {
-                    let p = ConvParams {
-                        width: s.width,
-                        height: s.height,
-                        cin4_a,
-                        cin4_b: if reset == 1 && s.b_is_hidden { 0 } else { cin4_b },
-                        cin4_total: cin4,
-                        ob0: first * ob,
-                        cout4,
-                        slope: s.slope,
-                        group_stride: stride,
-                        _pad: [0; 3],
-                    };
-                    params.resize(params.len().next_multiple_of(align), 0);
-                    group.params[reset] = params.len() as u32;
-                    params.extend_from_slice(bytemuck::bytes_of(&p));
-                }
+                group.params = push_params(&mut params, align, s, first * ob, stride);
                 weights.resize(weights.len().next_multiple_of(align), 0);
                 group.weights = weights.len() as u32;
                 for g in first..first + count {

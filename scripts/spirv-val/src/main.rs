@@ -6,7 +6,7 @@
 //! overrides set, and each entry point written as SPIR-V 1.3 and validated for Vulkan 1.3.
 //! Exits non-zero on the first invalid module.
 
-use rae_core::kernels::{SHADERS, STORAGE_SOURCES, mma_source};
+use rae_core::kernels::{SHADERS, STORAGE_SOURCES, conv_module_source, mma_source};
 use spirv_tools::val::Validator;
 
 /// Drop the ArrayStride decorations of sized arrays outside structs: naga puts them on
@@ -40,11 +40,11 @@ fn strip_array_strides(w: Vec<u32>) -> Vec<u32> {
 
 fn main() {
     let mut modules: Vec<(String, String, Vec<(&str, f64)>)> = Vec::new();
-    for (name, src) in SHADERS {
-        if ["conv3x3_rows", "conv3x3_mma", "conv3x3_mma_coop"].contains(name) {
+    for (name, _) in SHADERS {
+        if ["conv3x3_rows", "conv3x3_mma", "conv3x3_mma_coop", "conv_common"].contains(name) {
             continue;
         }
-        modules.push((name.to_string(), src.to_string(), vec![]));
+        modules.push((name.to_string(), conv_module_source(name), vec![]));
     }
     for f16 in [false, true] {
         for storage in [false, true] {

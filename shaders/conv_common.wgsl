@@ -1,0 +1,79 @@
+// What both conv kernels (conv3x3.wgsl and conv3x3_mma.wgsl) share, appended to each by
+// kernels::conv_module_source: the parameter block and the bindings other than the weights,
+// the read modes and how a source is read, and the store's activation.
+
+// How a source is read at output pixel (x, y).
+const READ_DIRECT: u32 = 0u;        // src[x, y]
+const READ_POOL: u32 = 1u;          // max of src[2x + i, 2y + j]          (src at 2x resolution)
+const READ_UPSAMPLE: u32 = 2u;      // src[x / 2, y / 2]                   (src at 1/2 resolution)
+const READ_POOL_UPSAMPLE: u32 = 3u; // upsample(pool(src)): max of the 2x2 block holding (x, y)
+
+override MODE_A: u32 = 0u;
+override MODE_B: u32 = 0u;
+override LEAKY: bool = true;
+// The conv reads a source b (a concatenation). Half the convs read one source: without the
+// second input-block loop their kernels carry half the multiply-add code, which lavapipe
+// compiles with LLVM at the first dispatch (the sample's cold first frame 0.84x of the time
+// with the loop everywhere); run time is unchanged (docs/PERF.md, session 8).
+override SOURCE_B: bool = true;
+// Largest magnitude stored: f32::MAX for f32 activations, 65504 for f16 (no infinities).
+override STORE_MAX: f32 = 3.4028234e38;
+
+// One per (dispatch, reset): kernels::ConvParams.
+struct Params {
+    width: u32,       // output (= convolution) resolution
+    height: u32,
+    cin4_a: u32,      // channel blocks read from a
+    cin4_b: u32,      // channel blocks read from b (0: no b, or a zeroed hidden state)
+    cin4_total: u32,  // input blocks in the weight layout (a + b)
+    ob0: u32,         // first output block (texture layer) of the group at z = 0
+    cout4: u32,       // output blocks of the conv
+    slope: f32,       // LeakyReLU negative slope
+    group_stride: u32,// vec4s from one group's weights to the next (group z at z * group_stride)
+}
+
+// The conv's bindings but its weights (binding 3, declared by each kernel).
+@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(1) var src_a: Source;
+@group(0) @binding(2) var src_b: Source;
+@group(0) @binding(4) var dst: texture_storage_2d_array<rgba32float, write>;
+
+// The sources' texture type: sampled textures read at level 0 (GPUs), or read-only storage
+// textures on CPU drivers (kernels::SourceAccess; Kernels::new rewrites this alias and `load`,
+// kernels::STORAGE_SOURCES), where lavapipe's storage-image load skips the sampler's per-lane
+// mip-level set-up.
+alias Source = texture_2d_array<f32>;
+
+// One texel of a source.
+fn load(t: Source, p: vec2<i32>, layer: u32) -> vec4<f32> {
+    return textureLoad(t, p, layer, 0);
+}
+
+fn max4(t: Source, p: vec2<i32>, layer: u32) -> vec4<f32> {
+    let a = load(t, p, layer);
+    let b = load(t, p + vec2<i32>(1, 0), layer);
+    let c = load(t, p + vec2<i32>(0, 1), layer);
+    let d = load(t, p + vec2<i32>(1, 1), layer);
+    return max(max(a, b), max(c, d));
+}
+
+// One channel block of a source at output-resolution pixel (x, y); zero outside (padding 1).
+fn fetch(t: Source, mode: u32, x: i32, y: i32, layer: u32) -> vec4<f32> {
+    if x < 0 || y < 0 || x >= i32(params.width) || y >= i32(params.height) {
+        return vec4<f32>(0.0);
+    }
+    switch mode {
+        case READ_POOL: { return max4(t, vec2<i32>(2 * x, 2 * y), layer); }
+        case READ_UPSAMPLE: { return load(t, vec2<i32>(x >> 1u, y >> 1u), layer); }
+        case READ_POOL_UPSAMPLE: { return max4(t, vec2<i32>(x & ~1, y & ~1), layer); }
+        default: { return load(t, vec2<i32>(x, y), layer); }
+    }
+}
+
+fn activate(v: vec4<f32>) -> vec4<f32> {
+    var a = v;
+    if LEAKY {
+        a = select(v * params.slope, v, v >= vec4<f32>(0.0));
+    }
+    return clamp(a, vec4<f32>(-STORE_MAX), vec4<f32>(STORE_MAX));
+}
