@@ -673,44 +673,36 @@ impl Kernels {
 
     /// Create one conv pipeline (its module made by [`Kernels::prepare`]).
     fn create_conv(&self, device: &wgpu::Device, v: ConvVariant) -> wgpu::ComputePipeline {
-        if v.method == Method::Mma {
-            let constants = [
-                ("MODE_A", v.read_a as u32 as f64),
-                ("MODE_B", v.read_b as u32 as f64),
-                ("SOURCE_B", if v.source_b { 1.0 } else { 0.0 }),
-                ("LEAKY", if v.leaky { 1.0 } else { 0.0 }),
-                ("NT", v.ob as f64),
-                ("STORE_MAX", self.precision.store_max() as f64),
-            ];
-            return device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some("conv3x3_mma"),
-                layout: Some(&self.conv_pipeline_layout),
-                module: self.mma_module.as_ref().expect("made by prepare"),
-                entry_point: Some(if self.matrix_units { "mma" } else { "mma_emulated" }),
-                compilation_options: wgpu::PipelineCompilationOptions { constants: &constants, zero_initialize_workgroup_memory: false },
-                cache: None,
-            });
-        }
-        let module = if v.runs_rows() { self.conv_rows_module.as_ref().expect("made by prepare") } else { &self.conv_module };
-        let constants = [
+        // conv_common.wgsl's overrides, then the kernel's own.
+        let mut constants = vec![
             ("MODE_A", v.read_a as u32 as f64),
             ("MODE_B", v.read_b as u32 as f64),
             ("SOURCE_B", if v.source_b { 1.0 } else { 0.0 }),
             ("LEAKY", if v.leaky { 1.0 } else { 0.0 }),
-            ("OB", v.ob as f64),
-            ("ROWS", v.rows as f64),
-            ("TW", v.cols as f64),
-            ("WG_X", v.group_x as f64),
-            ("WG_Y", (64 / v.group_x) as f64),
-            ("SPLIT", v.split as f64),
-            ("LANES", if v.method == Method::Lanes { 1.0 } else { 0.0 }),
             ("STORE_MAX", self.precision.store_max() as f64),
         ];
+        let (label, module, entry) = if v.method == Method::Mma {
+            constants.push(("NT", v.ob as f64));
+            let entry = if self.matrix_units { v.method.entry_point() } else { "mma_emulated" };
+            ("conv3x3_mma", self.mma_module.as_ref().expect("made by prepare"), entry)
+        } else {
+            constants.extend([
+                ("OB", v.ob as f64),
+                ("ROWS", v.rows as f64),
+                ("TW", v.cols as f64),
+                ("WG_X", v.group_x as f64),
+                ("WG_Y", (64 / v.group_x) as f64),
+                ("SPLIT", v.split as f64),
+                ("LANES", if v.method == Method::Lanes { 1.0 } else { 0.0 }),
+            ]);
+            let module = if v.runs_rows() { self.conv_rows_module.as_ref().expect("made by prepare") } else { &self.conv_module };
+            ("conv3x3", module, if v.reduce { "reduce" } else { v.method.entry_point() })
+        };
         device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("conv3x3"),
+            label: Some(label),
             layout: Some(&self.conv_pipeline_layout),
             module,
-            entry_point: Some(if v.reduce { "reduce" } else { v.method.entry_point() }),
+            entry_point: Some(entry),
             compilation_options: wgpu::PipelineCompilationOptions { constants: &constants, zero_initialize_workgroup_memory: false },
             cache: None,
         })
