@@ -23,13 +23,27 @@
 // are exact in f32 and summed in f32. In f32 storage this is a TF32-like mode (10-bit
 // mantissas in, f32 sums), not f32 arithmetic; kernels::Tile::mma documents it.
 //
+// Split operands (entry points `mma_split` and `mma_split_emulated`, kernels::Tile::mma_split):
+// each operand x is also carried as its scaled remainder lo(x) = f16((x - hi(x)) * LO_SCALE),
+// hi(x) = f16(x), and each pair is multiplied three times: a * b ~ hi(a) hi(b) + (hi(a) lo(b) +
+// lo(a) hi(b)) / LO_SCALE, the dropped lo(a) lo(b) being 2^-22 of the product. That is 22-bit
+// operands, f32-class results at three times the products. The remainder is scaled by 2^11 so
+// that it stays a normal f16 (an unscaled remainder of a value under 0.125 would be subnormal,
+// which devices may flush), and the scaled products sum in accumulators of their own, divided
+// (exactly, a power of two) when the two meet at the store. With f16 activations (SPLIT_A
+// false) the activations are exact in f16 and only the weights are split: two products.
+//
 // The parameter block, the sources and the output, the read modes, `fetch` and `activate` are
 // conv_common.wgsl's, appended by kernels::conv_module_source.
 
 enable f16;
 
-// 16-channel output tiles per workgroup: 1 to 4.
+// 16-channel output tiles per workgroup: 1 to 4 (1 or 2 for the split entry points).
 override NT: u32 = 2u;
+// Split entry points: the weights carry their remainders (after all the hi tiles, before the
+// bias), and with SPLIT_A the activations too (f32 storage; f16 activations have none).
+override SPLIT: bool = false;
+override SPLIT_A: bool = true;
 
 // Pixels per subgroup row (4 tiles of 16), rows per workgroup (one per subgroup), and the
 // staged window: (ROWS + 2) x (PIXELS + 2) pixels of 16 channels.
@@ -41,12 +55,15 @@ const WIN_H: u32 = 6u;
 const WIN_TEXELS: u32 = 1584u;
 // Elements of one 16 x 16 tile.
 const TILE: u32 = 256u;
+// Scale of a split operand's remainder (2^11: one f16 mantissa).
+const LO_SCALE: f32 = 2048.0;
 
 // Weights of group z (16 * NT output channels from 4 * params.ob0 + z * 16 * NT), f16 from
 // w = z * group_stride: for chunk c (input blocks 4c .. 4c + 3) and tap t = ky * 3 + kx, NT
 // tiles of 16 x 16 at w + ((c * 9 + t) * NT + nt) * 256, row k (input channel 16c + k, in the
-// order of kernels::pack_group's blocks) and column n (output channel); then the bias as two
-// f16 halves, hi and lo (hi + lo is the f32 bias to 22 bits): 16 * NT hi, then 16 * NT lo.
+// order of kernels::pack_group's blocks) and column n (output channel); with SPLIT, the same
+// tiles again as scaled remainders (`lo_tiles` further on); then the bias as two f16 halves,
+// hi and lo (hi + lo is the f32 bias to 22 bits): 16 * NT hi, then 16 * NT lo.
 @group(0) @binding(3) var<storage, read> weights: array<f16>;
 
 // The input window of one chunk, [row][column][channel]; an A tile of pixels p .. p + 15 of a
@@ -54,35 +71,70 @@ const TILE: u32 = 256u;
 var<workgroup> win: array<f16, 6336>;
 // One 16 x 16 f32 accumulator per subgroup on its way to the output, row-major.
 var<workgroup> stage: array<f32, 1024>;
+// The split entry points' remainders of `win` (scaled by LO_SCALE). The other entry points do
+// not touch it, so their workgroups do not pay for it.
+var<workgroup> win_lo: array<f16, 6336>;
 
 // Chunks of 16 input channels (4 blocks; the last one padded with zero weights).
 fn chunks() -> u32 {
     return (params.cin4_total + 3u) / 4u;
 }
 
-// Stage chunk c of the window whose top-left output pixel is (x0, y0): input block 4c + j at
-// window pixel (r, q) is the source texel at (x0 + q - 1, y0 + r - 1). Blocks past cin4_a +
-// cin4_b (padding, or a reset frame's hidden state) are zero.
+// Texel i (< WIN_TEXELS) of chunk c's window whose top-left output pixel is (x0, y0), clamped
+// to f16's range: input block 4c + j (j = i % 4) at window pixel (r, q) is the source texel at
+// (x0 + q - 1, y0 + r - 1). Blocks past cin4_a + cin4_b (padding, or a reset frame's hidden
+// state) are zero. It goes to `win` at win_at(i).
+fn window_texel(i: u32, c: u32, x0: u32, y0: u32) -> vec4<f32> {
+    let j = i % 4u;
+    let pixel = i / 4u;
+    let x = i32(x0 + pixel % WIN_W) - 1;
+    let y = i32(y0 + pixel / WIN_W) - 1;
+    let ib = 4u * c + j;
+    var v = vec4<f32>(0.0);
+    if ib < params.cin4_a {
+        v = fetch(src_a, MODE_A, x, y, ib);
+    } else if SOURCE_B && ib < params.cin4_a + params.cin4_b {
+        v = fetch(src_b, MODE_B, x, y, ib - params.cin4_a);
+    }
+    // f16 has no room past 65504: clamp rather than overflow to infinity.
+    return clamp(v, vec4<f32>(-65504.0), vec4<f32>(65504.0));
+}
+
+// Where texel i of the window goes in `win`: pixel i / 4, channels 4 (i % 4) .. + 3.
+fn win_at(i: u32) -> u32 {
+    return (i / 4u) * 16u + 4u * (i % 4u);
+}
+
+// Stage chunk c of the window whose top-left output pixel is (x0, y0) into `win`.
 fn stage_chunk(li: u32, c: u32, x0: u32, y0: u32) {
     for (var i = li; i < WIN_TEXELS; i += 128u) {
-        let j = i % 4u;
-        let pixel = i / 4u;
-        let x = i32(x0 + pixel % WIN_W) - 1;
-        let y = i32(y0 + pixel / WIN_W) - 1;
-        let ib = 4u * c + j;
-        var v = vec4<f32>(0.0);
-        if ib < params.cin4_a {
-            v = fetch(src_a, MODE_A, x, y, ib);
-        } else if SOURCE_B && ib < params.cin4_a + params.cin4_b {
-            v = fetch(src_b, MODE_B, x, y, ib - params.cin4_a);
-        }
-        // f16 has no room past 65504: clamp rather than overflow to infinity.
-        let h = vec4<f16>(clamp(v, vec4<f32>(-65504.0), vec4<f32>(65504.0)));
-        let o = pixel * 16u + 4u * j;
+        let h = vec4<f16>(window_texel(i, c, x0, y0));
+        let o = win_at(i);
         win[o] = h.x;
         win[o + 1u] = h.y;
         win[o + 2u] = h.z;
         win[o + 3u] = h.w;
+    }
+}
+
+// Stage chunk c as `stage_chunk` does, and with SPLIT_A each value's scaled remainder into
+// `win_lo`.
+fn stage_chunk_split(li: u32, c: u32, x0: u32, y0: u32) {
+    for (var i = li; i < WIN_TEXELS; i += 128u) {
+        let v = window_texel(i, c, x0, y0);
+        let h = vec4<f16>(v);
+        let o = win_at(i);
+        win[o] = h.x;
+        win[o + 1u] = h.y;
+        win[o + 2u] = h.z;
+        win[o + 3u] = h.w;
+        if SPLIT_A {
+            let l = vec4<f16>((v - vec4<f32>(h)) * LO_SCALE);
+            win_lo[o] = l.x;
+            win_lo[o + 1u] = l.y;
+            win_lo[o + 2u] = l.z;
+            win_lo[o + 3u] = l.w;
+        }
     }
 }
 
@@ -97,12 +149,17 @@ fn b_at(w: u32, c: u32, t: u32, nt: u32) -> u32 {
     return w + ((c * 9u + t) * NT + nt) * TILE;
 }
 
+// Elements from a weight tile to its scaled remainder (SPLIT): one set of tiles.
+fn lo_tiles() -> u32 {
+    return chunks() * 9u * NT * TILE;
+}
+
 // Store the accumulator subgroup sg left in `stage` (tile mt, nt): 16 pixels x 4 blocks, two
 // texels per lane, each with its bias, activated; pixels past the level's edge and blocks past
 // the conv's outputs are dropped. z is the workgroup's group.
 fn emit(sg: u32, lane: u32, mt: u32, nt: u32, x0: u32, y0: u32, z: u32) {
     let y = y0 + sg;
-    let bias_at = z * params.group_stride + chunks() * 9u * NT * TILE;
+    let bias_at = z * params.group_stride + select(1u, 2u, SPLIT) * lo_tiles();
     for (var k = lane; k < 64u; k += 32u) {
         let p = k / 4u;
         let j = k % 4u;
@@ -181,6 +238,83 @@ fn mma_emulated(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_
             stage[s + 9u] = hi.y;
             stage[s + 10u] = hi.z;
             stage[s + 11u] = hi.w;
+            workgroupBarrier();
+            emit(sg, lane, mt, nt, x0, y0, wg.z);
+        }
+    }
+}
+
+// ---- Emulated split products: entry point `mma_split_emulated` ----
+
+// `mma_emulated` with split operands (NT <= 2): lane `lane` holds the same elements of the
+// 4 * NT main accumulators at acc[(mt * NT + nt) * 2 ..] and of the remainders' products at
+// acc[16 + (mt * NT + nt) * 2 ..]; the two meet before the store as `mma_split`'s do.
+@compute @workgroup_size(128, 1, 1)
+fn mma_split_emulated(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
+    let x0 = wg.x * PIXELS;
+    let y0 = wg.y * ROWS;
+    let w = wg.z * params.group_stride;
+    let sg = li / 32u;
+    let lane = li % 32u;
+    let p = lane % 16u;
+    let n = 4u * (lane / 16u);
+    var acc: array<vec4<f32>, 32>;
+    for (var i = 0u; i < 32u; i++) {
+        acc[i] = vec4<f32>(0.0);
+    }
+    for (var c = 0u; c < chunks(); c++) {
+        // The previous chunk's products are done before its window is overwritten.
+        workgroupBarrier();
+        stage_chunk_split(li, c, x0, y0);
+        workgroupBarrier();
+        for (var t = 0u; t < 9u; t++) {
+            for (var mt = 0u; mt < 4u; mt++) {
+                let row = a_at(sg, mt, t / 3u, t % 3u) + p * 16u;
+                for (var nt = 0u; nt < NT; nt++) {
+                    let b = b_at(w, c, t, nt);
+                    let i = (mt * NT + nt) * 2u;
+                    var m0 = acc[i];
+                    var m8 = acc[i + 1u];
+                    var r0 = acc[16u + i];
+                    var r8 = acc[17u + i];
+                    for (var k = 0u; k < 16u; k++) {
+                        let a = vec4<f32>(f32(win[row + k]));
+                        let b0 = b_row4(b, k, n);
+                        let b8 = b_row4(b, k, n + 8u);
+                        m0 = fma(a, b0, m0);
+                        m8 = fma(a, b8, m8);
+                        // The remainders' products: hi(a) lo(b), and lo(a) hi(b) with SPLIT_A.
+                        r0 = fma(a, b_row4(b + lo_tiles(), k, n), r0);
+                        r8 = fma(a, b_row4(b + lo_tiles(), k, n + 8u), r8);
+                        if SPLIT_A {
+                            let l = vec4<f32>(f32(win_lo[row + k]));
+                            r0 = fma(l, b0, r0);
+                            r8 = fma(l, b8, r8);
+                        }
+                    }
+                    acc[i] = m0;
+                    acc[i + 1u] = m8;
+                    acc[16u + i] = r0;
+                    acc[17u + i] = r8;
+                }
+            }
+        }
+    }
+    for (var mt = 0u; mt < 4u; mt++) {
+        for (var nt = 0u; nt < NT; nt++) {
+            workgroupBarrier();
+            let s = sg * TILE + p * 16u + n;
+            let i = (mt * NT + nt) * 2u;
+            let v0 = acc[i] + acc[16u + i] * (1.0 / LO_SCALE);
+            let v8 = acc[i + 1u] + acc[17u + i] * (1.0 / LO_SCALE);
+            stage[s] = v0.x;
+            stage[s + 1u] = v0.y;
+            stage[s + 2u] = v0.z;
+            stage[s + 3u] = v0.w;
+            stage[s + 8u] = v8.x;
+            stage[s + 9u] = v8.y;
+            stage[s + 10u] = v8.z;
+            stage[s + 11u] = v8.w;
             workgroupBarrier();
             emit(sg, lane, mt, nt, x0, y0, wg.z);
         }

@@ -1,9 +1,9 @@
-// ---- Cooperative matrices: entry point `mma` ----
+// ---- Cooperative matrices: entry points `mma` and `mma_split` ----
 //
 // Appended to conv3x3_mma.wgsl by kernels::Kernels where the device has 16 x 16 x 16
 // f16 -> f32 cooperative matrices and subgroups of 32 lanes (with `enable
 // wgpu_cooperative_matrix;` added to the module's enables; kernels::matrix_units_supported):
-// `mma_emulated`'s products in the matrix units. Subgroup sg is invocations 32 sg .. 32 sg + 31
+// `mma_emulated`'s and `mma_split_emulated`'s products in the matrix units. Subgroup sg is invocations 32 sg .. 32 sg + 31
 // of the one-dimensional workgroup, so sg is uniform over each subgroup, as the cooperative
 // operations need. The accumulators are named, not an array, so that no driver has to prove
 // an index constant to keep them in registers; tiles past NT sit behind `if NT > n`, which the
@@ -135,5 +135,182 @@ fn mma(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li
         coopStoreT(c33, &stage[sg * TILE], 16u);
         workgroupBarrier();
         emit(sg, lane, 3u, 3u, x0, y0, wg.z);
+    }
+}
+
+// ---- Split operands in matrix units: entry point `mma_split` ----
+//
+// `mma_split_emulated`'s products in the matrix units (NT 1 or 2): accumulator (mt, nt) is
+// c<mt><nt> for the hi products and d<mt><nt> for the remainders' (hi(a) lo(b), and lo(a)
+// hi(b) with SPLIT_A). At the store each pair meets in `stage` as hi + rest / LO_SCALE, as in
+// the emulation: the rest goes through `stage` first and each lane keeps the 8 elements it
+// will add, so the split kernel needs no second stage (its workgroup memory stays under
+// 32 KiB, kernels::MMA_SPLIT_WORKGROUP_BYTES).
+
+// The 8 elements of subgroup sg's accumulator in `stage` that lane `lane` joins: lane + 32 i.
+fn rest_of(sg: u32, lane: u32) -> array<f32, 8> {
+    var r: array<f32, 8>;
+    for (var i = 0u; i < 8u; i++) {
+        r[i] = stage[sg * TILE + lane + 32u * i];
+    }
+    return r;
+}
+
+// Add the rest `r` (from `rest_of`) to subgroup sg's accumulator in `stage`.
+fn join_rest(sg: u32, lane: u32, r: array<f32, 8>) {
+    for (var i = 0u; i < 8u; i++) {
+        stage[sg * TILE + lane + 32u * i] += r[i] * (1.0 / LO_SCALE);
+    }
+}
+
+@compute @workgroup_size(128, 1, 1)
+fn mma_split(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
+    let x0 = wg.x * PIXELS;
+    let y0 = wg.y * ROWS;
+    let w = wg.z * params.group_stride;
+    let sg = li / 32u;
+    let lane = li % 32u;
+    // Accumulators (mt, nt): pixels 16 mt .. 16 mt + 15 of row y0 + sg x output tile nt.
+    var c00 = Acc(); var c01 = Acc(); var c10 = Acc(); var c11 = Acc();
+    var c20 = Acc(); var c21 = Acc(); var c30 = Acc(); var c31 = Acc();
+    var d00 = Acc(); var d01 = Acc(); var d10 = Acc(); var d11 = Acc();
+    var d20 = Acc(); var d21 = Acc(); var d30 = Acc(); var d31 = Acc();
+    for (var c = 0u; c < chunks(); c++) {
+        // The previous chunk's products are done before its window is overwritten.
+        workgroupBarrier();
+        stage_chunk_split(li, c, x0, y0);
+        workgroupBarrier();
+        for (var t = 0u; t < 9u; t++) {
+            let ky = t / 3u;
+            let kx = t % 3u;
+            let a0 = coopLoadT<TileA>(&win[a_at(sg, 0u, ky, kx)], 16u);
+            let a1 = coopLoadT<TileA>(&win[a_at(sg, 1u, ky, kx)], 16u);
+            let a2 = coopLoadT<TileA>(&win[a_at(sg, 2u, ky, kx)], 16u);
+            let a3 = coopLoadT<TileA>(&win[a_at(sg, 3u, ky, kx)], 16u);
+            var l0 = TileA(); var l1 = TileA(); var l2 = TileA(); var l3 = TileA();
+            if SPLIT_A {
+                l0 = coopLoadT<TileA>(&win_lo[a_at(sg, 0u, ky, kx)], 16u);
+                l1 = coopLoadT<TileA>(&win_lo[a_at(sg, 1u, ky, kx)], 16u);
+                l2 = coopLoadT<TileA>(&win_lo[a_at(sg, 2u, ky, kx)], 16u);
+                l3 = coopLoadT<TileA>(&win_lo[a_at(sg, 3u, ky, kx)], 16u);
+            }
+            let b0 = coopLoadT<TileB>(&weights[b_at(w, c, t, 0u)], 16u);
+            let e0 = coopLoadT<TileB>(&weights[b_at(w, c, t, 0u) + lo_tiles()], 16u);
+            c00 = coopMultiplyAdd(a0, b0, c00);
+            c10 = coopMultiplyAdd(a1, b0, c10);
+            c20 = coopMultiplyAdd(a2, b0, c20);
+            c30 = coopMultiplyAdd(a3, b0, c30);
+            d00 = coopMultiplyAdd(a0, e0, d00);
+            d10 = coopMultiplyAdd(a1, e0, d10);
+            d20 = coopMultiplyAdd(a2, e0, d20);
+            d30 = coopMultiplyAdd(a3, e0, d30);
+            if SPLIT_A {
+                d00 = coopMultiplyAdd(l0, b0, d00);
+                d10 = coopMultiplyAdd(l1, b0, d10);
+                d20 = coopMultiplyAdd(l2, b0, d20);
+                d30 = coopMultiplyAdd(l3, b0, d30);
+            }
+            if NT > 1u {
+                let b1 = coopLoadT<TileB>(&weights[b_at(w, c, t, 1u)], 16u);
+                let e1 = coopLoadT<TileB>(&weights[b_at(w, c, t, 1u) + lo_tiles()], 16u);
+                c01 = coopMultiplyAdd(a0, b1, c01);
+                c11 = coopMultiplyAdd(a1, b1, c11);
+                c21 = coopMultiplyAdd(a2, b1, c21);
+                c31 = coopMultiplyAdd(a3, b1, c31);
+                d01 = coopMultiplyAdd(a0, e1, d01);
+                d11 = coopMultiplyAdd(a1, e1, d11);
+                d21 = coopMultiplyAdd(a2, e1, d21);
+                d31 = coopMultiplyAdd(a3, e1, d31);
+                if SPLIT_A {
+                    d01 = coopMultiplyAdd(l0, b1, d01);
+                    d11 = coopMultiplyAdd(l1, b1, d11);
+                    d21 = coopMultiplyAdd(l2, b1, d21);
+                    d31 = coopMultiplyAdd(l3, b1, d31);
+                }
+            }
+        }
+    }
+    // Each pair of accumulators joined in `stage`, to the output.
+    workgroupBarrier();
+    coopStoreT(d00, &stage[sg * TILE], 16u);
+    workgroupBarrier();
+    let r00 = rest_of(sg, lane);
+    workgroupBarrier();
+    coopStoreT(c00, &stage[sg * TILE], 16u);
+    workgroupBarrier();
+    join_rest(sg, lane, r00);
+    workgroupBarrier();
+    emit(sg, lane, 0u, 0u, x0, y0, wg.z);
+    workgroupBarrier();
+    coopStoreT(d10, &stage[sg * TILE], 16u);
+    workgroupBarrier();
+    let r10 = rest_of(sg, lane);
+    workgroupBarrier();
+    coopStoreT(c10, &stage[sg * TILE], 16u);
+    workgroupBarrier();
+    join_rest(sg, lane, r10);
+    workgroupBarrier();
+    emit(sg, lane, 1u, 0u, x0, y0, wg.z);
+    workgroupBarrier();
+    coopStoreT(d20, &stage[sg * TILE], 16u);
+    workgroupBarrier();
+    let r20 = rest_of(sg, lane);
+    workgroupBarrier();
+    coopStoreT(c20, &stage[sg * TILE], 16u);
+    workgroupBarrier();
+    join_rest(sg, lane, r20);
+    workgroupBarrier();
+    emit(sg, lane, 2u, 0u, x0, y0, wg.z);
+    workgroupBarrier();
+    coopStoreT(d30, &stage[sg * TILE], 16u);
+    workgroupBarrier();
+    let r30 = rest_of(sg, lane);
+    workgroupBarrier();
+    coopStoreT(c30, &stage[sg * TILE], 16u);
+    workgroupBarrier();
+    join_rest(sg, lane, r30);
+    workgroupBarrier();
+    emit(sg, lane, 3u, 0u, x0, y0, wg.z);
+    if NT > 1u {
+        workgroupBarrier();
+        coopStoreT(d01, &stage[sg * TILE], 16u);
+        workgroupBarrier();
+        let r01 = rest_of(sg, lane);
+        workgroupBarrier();
+        coopStoreT(c01, &stage[sg * TILE], 16u);
+        workgroupBarrier();
+        join_rest(sg, lane, r01);
+        workgroupBarrier();
+        emit(sg, lane, 0u, 1u, x0, y0, wg.z);
+        workgroupBarrier();
+        coopStoreT(d11, &stage[sg * TILE], 16u);
+        workgroupBarrier();
+        let r11 = rest_of(sg, lane);
+        workgroupBarrier();
+        coopStoreT(c11, &stage[sg * TILE], 16u);
+        workgroupBarrier();
+        join_rest(sg, lane, r11);
+        workgroupBarrier();
+        emit(sg, lane, 1u, 1u, x0, y0, wg.z);
+        workgroupBarrier();
+        coopStoreT(d21, &stage[sg * TILE], 16u);
+        workgroupBarrier();
+        let r21 = rest_of(sg, lane);
+        workgroupBarrier();
+        coopStoreT(c21, &stage[sg * TILE], 16u);
+        workgroupBarrier();
+        join_rest(sg, lane, r21);
+        workgroupBarrier();
+        emit(sg, lane, 2u, 1u, x0, y0, wg.z);
+        workgroupBarrier();
+        coopStoreT(d31, &stage[sg * TILE], 16u);
+        workgroupBarrier();
+        let r31 = rest_of(sg, lane);
+        workgroupBarrier();
+        coopStoreT(c31, &stage[sg * TILE], 16u);
+        workgroupBarrier();
+        join_rest(sg, lane, r31);
+        workgroupBarrier();
+        emit(sg, lane, 3u, 1u, x0, y0, wg.z);
     }
 }

@@ -120,8 +120,10 @@ enum Command {
         /// `denoise` uses). `mma16`, `mma32`, `mma48`, `mma64`: the matrix-unit kernel (f16
         /// products summed in f32, 16 to 64 output channels per workgroup; tensor cores where
         /// wgpu's cooperative matrices have 16x16x16 f16 -> f32, emulated and slow elsewhere;
-        /// storage weights and SHADER_F16), `tuned-mma`: `tuned` with those among the candidates
-        /// where the device has matrix units.
+        /// storage weights and SHADER_F16); `mma16x3`, `mma32x3`: the same with every operand
+        /// split into two f16 halves and three products (f32-class results); `tuned-mma`:
+        /// `tuned` with the split tiles (f32) or the plain ones (f16) among the candidates where
+        /// the device has matrix units.
         #[arg(long, value_delimiter = ',', default_value = "auto")]
         tile: Vec<String>,
         /// Where the convs read weights: `uniform` (64 KiB chunks), `storage` (one buffer, a
@@ -168,12 +170,11 @@ fn parse_tile(s: &str) -> Result<TileChoice> {
         _ => {}
     }
     if let Some(channels) = s.strip_prefix("mma") {
-        return channels
-            .parse()
-            .ok()
-            .and_then(Tile::mma)
-            .map(TileChoice::Fixed)
-            .with_context(|| format!("tile `{s}`: matrix-unit tiles are mma16, mma32, mma48 or mma64 (output channels per workgroup)"));
+        let tile = match channels.strip_suffix("x3") {
+            Some(split) => split.parse().ok().and_then(Tile::mma_split),
+            None => channels.parse().ok().and_then(Tile::mma),
+        };
+        return tile.map(TileChoice::Fixed).with_context(|| format!("tile `{s}`: matrix-unit tiles are mma16, mma32, mma48 or mma64 (output channels per workgroup), or split mma16x3 or mma32x3"));
     }
     let bad = || format!("tile `{s}` is not [wino|lanes]ROWSxBLOCKS[wCOLS][gGROUPX][kSPLIT], tuned or auto");
     let (winograd, s2) = s.strip_prefix("wino").map_or((false, s), |r| (true, r));
@@ -526,7 +527,7 @@ fn devices() -> Result<()> {
             println!("    cooperative matrix {}x{}x{} {:?} -> {:?}", m.m_size, m.n_size, m.k_size, m.ab_type, m.cr_type);
         }
         if rae_core::gpu::has_matrix_units(&a) {
-            println!("    matrix units: mma tiles run on them (--tile mma32, tuned-mma)");
+            println!("    matrix units: mma tiles run on them (--tile mma32, mma32x3, tuned-mma)");
         }
     }
     Ok(())

@@ -35,7 +35,7 @@ use std::time::Instant;
 use crate::error::{Error, Result};
 use crate::frame::{FrameInputs, FrameTimings};
 use crate::graph::{Graph, Read, Value};
-use crate::kernels::{ConvPlan, ConvSpec, Kernels, Method, OutputParams, PrepParams, Precision, SourceAccess, Tile, WORKGROUP, WeightMemory, blocks};
+use crate::kernels::{ConvPlan, ConvSpec, Kernels, MMA_SPLIT_WORKGROUP_BYTES, Method, OutputParams, PrepParams, Precision, SourceAccess, Tile, WORKGROUP, WeightMemory, blocks};
 use crate::model::{Arch, InputBuffer, Transfer};
 use crate::weights::Weights;
 
@@ -128,20 +128,30 @@ pub enum TileChoice {
     Tuned,
     /// [`TileChoice::Tuned`] among these candidates only (fewer pipelines to compile).
     TunedAmong(&'static [Tile]),
-    /// [`TileChoice::Tuned`] with the matrix-unit tiles [`MMA_TILES`] among the candidates
-    /// where the device has matrix units ([`crate::kernels::matrix_units_supported`]) and the
-    /// weights are in a storage buffer: convs that pick one compute f16 products summed in f32
-    /// ([`Tile::mma`]). Opt-in: never what [`TileChoice::Auto`] picks.
+    /// [`TileChoice::Tuned`] with matrix-unit tiles among the candidates where the device has
+    /// matrix units ([`crate::kernels::matrix_units_supported`]) and the weights are in a
+    /// storage buffer, those that keep the precision's accuracy: with f32 activations the split
+    /// tiles [`MMA_SPLIT_TILES`] (f32-class results, [`Tile::mma_split`]), with f16 ones
+    /// [`MMA_TILES`] (f16 products summed in f32, [`Tile::mma`]). Opt-in: never what
+    /// [`TileChoice::Auto`] picks. The TF32-like plain tiles with f32 activations are fixed
+    /// tiles only (`Fixed(Tile::mma(32))`).
     TunedMma,
 }
 
-/// The matrix-unit tiles [`TileChoice::TunedMma`] adds to [`TUNE_TILES`]: 16 to 64 output
-/// channels per workgroup.
+/// The matrix-unit tiles [`TileChoice::TunedMma`] adds to [`TUNE_TILES`] with f16 activations:
+/// 16 to 64 output channels per workgroup.
 pub const MMA_TILES: [Tile; 4] = [
     Tile { rows: 4, blocks: 4, cols: 1, group_x: 8, method: Method::Mma, split: 1 },
     Tile { rows: 4, blocks: 8, cols: 1, group_x: 8, method: Method::Mma, split: 1 },
     Tile { rows: 4, blocks: 12, cols: 1, group_x: 8, method: Method::Mma, split: 1 },
     Tile { rows: 4, blocks: 16, cols: 1, group_x: 8, method: Method::Mma, split: 1 },
+];
+
+/// The split matrix-unit tiles [`TileChoice::TunedMma`] adds to [`TUNE_TILES`] with f32
+/// activations: 16 and 32 output channels per workgroup ([`Tile::mma_split`]).
+pub const MMA_SPLIT_TILES: [Tile; 2] = [
+    Tile { rows: 4, blocks: 4, cols: 1, group_x: 8, method: Method::MmaSplit, split: 1 },
+    Tile { rows: 4, blocks: 8, cols: 1, group_x: 8, method: Method::MmaSplit, split: 1 },
 ];
 
 /// The tiles [`TileChoice::Tuned`] times.
@@ -189,7 +199,7 @@ pub struct Options {
     /// Register tile of the conv kernel.
     pub tiles: TileChoice,
     /// Where the conv reads weights; `None`: by adapter type ([`WeightMemory::for_device_type`]),
-    /// or storage for a fixed Mma tile ([`Tile::mma`]).
+    /// or storage for a fixed Mma tile ([`Tile::mma`], [`Tile::mma_split`]).
     pub weights: Option<WeightMemory>,
     /// How the conv reads its sources; `None`: by adapter type ([`SourceAccess::for_device_type`]).
     pub sources: Option<SourceAccess>,
@@ -267,7 +277,7 @@ impl Denoiser {
         let device_type = device.adapter_info().device_type;
         // Mma tiles read storage weights: a fixed one picks them where the caller left it open.
         let memory = memory.unwrap_or(match tiles {
-            TileChoice::Fixed(t) if t.method == Method::Mma => WeightMemory::Storage,
+            TileChoice::Fixed(t) if t.method.is_mma() => WeightMemory::Storage,
             _ => WeightMemory::for_device_type(device_type),
         });
         let sources = sources.unwrap_or(SourceAccess::for_device_type(device_type));
@@ -362,7 +372,12 @@ impl Denoiser {
             TileChoice::TunedMma if timestamps => {
                 let mut candidates = TUNE_TILES.to_vec();
                 if kernels.matrix_units() && memory == WeightMemory::Storage {
-                    candidates.extend(MMA_TILES);
+                    match precision {
+                        // Split tiles where the device has their workgroup memory.
+                        Precision::F32 if device.limits().max_compute_workgroup_storage_size >= MMA_SPLIT_WORKGROUP_BYTES => candidates.extend(MMA_SPLIT_TILES),
+                        Precision::F32 => {}
+                        Precision::F16 => candidates.extend(MMA_TILES),
+                    }
                 }
                 tune(device, queue, &mut kernels, &specs, &node_views, &candidates)?
             }

@@ -185,6 +185,11 @@ pub fn mma_source(matrix_units: bool) -> String {
 /// adapter's).
 pub const MMA_WORKGROUP_BYTES: u32 = 6 * 66 * 16 * 2 + 4 * 256 * 4;
 
+/// Workgroup memory of conv3x3_mma.wgsl's split entry points ([`Method::MmaSplit`]): the
+/// window's remainders beside [`MMA_WORKGROUP_BYTES`], under the 32 KiB many devices have
+/// (lavapipe and Apple GPUs among them).
+pub const MMA_SPLIT_WORKGROUP_BYTES: u32 = MMA_WORKGROUP_BYTES + 6 * 66 * 16 * 2;
+
 /// Whether a device runs [`Method::Mma`] in matrix units: it has wgpu's cooperative matrices
 /// ([`crate::Gpu`] enables them only where [`crate::gpu::has_matrix_units`]: 16 x 16 x 16
 /// f16 -> f32 and 32-lane subgroups; a device opened elsewhere with the feature must have the
@@ -414,26 +419,35 @@ pub enum Method {
     /// summed in f32, in the device's matrix units (tensor cores, [`matrix_units_supported`])
     /// or emulated where it has none ([`Tile::mma`]).
     Mma,
+    /// conv3x3_mma.wgsl's split entry points: [`Method::Mma`] with each operand carried as two
+    /// f16 halves and three products per pair, f32-class results ([`Tile::mma_split`]).
+    MmaSplit,
 }
 
 impl Method {
     /// Weights per input-output channel pair: 9 taps, or 16 transformed ones for Winograd.
     pub fn taps(self) -> u32 {
         match self {
-            Method::Direct | Method::Lanes | Method::Mma => 9,
+            Method::Direct | Method::Lanes | Method::Mma | Method::MmaSplit => 9,
             Method::Winograd => 16,
         }
     }
 
-    /// The entry point in conv3x3.wgsl (conv3x3_mma.wgsl's `mma`, or `mma_emulated` on devices
-    /// without matrix units, for [`Method::Mma`]).
+    /// The entry point in conv3x3.wgsl (conv3x3_mma.wgsl's `mma` and `mma_split` for the Mma
+    /// methods, or `mma_emulated` and `mma_split_emulated` on devices without matrix units).
     pub fn entry_point(self) -> &'static str {
         match self {
             Method::Direct => "main",
             Method::Winograd => "winograd",
             Method::Lanes => "lanes",
             Method::Mma => "mma",
+            Method::MmaSplit => "mma_split",
         }
+    }
+
+    /// Whether this is one of conv3x3_mma.wgsl's methods ([`Method::Mma`], [`Method::MmaSplit`]).
+    pub fn is_mma(self) -> bool {
+        matches!(self, Method::Mma | Method::MmaSplit)
     }
 }
 
@@ -634,7 +648,7 @@ impl Kernels {
             return;
         }
         // Mma tiles run conv3x3_mma.wgsl, rewritten as conv3x3.wgsl is (sources, f16 storage).
-        if missing.iter().any(|v| v.method == Method::Mma) && self.mma_module.is_none() {
+        if missing.iter().any(|v| v.method.is_mma()) && self.mma_module.is_none() {
             let mut src = mma_source(self.matrix_units);
             if self.sources == SourceAccess::Storage {
                 for (from, to) in STORAGE_SOURCES {
@@ -681,9 +695,15 @@ impl Kernels {
             ("LEAKY", if v.leaky { 1.0 } else { 0.0 }),
             ("STORE_MAX", self.precision.store_max() as f64),
         ];
-        let (label, module, entry) = if v.method == Method::Mma {
-            constants.push(("NT", v.ob as f64));
-            let entry = if self.matrix_units { v.method.entry_point() } else { "mma_emulated" };
+        let (label, module, entry) = if v.method.is_mma() {
+            // Split tiles split the activations too where they are f32 (f16 ones are exact).
+            let split = v.method == Method::MmaSplit;
+            constants.extend([("NT", v.ob as f64), ("SPLIT", split as u32 as f64), ("SPLIT_A", (split && self.precision == Precision::F32) as u32 as f64)]);
+            let entry = match (self.matrix_units, split) {
+                (true, _) => v.method.entry_point(),
+                (false, false) => "mma_emulated",
+                (false, true) => "mma_split_emulated",
+            };
             ("conv3x3_mma", self.mma_module.as_ref().expect("made by prepare"), entry)
         } else {
             constants.extend([
@@ -811,6 +831,17 @@ impl Tile {
         [16, 32, 48, 64].contains(&channels).then_some(Tile { rows: 4, blocks: channels / 4, cols: 1, group_x: WORKGROUP, method: Method::Mma, split: 1 })
     }
 
+    /// A split matrix-unit tile ([`Method::MmaSplit`]): [`Tile::mma`]'s workgroups with 16 or
+    /// 32 output channels (its second set of accumulators takes the registers of more), if the
+    /// kernel has it. Each operand x goes in as hi = f16(x) and its remainder lo = f16((x - hi)
+    /// * 2^11), and a product as hi(a) hi(b) + (hi(a) lo(b) + lo(a) hi(b)) / 2^11: 22-bit
+    /// operands, so f32 activations get f32-class results (held to the golden tolerance) for
+    /// three times the matrix products, and f16 activations (exact in f16) two. Needs what
+    /// [`Tile::mma`] needs and [`MMA_SPLIT_WORKGROUP_BYTES`] of workgroup memory.
+    pub fn mma_split(channels: u32) -> Option<Self> {
+        [16, 32].contains(&channels).then_some(Tile { method: Method::MmaSplit, ..Tile::mma(channels)? })
+    }
+
     /// Weights per input-output channel pair ([`Method::taps`]).
     pub fn taps(&self) -> u32 {
         self.method.taps()
@@ -837,10 +868,11 @@ impl std::fmt::Display for Tile {
     /// `ROWSxBLOCKS`, with `wCOLS` appended for a 2-column tile (`8x1w2`) and `gGROUPX` for a
     /// workgroup other than 8 x 8 and `kSPLIT` for a split tile (`8x1g32k4`); Winograd tiles are
     /// `wino` and `ROWSxBLOCKS` (`wino4x1g32`); Mma tiles are `mma` and their output channels
-    /// (`mma32`).
+    /// (`mma32`), with `x3` for the split ones' three products (`mma32x3`).
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self.method {
             Method::Mma => return write!(f, "mma{}", 4 * self.blocks),
+            Method::MmaSplit => return write!(f, "mma{}x3", 4 * self.blocks),
             Method::Direct => {}
             Method::Winograd => write!(f, "wino")?,
             Method::Lanes => write!(f, "lanes")?,
@@ -955,13 +987,15 @@ fn input_channel(spec: &ConvSpec, ib: usize, lane: usize) -> Option<usize> {
 /// nt` of a conv over `cat(a, b)`, laid out as conv3x3_mma.wgsl reads them. For chunk c (input
 /// blocks 4c .. 4c + 3, in [`pack_group`]'s block order) and tap t = ky * 3 + kx, `nt` tiles of
 /// 16 x 16 `[k][n]` (input channel of block 4c + k / 4, lane k % 4; output channel
-/// n0 + 16 tile + n); then the bias as hi = f16(b) for the 16 * nt channels and lo =
-/// f16(b - hi) for them. Padding is zero.
-pub fn pack_mma(spec: &ConvSpec, n0: usize, nt: usize) -> Vec<half::f16> {
+/// n0 + 16 tile + n); with `split` ([`Method::MmaSplit`]) all those tiles again as the
+/// weights' scaled remainders f16((w - f16(w)) * 2^11); then the bias as hi = f16(b) for the
+/// 16 * nt channels and lo = f16(b - hi) for them. Padding is zero.
+pub fn pack_mma(spec: &ConvSpec, n0: usize, nt: usize, split: bool) -> Vec<half::f16> {
     let (weight, cout, cin) = (spec.weight, spec.cout, spec.ca + spec.cb);
     debug_assert_eq!(weight.len(), cout * cin * 9);
     let chunks = (blocks(spec.ca) + blocks(spec.cb)).div_ceil(4) as usize;
-    let mut out = Vec::with_capacity(chunks * 9 * nt * 256 + 32 * nt);
+    // The tiles' weights in f32, in the kernel's order.
+    let mut tiles: Vec<f32> = Vec::with_capacity(chunks * 9 * nt * 256);
     for c in 0..chunks {
         // The input channel of each row k of this chunk's tiles.
         let rows: Vec<Option<usize>> = (0..16).map(|k| input_channel(spec, 4 * c + k / 4, k % 4)).collect();
@@ -970,15 +1004,21 @@ pub fn pack_mma(spec: &ConvSpec, n0: usize, nt: usize) -> Vec<half::f16> {
                 for i in &rows {
                     for n in 0..16 {
                         let o = n0 + 16 * tile + n;
-                        let v = match *i {
+                        tiles.push(match *i {
                             Some(i) if o < cout => weight[(o * cin + i) * 9 + t],
                             _ => 0.0,
-                        };
-                        out.push(half::f16::from_f32(v));
+                        });
                     }
                 }
             }
         }
+    }
+    let mut out: Vec<half::f16> = Vec::with_capacity(tiles.len() * (1 + split as usize) + 32 * nt);
+    out.extend(tiles.iter().map(|&w| half::f16::from_f32(w)));
+    if split {
+        // Each weight's remainder below its f16, scaled by 2^11 (conv3x3_mma.wgsl's LO_SCALE)
+        // so that it stays a normal f16 where an unscaled one would be subnormal.
+        out.extend(tiles.iter().map(|&w| half::f16::from_f32((w - half::f16::from_f32(w).to_f32()) * MMA_LO_SCALE)));
     }
     let bias: Vec<f32> = (0..16 * nt).map(|n| spec.bias.get(n0 + n).copied().unwrap_or(0.0)).collect();
     let hi: Vec<half::f16> = bias.iter().map(|&b| half::f16::from_f32(b)).collect();
@@ -986,6 +1026,10 @@ pub fn pack_mma(spec: &ConvSpec, n0: usize, nt: usize) -> Vec<half::f16> {
     out.extend(bias.iter().zip(&hi).map(|(&b, h)| half::f16::from_f32(b - h.to_f32())));
     out
 }
+
+/// Scale of a split operand's remainder ([`Method::MmaSplit`], conv3x3_mma.wgsl's LO_SCALE):
+/// 2^11, one f16 mantissa.
+pub const MMA_LO_SCALE: f32 = 2048.0;
 
 /// Full-resolution f32 texture layers split-K's partial sums may take ([`ConvPlan::new`]).
 pub const PARTIAL_LAYERS: u64 = 4;
@@ -1118,7 +1162,7 @@ impl ConvPlan {
             let tile = tiles[if tiles.len() == 1 { 0 } else { i }];
             let (cin4_a, cin4_b) = (blocks(s.ca), blocks(s.cb));
             let cin4 = cin4_a + cin4_b;
-            if tile.method == Method::Mma {
+            if tile.method.is_mma() {
                 let unsupported = |reason: String| crate::Error::UnsupportedTile { tile: tile.to_string(), reason };
                 if memory != WeightMemory::Storage {
                     return Err(unsupported("Mma tiles read their weights from a storage buffer (weights memory `storage`)".into()));
@@ -1126,14 +1170,17 @@ impl ConvPlan {
                 if !device.features().contains(wgpu::Features::SHADER_F16) {
                     return Err(unsupported(format!("Mma tiles need SHADER_F16, which {} lacks", device.adapter_info().name)));
                 }
+                let split = tile.method == Method::MmaSplit;
+                let needed = if split { MMA_SPLIT_WORKGROUP_BYTES } else { MMA_WORKGROUP_BYTES };
                 let shared = device.limits().max_compute_workgroup_storage_size;
-                if shared < MMA_WORKGROUP_BYTES {
-                    return Err(unsupported(format!("Mma tiles use {MMA_WORKGROUP_BYTES} bytes of workgroup memory; the device allows {shared}")));
+                if shared < needed {
+                    return Err(unsupported(format!("{tile} uses {needed} bytes of workgroup memory; the device allows {shared}")));
                 }
                 // Tiles of 16 output channels, at most as many per group as the conv has.
                 let tiles16 = s.cout.div_ceil(16) as u32;
                 let nt = (tile.blocks / 4).clamp(1, tiles16);
-                let stride = cin4.div_ceil(4) * 9 * nt * 256 + 32 * nt;
+                // The hi tiles, with `split` their remainders, then the bias's two halves.
+                let stride = cin4.div_ceil(4) * 9 * nt * 256 * (1 + split as u32) + 32 * nt;
                 let group_count = tiles16.div_ceil(nt);
                 binding = binding.max(group_count as u64 * stride as u64 * 2);
                 let mut group = Group { params: [0; 2], weights: 0, count: group_count };
@@ -1141,14 +1188,14 @@ impl ConvPlan {
                 weights.resize(weights.len().next_multiple_of(align), 0);
                 group.weights = weights.len() as u32;
                 for g in 0..group_count {
-                    let packed = pack_mma(s, (16 * nt * g) as usize, nt as usize);
+                    let packed = pack_mma(s, (16 * nt * g) as usize, nt as usize, split);
                     debug_assert_eq!(packed.len() as u32, stride);
                     weights.extend_from_slice(bytemuck::cast_slice(&packed));
                 }
-                let variant = ConvVariant { read_a: s.read_a, read_b: s.read_b, source_b: s.cb > 0, leaky: s.leaky, ob: nt, rows: 1, cols: 1, group_x: WORKGROUP, method: Method::Mma, split: 1, reduce: false };
+                let variant = ConvVariant { read_a: s.read_a, read_b: s.read_b, source_b: s.cb > 0, leaky: s.leaky, ob: nt, rows: 1, cols: 1, group_x: WORKGROUP, method: tile.method, split: 1, reduce: false };
                 // Workgroups of 4 rows x 64 pixels (conv3x3_mma.wgsl's ROWS and PIXELS).
                 pending.push((variant, (s.width.div_ceil(64), s.height.div_ceil(4)), 1, vec![group], None));
-                used.push(Tile::mma(16 * nt).expect("16 to 64 channels"));
+                used.push(Tile { blocks: 4 * nt, ..tile });
                 continue;
             }
             let taps = tile.taps();
