@@ -473,6 +473,50 @@ fn conv_mma_tiles_match_cpu() {
     assert_eq!(Tile::mma(24), None);
 }
 
+/// A split Mma conv ([`Tile::mma_split`]) against the CPU convolution in f32, at the direct
+/// kernel's tolerance of the output's largest value, on inputs and a bias scaled by `scale`:
+/// the f16-rounded operands of the plain tiles must fail the same bound, so the test tells the
+/// two apart.
+#[allow(clippy::too_many_arguments)]
+fn check_conv_mma_split(a: (Chw, Read), b: Option<(Chw, Read)>, cout: usize, leaky: bool, w: usize, h: usize, seed: u64, tile: Tile, scale: f32) {
+    let scaled = |t: Chw| Chw { data: t.data.iter().map(|v| v * scale).collect(), ..t };
+    let (a, b) = ((scaled(a.0), a.1), b.map(|b| (scaled(b.0), b.1)));
+    let cin = a.0.c + b.as_ref().map_or(0, |b| b.0.c);
+    let rel = 1e-5 * ((9 * cin) as f32 / 100.0).sqrt().max(1.0);
+    let weight: Vec<f32> = noise(cout * cin * 9, seed).iter().map(|v| v * 0.3).collect();
+    let bias: Vec<f32> = noise(cout, seed + 1).iter().map(|v| v * scale).collect();
+    let got = gpu_conv((&a.0, a.1), b.as_ref().map(|b| (&b.0, b.1)), &weight, &bias, leaky, w, h, tile, WeightMemory::Storage);
+    let ra = cpu::read(&a.0, a.1, h, w);
+    let x = match &b {
+        Some((t, m)) => cpu::concat(&ra, &cpu::read(t, *m, h, w)),
+        None => ra,
+    };
+    let want = cpu::conv3x3(&x, &weight, &bias, leaky.then_some(0.1));
+    // Errors over the output's largest value (Tolerance is absolute below 1).
+    let top = want.data.iter().fold(0.0f32, |m, v| m.max(v.abs()));
+    let unit = |d: &[f32]| d.iter().map(|v| v / top).collect::<Vec<f32>>();
+    let what = format!("split mma conv {:?}/{:?} {w}x{h} tile {tile} scale {scale}", a.1, b.as_ref().map(|b| b.1));
+    crate::assert_close(Tolerance { rel }, &what, &unit(&got.data), &unit(&want.data));
+    // The plain tiles' operands, f16-rounded, miss that bound.
+    let f16 = |v: &f32| half::f16::from_f32(*v).to_f32();
+    let x16 = Chw { data: x.data.iter().map(f16).collect(), ..x };
+    let plain = cpu::conv3x3(&x16, &weight.iter().map(f16).collect::<Vec<f32>>(), &bias, leaky.then_some(0.1));
+    assert!(Tolerance { rel }.worst(&unit(&plain.data), &unit(&want.data)).0 > 1.0, "{what}: f16 operands would pass too");
+}
+
+#[test]
+fn conv_mma_split_tiles_match_cpu_in_f32() {
+    // The split matrix-unit kernel (emulated here unless the device has cooperative matrices)
+    // holds f32 convolutions to the direct kernel's tolerance: mma32x3 over a pooled and a
+    // direct source (5 chunks, the last partial) with 43 outputs in groups of two tiles on a
+    // level spanning partial workgroups; mma16x3 on upsampled sources at a thousandth of the
+    // scale, where an unscaled remainder would be an f16 subnormal.
+    check_conv_mma_split((tensor(41, 18, 140, 320), Read::Pool), Some((tensor(22, 9, 70, 321), Read::Direct)), 43, true, 70, 9, 322, Tile::mma_split(32).unwrap(), 1.0);
+    check_conv_mma_split((tensor(6, 3, 7, 323), Read::Upsample), Some((tensor(5, 6, 14, 324), Read::PoolUpsample)), 20, false, 14, 6, 325, Tile::mma_split(16).unwrap(), 1e-3);
+    assert_eq!(Tile::mma_split(32).unwrap().to_string(), "mma32x3");
+    assert_eq!(Tile::mma_split(48), None, "two sets of accumulators: at most 32 channels");
+}
+
 #[test]
 fn mma_tiles_need_storage_weights() {
     let g = gpu();
@@ -491,7 +535,7 @@ fn mma_weights_are_laid_out_as_the_kernel_reads_them() {
     let weight: Vec<f32> = (0..cout * (ca + cb) * 9).map(|i| i as f32).collect();
     let bias: Vec<f32> = (0..cout).map(|i| 1.0 + i as f32 / 3.0).collect();
     let spec = ConvSpec { cb, read_b: Read::Direct, ..one_source_spec("test", 8, 8, ca, &weight, &bias) };
-    let packed = kernels::pack_mma(&spec, 16, 2);
+    let packed = kernels::pack_mma(&spec, 16, 2, false);
     assert_eq!(packed.len(), 9 * 2 * 256 + 64, "one chunk of 3 blocks, 9 taps, 2 tiles, the bias");
     let at = |t: usize, tile: usize, k: usize, n: usize| packed[(t * 2 + tile) * 256 + k * 16 + n].to_f32();
     let w = |o: usize, i: usize, t: usize| half::f16::from_f32(weight[(o * (ca + cb) + i) * 9 + t]).to_f32();
@@ -511,6 +555,23 @@ fn mma_weights_are_laid_out_as_the_kernel_reads_them() {
         assert!((hi[n].to_f32() + lo[n].to_f32() - b).abs() <= b.abs() * 2e-6, "bias {n}");
     }
     assert!(hi[4..].iter().chain(&lo[4..]).all(|v| v.to_f32() == 0.0));
+    // Split: the same tiles, then each weight's remainder scaled by 2^11, then the same bias;
+    // hi + lo / 2^11 is the f32 weight to 22 bits.
+    let weight: Vec<f32> = weight.iter().map(|v| (v + 0.1) / 7.0).collect();
+    let spec = ConvSpec { weight: &weight, ..spec };
+    let (plain, split) = (kernels::pack_mma(&spec, 16, 2, false), kernels::pack_mma(&spec, 16, 2, true));
+    let tiles = 9 * 2 * 256;
+    assert_eq!(split.len(), 2 * tiles + 64);
+    assert_eq!(split[..tiles], plain[..tiles], "the hi tiles");
+    assert_eq!(split[2 * tiles..], plain[tiles..], "the bias");
+    for (t, k, n) in [(7, 4, 3), (2, 8, 0), (0, 1, 2)] {
+        let i = (t * 2) * 256 + k * 16 + n;
+        let joined = split[i].to_f32() + split[tiles + i].to_f32() / kernels::MMA_LO_SCALE;
+        // Rows 0-4: a's channels 0-4; rows 8-10: b's, input channels 5-7.
+        let input = if k < 5 { k } else { 5 + (k - 8) };
+        let w = weight[((16 + n) * (ca + cb) + input) * 9 + t];
+        assert!((joined - w).abs() <= w.abs() * 2.5e-7, "tap {t} row {k} column {n}: {joined} against {w}");
+    }
 }
 
 #[test]

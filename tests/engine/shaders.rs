@@ -1,6 +1,6 @@
 //! Every WGSL file parses and validates with naga: no GPU needed, a broken shader fails here.
 
-use rae_core::kernels::{MMA_ENABLE, ROWS_STUB, SHADERS, STORAGE_SOURCES, STORAGE_WEIGHTS, UNIFORM_WEIGHTS, WITHOUT_SUBGROUPS, conv_module_source, mma_source, shader_source};
+use rae_core::kernels::{MMA_ENABLE, MMA_SPLIT_WORKGROUP_BYTES, MMA_WORKGROUP_BYTES, ROWS_STUB, SHADERS, STORAGE_SOURCES, STORAGE_WEIGHTS, UNIFORM_WEIGHTS, WITHOUT_SUBGROUPS, conv_module_source, mma_source, shader_source};
 
 #[test]
 fn every_shader_validates_with_naga() {
@@ -49,33 +49,66 @@ fn every_shader_validates_with_naga() {
         naga::valid::Validator::new(naga::valid::ValidationFlags::all(), caps)
             .validate(&module)
             .unwrap_or_else(|e| panic!("{name}.wgsl: {}", e.emit_to_string(source)));
-        let entry = if name.starts_with("conv3x3_mma") { "mma_emulated" } else { "main" };
-        assert!(module.entry_points.iter().any(|e| e.name == entry), "{name}.wgsl has no `{entry}`");
+        let entries: &[&str] = if name.starts_with("conv3x3_mma") { &["mma_emulated", "mma_split_emulated"] } else { &["main"] };
+        for entry in entries {
+            assert!(module.entry_points.iter().any(|e| e.name == *entry), "{name}.wgsl has no `{entry}`");
+        }
     }
 }
 
 #[test]
 fn the_matrix_unit_kernel_translates_to_spirv() {
     // What wgpu does with conv3x3_mma.wgsl on a device with cooperative matrices (none here):
-    // the module validates, the entry point `mma` uses cooperative matrices, and naga's SPIR-V
-    // writer emits it with the cooperative-matrix capability and the Vulkan memory model, once
-    // for every tile width (the override NT), as the pipeline's constants set it.
+    // the module validates, the entry points `mma` and `mma_split` use cooperative matrices,
+    // and naga's SPIR-V writer emits them with the cooperative-matrix capability and the
+    // Vulkan memory model, once for every tile width (the override NT) and split mode, as the
+    // pipeline's constants set them.
     let source = mma_source(true);
     let module = naga::front::wgsl::parse_str(&source).unwrap_or_else(|e| panic!("{}", e.emit_to_string(&source)));
     assert!(module.entry_points.iter().any(|e| e.name == "mma"), "the cooperative entry point");
     assert!(module.types.iter().any(|(_, t)| matches!(t.inner, naga::TypeInner::CooperativeMatrix { .. })), "cooperative matrix types");
     let info = naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all()).validate(&module).unwrap_or_else(|e| panic!("{}", e.emit_to_string(&source)));
-    for nt in 1..=4 {
-        let constants: naga::back::PipelineConstants = [("NT".to_string(), nt as f64)].into_iter().collect();
+    let plain = (1..=4).map(|nt| ("mma", nt, false, false));
+    let split = (1..=2).flat_map(|nt| [("mma_split", nt, true, true), ("mma_split", nt, true, false)]);
+    for (entry, nt, split, split_a) in plain.chain(split) {
+        let case = format!("{entry} NT = {nt} SPLIT_A = {split_a}");
+        let constants: naga::back::PipelineConstants = [("NT", nt as f64), ("SPLIT", split as u32 as f64), ("SPLIT_A", split_a as u32 as f64)].into_iter().map(|(k, v)| (k.to_string(), v)).collect();
         let (module, info) = naga::back::pipeline_constants::process_overrides(&module, &info, None, &constants).unwrap();
         let options = naga::back::spv::Options { lang_version: (1, 3), ..Default::default() };
-        let pipeline = naga::back::spv::PipelineOptions { shader_stage: naga::ShaderStage::Compute, entry_point: "mma".to_string() };
-        let words = naga::back::spv::write_vec(&module, &info, &options, Some(&pipeline)).unwrap_or_else(|e| panic!("NT = {nt}: {e}"));
+        let pipeline = naga::back::spv::PipelineOptions { shader_stage: naga::ShaderStage::Compute, entry_point: entry.to_string() };
+        let words = naga::back::spv::write_vec(&module, &info, &options, Some(&pipeline)).unwrap_or_else(|e| panic!("{case}: {e}"));
         // OpCapability CooperativeMatrixKHR (6022) and OpMemoryModel Logical Vulkan (3).
         let has = |op: u32, operands: &[u32]| words.windows(1 + operands.len()).any(|w| w[0] == ((1 + operands.len() as u32) << 16 | op) && w[1..] == *operands);
-        assert!(has(17, &[6022]), "NT = {nt}: OpCapability CooperativeMatrixKHR");
-        assert!(has(14, &[0, 3]), "NT = {nt}: OpMemoryModel Logical Vulkan");
+        assert!(has(17, &[6022]), "{case}: OpCapability CooperativeMatrixKHR");
+        assert!(has(14, &[0, 3]), "{case}: OpMemoryModel Logical Vulkan");
     }
+}
+
+#[test]
+fn each_matrix_unit_entry_point_uses_only_its_workgroup_memory() {
+    // Workgroup memory is the sum of the workgroup arrays an entry point uses: the plain entry
+    // points must not touch the split ones' remainder window (or every mma tile would pay for
+    // it), and the sums are the byte counts ConvPlan checks against the device's limit.
+    let source = mma_source(true);
+    let module = naga::front::wgsl::parse_str(&source).unwrap_or_else(|e| panic!("{}", e.emit_to_string(&source)));
+    let info = naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all()).validate(&module).unwrap();
+    let workgroup: Vec<_> = module.global_variables.iter().filter(|(_, g)| g.space == naga::AddressSpace::WorkGroup).collect();
+    let bytes = |entry: &str| -> (u32, Vec<String>) {
+        let at = module.entry_points.iter().position(|e| e.name == entry).unwrap_or_else(|| panic!("no `{entry}`"));
+        let used: Vec<_> = workgroup.iter().filter(|(h, _)| !info.get_entry_point(at)[*h].is_empty()).collect();
+        let size = used.iter().map(|(_, g)| module.types[g.ty].inner.size(module.to_ctx())).sum();
+        (size, used.iter().map(|(_, g)| g.name.clone().unwrap_or_default()).collect())
+    };
+    for entry in ["mma", "mma_emulated"] {
+        let (size, names) = bytes(entry);
+        assert_eq!(size, MMA_WORKGROUP_BYTES, "{entry} uses {names:?}");
+        assert!(!names.iter().any(|n| n == "win_lo"), "{entry} uses {names:?}");
+    }
+    for entry in ["mma_split", "mma_split_emulated"] {
+        let (size, names) = bytes(entry);
+        assert_eq!(size, MMA_SPLIT_WORKGROUP_BYTES, "{entry} uses {names:?}");
+    }
+    assert!(MMA_SPLIT_WORKGROUP_BYTES <= 32 * 1024, "split tiles fit the 32 KiB many devices have");
 }
 
 #[test]

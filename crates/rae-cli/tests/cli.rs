@@ -383,7 +383,7 @@ fn the_shipped_model_that_fits_is_chosen() {
 
 #[test]
 fn bench_refuses_a_tile_the_kernel_does_not_have() {
-    for (tile, shown) in [("3x1", "3x1"), ("8x1w3", "8x1w3"), ("8x1g128", "8x1g128"), ("big", "big"), ("lanes16x4w2", "lanes16x4w2"), ("mma24", "mma24"), ("mma", "mma")] {
+    for (tile, shown) in [("3x1", "3x1"), ("8x1w3", "8x1w3"), ("8x1g128", "8x1g128"), ("big", "big"), ("lanes16x4w2", "lanes16x4w2"), ("mma24", "mma24"), ("mma", "mma"), ("mma48x3", "mma48x3"), ("mma32x2", "mma32x2")] {
         let out = rae().args(["bench", &fixture("weights_full.safetensors"), "--sizes", "32x32", "--tile", tile]).output().unwrap();
         assert!(!out.status.success(), "--tile {tile} must fail");
         let err = String::from_utf8(out.stderr).unwrap();
@@ -430,10 +430,11 @@ fn bench_times_sampled_and_storage_sources() {
 #[test]
 fn bench_reports_each_combinations_error_and_skips_what_it_cannot_run() {
     // The err column: the CPU drivers' tile is the reference itself (0); the matrix-unit kernel
-    // (emulated on lavapipe) rounds its operands to f16, off by a little; with uniform weights
-    // it cannot run, which is a row saying so, not a failed run.
+    // (emulated on lavapipe) rounds its operands to f16, off by a little, and its split tiles
+    // by far less; with uniform weights they cannot run, which is a row saying so, not a
+    // failed run.
     let out = rae()
-        .args(["bench", &fixture("weights_full.safetensors"), "--sizes", "32x32", "--frames", "1", "--precision", "f32", "--tile", "auto,mma16", "--weights-memory", "storage,uniform"])
+        .args(["bench", &fixture("weights_full.safetensors"), "--sizes", "32x32", "--frames", "1", "--precision", "f32", "--tile", "auto,mma16,mma16x3", "--weights-memory", "storage,uniform"])
         .output()
         .unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
@@ -441,13 +442,17 @@ fn bench_reports_each_combinations_error_and_skips_what_it_cannot_run() {
     let header = text.lines().find(|l| l.trim_start().starts_with("size ")).expect("a header");
     assert!(header.ends_with(" err"), "err is the last column: {header}");
     let rows: Vec<Vec<&str>> = text.lines().map(|l| l.split_whitespace().collect::<Vec<_>>()).filter(|f| f.first() == Some(&"32x32")).collect();
-    assert_eq!(rows.len(), 4, "{text}");
+    assert_eq!(rows.len(), 6, "{text}");
     let value = |row: &[&str]| -> f64 { row.last().unwrap().parse().unwrap_or_else(|_| panic!("err of {row:?}")) };
     assert_eq!((rows[0][2], rows[0][3], value(&rows[0])), ("auto", "storage", 0.0), "{text}");
     assert_eq!((rows[1][2], rows[1][3]), ("mma16", "storage"), "{text}");
     assert!((1e-6..1e-2).contains(&value(&rows[1])), "{text}");
-    assert_eq!(rows[2][2], "auto", "{text}");
-    assert!(rows[3][2] == "mma16" && rows[3].contains(&"unsupported:") && rows[3].join(" ").contains("storage buffer"), "{text}");
+    assert_eq!((rows[2][2], rows[2][3]), ("mma16x3", "storage"), "{text}");
+    assert!(value(&rows[2]) < value(&rows[1]) / 10.0, "split operands: {text}");
+    assert_eq!(rows[3][2], "auto", "{text}");
+    for row in &rows[4..] {
+        assert!(row[2].starts_with("mma16") && row.contains(&"unsupported:") && row.join(" ").contains("storage buffer"), "{text}");
+    }
 }
 
 #[test]
