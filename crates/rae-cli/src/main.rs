@@ -86,6 +86,10 @@ enum Command {
         /// Golden .safetensors files; their weights file is looked up beside them.
         #[arg(required = true)]
         golden: Vec<PathBuf>,
+        /// The conv tile to hold to PyTorch, as `bench --tile` takes it (one): `auto` (what
+        /// `denoise` uses), a fixed tile such as `mma32x3`, or `tuned`.
+        #[arg(long, default_value = "auto")]
+        tile: String,
     },
     /// Time frames of a weights file on the chosen adapter: median ms per frame (after
     /// warm-up) split into upload, GPU and download, achieved GFLOP/s (and share of a stated
@@ -533,16 +537,18 @@ fn devices() -> Result<()> {
     Ok(())
 }
 
-fn verify(files: &[PathBuf]) -> Result<()> {
+fn verify(files: &[PathBuf], tiles: TileChoice) -> Result<()> {
     let gpu = Gpu::new()?;
     println!("adapter: {}", gpu.describe());
+    println!("tile: {}", tile_name(tiles));
     println!("{:<40} {:>5} {:>9} {:>12} {:>10} {:>10}", "sequence", "frame", "size", "max |err|", "of tol", "ms");
     let mut failed = 0;
     for path in files {
         let golden = Golden::load(path)?;
         let wpath = path.with_file_name(&golden.weights);
         let weights = Weights::load(&wpath).with_context(|| format!("weights of {}", path.display()))?;
-        let mut d = Denoiser::new(&gpu.device, &gpu.queue, &weights, golden.width, golden.height)?;
+        let options = Options { tiles, ..Default::default() };
+        let mut d = Denoiser::with_options(&gpu.device, &gpu.queue, &weights, golden.width, golden.height, options).with_context(|| format!("denoiser for {}", path.display()))?;
         let name = path.file_name().unwrap_or_default().to_string_lossy();
         for i in 0..golden.frames.len() {
             let t = Instant::now();
@@ -572,7 +578,7 @@ fn main() -> Result<()> {
         }
         Command::Info { file, size } => info(&file, &size),
         Command::Devices => devices(),
-        Command::Verify { golden } => verify(&golden),
+        Command::Verify { golden, tile } => verify(&golden, parse_tile(&tile)?),
         Command::Bench { weights, sizes, frames, layers, precision, peak_gflops, tile, weights_memory, sources, interleave } => {
             let sweep = Sweep {
                 precisions: precision,

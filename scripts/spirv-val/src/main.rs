@@ -1,8 +1,8 @@
 //! SPIR-V of every kernel as wgpu would make it on Vulkan, through SPIRV-Tools' validator.
 //!
 //! Each shader of `rae_core::kernels::SHADERS` (conv3x3_mma.wgsl with the cooperative-matrix
-//! entry point, as on a device with matrix units; f32 and f16 storage, sampled and storage
-//! sources; every tile width NT) is parsed and validated by naga with every capability, its
+//! entry points, as on a device with matrix units; f32 and f16 storage, sampled and storage
+//! sources; every tile width NT, split for NT 1-2) is parsed and validated by naga with every capability, its
 //! overrides set, and each entry point written as SPIR-V 1.3 and validated for Vulkan 1.3.
 //! Exits non-zero on the first invalid module.
 
@@ -59,7 +59,10 @@ fn main() {
             }
             for nt in 1..=4 {
                 let label = format!("conv3x3_mma ({}, {} sources, NT = {nt})", if f16 { "f16" } else { "f32" }, if storage { "storage" } else { "sampled" });
-                modules.push((label, src.clone(), vec![("NT", nt as f64), ("MODE_A", 1.0), ("MODE_B", 3.0)]));
+                // Split (its entry points' NT is 1 or 2), with the activations split in f32.
+                let split = nt <= 2;
+                let label = format!("{label}{}", if split { ", SPLIT" } else { "" });
+                modules.push((label, src.clone(), vec![("NT", nt as f64), ("MODE_A", 1.0), ("MODE_B", 3.0), ("SPLIT", split as u32 as f64), ("SPLIT_A", !f16 as u32 as f64)]));
             }
         }
     }
