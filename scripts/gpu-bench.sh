@@ -7,11 +7,13 @@
 # sequence end to end, and PyTorch/cuDNN on the same weights. Everything goes to $2/log.txt.
 # TILES, MEMORIES, SOURCES (e.g. sampled,storage; builds before session 12 have no --sources),
 # STAGE_TILES override the sweep; SKIP_TORCH=1 leaves PyTorch out; MMA=1 adds the matrix-unit
-# kernel (session 13; older builds have no mma tiles): it checks it against PyTorch's goldens at
-# a loose bound, times tuned-mma and fixed mma tiles beside the others, prints the stages of
-# tuned-mma and denoises the sample with it (f32 and f16) for its PSNR against the direct one. With several builds the sweep
-# runs ROUNDS (default 2) interleaved rounds of each, for side-by-side ratios; everything else
-# uses the first.
+# kernel (sessions 13-14; older builds have no mma tiles): it holds the split tiles (mma32x3) to
+# PyTorch's goldens (`verify --tile`), prints every mma tile's error against the direct f32
+# frames, times tuned-mma and fixed mma tiles beside the others, prints the stages of tuned-mma
+# and denoises the sample with it (f32 and f16) for its PSNR against the direct one; MMA=only
+# stops after that (one call within the device's 10-minute limit; the sweep in a second call).
+# With several builds the sweep runs ROUNDS (default 2) interleaved rounds of each, for
+# side-by-side ratios; everything else uses the first.
 set -uo pipefail
 out=${1:?output folder}
 shift
@@ -39,18 +41,23 @@ w=models/rae-default.safetensors
     echo "== goldens"
     "$cli" verify tests/fixtures/golden_*.safetensors
     if [ -n "${MMA:-}" ]; then
+        echo "== mma: the split tiles against PyTorch's goldens (must pass, as the direct kernel does), then the plain one (fails by design: f16 operands)"
+        "$cli" verify tests/fixtures/golden_*.safetensors --tile mma32x3
+        "$cli" verify tests/fixtures/golden_full_64x64.safetensors --tile mma16x3
+        "$cli" verify tests/fixtures/golden_full_64x64.safetensors --tile mma32
         echo "== mma: each fixed tile on 64x64 against the direct f32 frames (the err column; emulated if no matrix units)"
-        "$cli" bench "$w" --sizes 64x64 --frames 3 --precision f32,f16 --tile 16x2,mma16,mma32,mma48,mma64 --weights-memory storage
+        "$cli" bench "$w" --sizes 64x64 --frames 3 --precision f32,f16 --tile 16x2,mma16,mma32,mma48,mma64,mma16x3,mma32x3 --weights-memory storage
         echo "== mma: the same tiles emulated on this GPU (RAE_MATRIX_UNITS=0), for comparison"
-        RAE_MATRIX_UNITS=0 "$cli" bench "$w" --sizes 64x64 --frames 3 --precision f32 --tile mma32,mma64 --weights-memory storage
+        RAE_MATRIX_UNITS=0 "$cli" bench "$w" --sizes 64x64 --frames 3 --precision f32 --tile mma32,mma64,mma32x3 --weights-memory storage
         echo "== mma: 1080p and 720p"
-        "$cli" bench "$w" --sizes 1920x1080,1280x720 --frames 20 --precision f32,f16 --tile tuned,tuned-mma,mma32,mma64 --weights-memory storage --peak-gflops 66900 | grep -E "^ +(size|[0-9]+x[0-9]+) "
+        "$cli" bench "$w" --sizes 1920x1080,1280x720 --frames 20 --precision f32,f16 --tile tuned,tuned-mma,mma32,mma64,mma16x3,mma32x3 --weights-memory storage --peak-gflops 66900 | grep -E "^ +(size|[0-9]+x[0-9]+) "
         echo "== mma: stages of tuned-mma (f16, f32)"
         "$cli" bench "$w" --sizes 1920x1080 --frames 10 --precision f16,f32 --tile tuned-mma --weights-memory storage --layers
         echo "== mma: the sample with tuned-mma, f32 and f16"
         "$cli" denoise samples/random2026 --weights "$w" -o "$out/sample-mma32" --csv "$out/sample-mma-f32.csv" --tile tuned-mma
         "$cli" denoise samples/random2026 --weights "$w" -o "$out/sample-mma16" --csv "$out/sample-mma-f16.csv" --tile tuned-mma --precision f16
         rm -rf "$out/sample-mma32" "$out/sample-mma16"
+        [ "$MMA" = only ] && exit 0
     fi
     for r in $(seq "$rounds"); do
         for b in "${builds[@]}"; do
