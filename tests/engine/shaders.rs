@@ -108,7 +108,6 @@ fn each_matrix_unit_entry_point_uses_only_its_workgroup_memory() {
         let (size, names) = bytes(entry);
         assert_eq!(size, MMA_SPLIT_WORKGROUP_BYTES, "{entry} uses {names:?}");
     }
-    assert!(MMA_SPLIT_WORKGROUP_BYTES <= 32 * 1024, "split tiles fit the 32 KiB many devices have");
 }
 
 #[test]

@@ -189,6 +189,7 @@ pub const MMA_WORKGROUP_BYTES: u32 = 6 * 66 * 16 * 2 + 4 * 256 * 4;
 /// window's remainders beside [`MMA_WORKGROUP_BYTES`], under the 32 KiB many devices have
 /// (lavapipe and Apple GPUs among them).
 pub const MMA_SPLIT_WORKGROUP_BYTES: u32 = MMA_WORKGROUP_BYTES + 6 * 66 * 16 * 2;
+const _: () = assert!(MMA_SPLIT_WORKGROUP_BYTES <= 32 * 1024, "split tiles fit the 32 KiB many devices have");
 
 /// Whether a device runs [`Method::Mma`] in matrix units: it has wgpu's cooperative matrices
 /// ([`crate::Gpu`] enables them only where [`crate::gpu::has_matrix_units`]: 16 x 16 x 16
@@ -833,9 +834,9 @@ impl Tile {
 
     /// A split matrix-unit tile ([`Method::MmaSplit`]): [`Tile::mma`]'s workgroups with 16 or
     /// 32 output channels (its second set of accumulators takes the registers of more), if the
-    /// kernel has it. Each operand x goes in as hi = f16(x) and its remainder lo = f16((x - hi)
-    /// * 2^11), and a product as hi(a) hi(b) + (hi(a) lo(b) + lo(a) hi(b)) / 2^11: 22-bit
-    /// operands, so f32 activations get f32-class results (held to the golden tolerance) for
+    /// kernel has it. Each operand x goes in as hi = f16(x) and its remainder scaled by 2^11,
+    /// lo = f16(2^11 (x - hi)), and a product as hi(a) hi(b) + (hi(a) lo(b) + lo(a) hi(b)) /
+    /// 2^11: 22-bit operands, so f32 activations get f32-class results (held to the golden tolerance) for
     /// three times the matrix products, and f16 activations (exact in f16) two. Needs what
     /// [`Tile::mma`] needs and [`MMA_SPLIT_WORKGROUP_BYTES`] of workgroup memory.
     pub fn mma_split(channels: u32) -> Option<Self> {
