@@ -837,8 +837,10 @@ impl Tile {
     /// kernel has it. Each operand x goes in as hi = f16(x) and its remainder scaled by 2^11,
     /// lo = f16(2^11 (x - hi)), and a product as hi(a) hi(b) + (hi(a) lo(b) + lo(a) hi(b)) /
     /// 2^11: 22-bit operands, so f32 activations get f32-class results (held to the golden tolerance) for
-    /// three times the matrix products, and f16 activations (exact in f16) two. Needs what
-    /// [`Tile::mma`] needs and [`MMA_SPLIT_WORKGROUP_BYTES`] of workgroup memory.
+    /// three times the matrix products, and f16 activations (exact in f16) two. Inputs are
+    /// clamped to +-65504 as for [`Tile::mma`] (the default model's activations stay under 26,
+    /// docs/STABILITY.md). Needs what [`Tile::mma`] needs and [`MMA_SPLIT_WORKGROUP_BYTES`] of
+    /// workgroup memory.
     pub fn mma_split(channels: u32) -> Option<Self> {
         [16, 32].contains(&channels).then_some(Tile { method: Method::MmaSplit, ..Tile::mma(channels)? })
     }
