@@ -185,6 +185,20 @@ fn b_row4(b: u32, k: u32, n: u32) -> vec4<f32> {
     return vec4<f32>(f32(weights[at]), f32(weights[at + 1u]), f32(weights[at + 2u]), f32(weights[at + 3u]));
 }
 
+// Put lane `lane`'s part of an accumulator (`mma_emulated`'s layout below: columns n .. n + 3
+// in v0 and n + 8 .. n + 11 in v8 of row p) into subgroup sg's part of `stage`.
+fn put_lane(sg: u32, lane: u32, v0: vec4<f32>, v8: vec4<f32>) {
+    let s = sg * TILE + (lane % 16u) * 16u + 4u * (lane / 16u);
+    stage[s] = v0.x;
+    stage[s + 1u] = v0.y;
+    stage[s + 2u] = v0.z;
+    stage[s + 3u] = v0.w;
+    stage[s + 8u] = v8.x;
+    stage[s + 9u] = v8.y;
+    stage[s + 10u] = v8.z;
+    stage[s + 11u] = v8.w;
+}
+
 // Lane `lane` of a subgroup holds row p = lane % 16 (a pixel) of each of its 4 * NT
 // accumulators, at columns (output channels) 4q .. 4q + 3 and 8 + 4q .. 8 + 4q + 3 with
 // q = lane / 16: accumulator (mt, nt) at acc[(mt * NT + nt) * 2] and [.. + 1].
@@ -197,10 +211,8 @@ fn mma_emulated(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_
     let lane = li % 32u;
     let p = lane % 16u;
     let n = 4u * (lane / 16u);
+    // Zero, as WGSL initialises a var without an initialiser.
     var acc: array<vec4<f32>, 32>;
-    for (var i = 0u; i < 32u; i++) {
-        acc[i] = vec4<f32>(0.0);
-    }
     for (var c = 0u; c < chunks(); c++) {
         // The previous chunk's products are done before its window is overwritten.
         workgroupBarrier();
@@ -211,15 +223,16 @@ fn mma_emulated(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_
                 let row = a_at(sg, mt, t / 3u, t % 3u) + p * 16u;
                 for (var nt = 0u; nt < NT; nt++) {
                     let b = b_at(w, c, t, nt);
-                    var lo = acc[(mt * NT + nt) * 2u];
-                    var hi = acc[(mt * NT + nt) * 2u + 1u];
+                    // Columns n .. n + 3 and n + 8 .. n + 11 of row p.
+                    var m0 = acc[(mt * NT + nt) * 2u];
+                    var m8 = acc[(mt * NT + nt) * 2u + 1u];
                     for (var k = 0u; k < 16u; k++) {
                         let a = vec4<f32>(f32(win[row + k]));
-                        lo = fma(a, b_row4(b, k, n), lo);
-                        hi = fma(a, b_row4(b, k, n + 8u), hi);
+                        m0 = fma(a, b_row4(b, k, n), m0);
+                        m8 = fma(a, b_row4(b, k, n + 8u), m8);
                     }
-                    acc[(mt * NT + nt) * 2u] = lo;
-                    acc[(mt * NT + nt) * 2u + 1u] = hi;
+                    acc[(mt * NT + nt) * 2u] = m0;
+                    acc[(mt * NT + nt) * 2u + 1u] = m8;
                 }
             }
         }
@@ -227,17 +240,7 @@ fn mma_emulated(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_
     for (var mt = 0u; mt < 4u; mt++) {
         for (var nt = 0u; nt < NT; nt++) {
             workgroupBarrier();
-            let s = sg * TILE + p * 16u + n;
-            let lo = acc[(mt * NT + nt) * 2u];
-            let hi = acc[(mt * NT + nt) * 2u + 1u];
-            stage[s] = lo.x;
-            stage[s + 1u] = lo.y;
-            stage[s + 2u] = lo.z;
-            stage[s + 3u] = lo.w;
-            stage[s + 8u] = hi.x;
-            stage[s + 9u] = hi.y;
-            stage[s + 10u] = hi.z;
-            stage[s + 11u] = hi.w;
+            put_lane(sg, lane, acc[(mt * NT + nt) * 2u], acc[(mt * NT + nt) * 2u + 1u]);
             workgroupBarrier();
             emit(sg, lane, mt, nt, x0, y0, wg.z);
         }
@@ -258,10 +261,8 @@ fn mma_split_emulated(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invoc
     let lane = li % 32u;
     let p = lane % 16u;
     let n = 4u * (lane / 16u);
+    // Zero, as WGSL initialises a var without an initialiser.
     var acc: array<vec4<f32>, 32>;
-    for (var i = 0u; i < 32u; i++) {
-        acc[i] = vec4<f32>(0.0);
-    }
     for (var c = 0u; c < chunks(); c++) {
         // The previous chunk's products are done before its window is overwritten.
         workgroupBarrier();
@@ -303,18 +304,8 @@ fn mma_split_emulated(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invoc
     for (var mt = 0u; mt < 4u; mt++) {
         for (var nt = 0u; nt < NT; nt++) {
             workgroupBarrier();
-            let s = sg * TILE + p * 16u + n;
             let i = (mt * NT + nt) * 2u;
-            let v0 = acc[i] + acc[16u + i] * (1.0 / LO_SCALE);
-            let v8 = acc[i + 1u] + acc[17u + i] * (1.0 / LO_SCALE);
-            stage[s] = v0.x;
-            stage[s + 1u] = v0.y;
-            stage[s + 2u] = v0.z;
-            stage[s + 3u] = v0.w;
-            stage[s + 8u] = v8.x;
-            stage[s + 9u] = v8.y;
-            stage[s + 10u] = v8.z;
-            stage[s + 11u] = v8.w;
+            put_lane(sg, lane, acc[i] + acc[16u + i] * (1.0 / LO_SCALE), acc[i + 1u] + acc[17u + i] * (1.0 / LO_SCALE));
             workgroupBarrier();
             emit(sg, lane, mt, nt, x0, y0, wg.z);
         }
