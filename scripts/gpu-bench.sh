@@ -4,7 +4,7 @@
 #   run there:    bash scripts/gpu-bench.sh "$OUT" .devbin/rae-cli [OTHER-BUILD ...]   (carrying .devbin and .gl)
 # Checks the goldens on the GPU, times 1080p and 720p in f32 and f16 over conv tiles x weight
 # memories (GPU-resident frames by timestamps, and host round trips), per-stage times, the sample
-# sequence end to end, and PyTorch/cuDNN on the same weights. Everything goes to $2/log.txt.
+# sequence end to end, and PyTorch/cuDNN on the same weights (TF32 off, then on). Everything goes to $2/log.txt.
 # TILES, MEMORIES, SOURCES (e.g. sampled,storage; builds before session 12 have no --sources),
 # STAGE_TILES override the sweep; SKIP_TORCH=1 leaves PyTorch out; MMA=1 adds the matrix-unit
 # kernel (sessions 13-14; older builds have no mma tiles): it holds the split tiles (mma32x3) to
@@ -72,5 +72,7 @@ w=models/rae-default.safetensors
     [ -n "${SKIP_TORCH:-}" ] && exit 0
     echo "== PyTorch"
     (cd weights-tool && python3 -m rae_weights bench ../"$w" --sizes 1920x1088,1280x736 --frames 20 --device cuda --dtypes float32,float16)
+    echo "== PyTorch with TF32 convs (its default on this GPU: 10-bit mantissas in, as in rae's plain mma tiles)"
+    (cd weights-tool && python3 -m rae_weights bench ../"$w" --sizes 1920x1088,1280x736 --frames 20 --device cuda --dtypes float32 --tf32)
 } 2>&1 | tee "$log"
 rm -rf "$out/sample"

@@ -25,9 +25,11 @@
 //
 // Split operands (entry points `mma_split` and `mma_split_emulated`, kernels::Tile::mma_split):
 // each operand x is also carried as its scaled remainder lo(x) = f16((x - hi(x)) * LO_SCALE),
-// hi(x) = f16(x), and each pair is multiplied three times: a * b ~ hi(a) hi(b) + (hi(a) lo(b) +
-// lo(a) hi(b)) / LO_SCALE, the dropped lo(a) lo(b) being 2^-22 of the product. That is 22-bit
-// operands, f32-class results at three times the products. The remainder is scaled by 2^11 so
+// hi(x) = f16(x) for the weights (rounded on the host) and x's mantissa cut to 10 bits for the
+// activations (`stage_chunk_split` says why), and each pair is multiplied three times: a * b ~
+// hi(a) hi(b) + (hi(a) lo(b) + lo(a) hi(b)) / LO_SCALE, the dropped lo(a) lo(b) being about
+// 2^-21 of the product. That is 21- to 22-bit operands, f32-class results at three times the
+// products. The remainder is scaled by 2^11 so
 // that it stays a normal f16 (an unscaled remainder of a value under 0.125 would be subnormal,
 // which devices may flush), and the scaled products sum in accumulators of their own, divided
 // (exactly, a power of two) when the two meet at the store. With f16 activations (SPLIT_A
@@ -119,17 +121,24 @@ fn stage_chunk(li: u32, c: u32, x0: u32, y0: u32) {
 
 // Stage chunk c as `stage_chunk` does, and with SPLIT_A each value's scaled remainder into
 // `win_lo`.
+//
+// hi is v with its mantissa cut to f16's 10 bits by a mask, not f16(v) widened back: the
+// NVIDIA driver (580, H100, session 15) treated v - f32(f16(v)) as if the round trip were
+// exact, so the remainder came out zero and the split tiles gave f16-operand (TF32-like)
+// error. The masked hi converts to f16 exactly (in f16's normal range; below it the lost bits
+// are under 2^-24 absolute), and v - hi is exact in f32 with no conversion to fold.
 fn stage_chunk_split(li: u32, c: u32, x0: u32, y0: u32) {
     for (var i = li; i < WIN_TEXELS; i += 128u) {
         let v = window_texel(i, c, x0, y0);
-        let h = vec4<f16>(v);
+        let hi = bitcast<vec4<f32>>(bitcast<vec4<u32>>(v) & vec4<u32>(0xffffe000u));
+        let h = vec4<f16>(hi);
         let o = win_at(i);
         win[o] = h.x;
         win[o + 1u] = h.y;
         win[o + 2u] = h.z;
         win[o + 3u] = h.w;
         if SPLIT_A {
-            let l = vec4<f16>((v - vec4<f32>(h)) * LO_SCALE);
+            let l = vec4<f16>((v - hi) * LO_SCALE);
             win_lo[o] = l.x;
             win_lo[o + 1u] = l.y;
             win_lo[o + 2u] = l.z;

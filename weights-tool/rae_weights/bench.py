@@ -61,17 +61,18 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--threads", type=int, default=min(2, os.cpu_count() or 1))
     p.add_argument("--device", default="cpu", help="cpu or cuda (cuDNN; TF32 off so float32 is IEEE float32)")
     p.add_argument("--dtypes", default="float32", help="comma-separated: float32, float16 (float16 on cuda only)")
+    p.add_argument("--tf32", action="store_true", help="let cuDNN run float32 convs in TF32 (PyTorch's own default for convs on Ampere and later)")
     a = p.parse_args(argv)
     torch.set_num_threads(a.threads)
-    torch.backends.cudnn.allow_tf32 = False
-    torch.backends.cuda.matmul.allow_tf32 = False
+    torch.backends.cudnn.allow_tf32 = a.tf32
+    torch.backends.cuda.matmul.allow_tf32 = a.tf32
     torch.backends.cudnn.benchmark = True
     arch, state = read_weights(a.weights)
     model = RecurrentAE(arch)
     model.load_state_dict(state)
     model = model.eval().to(memory_format=torch.channels_last)
     flop_px = 2 * macs_per_pixel(model)
-    where = f"CPU, {a.threads} threads" if a.device == "cpu" else f"{torch.cuda.get_device_name()} (cuDNN {torch.backends.cudnn.version()}, TF32 off)"
+    where = f"CPU, {a.threads} threads" if a.device == "cpu" else f"{torch.cuda.get_device_name()} (cuDNN {torch.backends.cudnn.version()}, TF32 {'on' if a.tf32 else 'off'})"
     print(f"PyTorch {torch.__version__} {where}, channels_last; weights: {a.weights}; {a.frames} timed frames after 2 warm-up")
     print(f"{'size':>10} {'dtype':>8} {'ms':>10} {'GFLOP/s':>10}")
     for dtype in a.dtypes.split(","):
