@@ -44,13 +44,14 @@ w=models/rae-default.safetensors
         echo "== mma: the split tiles against PyTorch's goldens (must pass, as the direct kernel does), then the plain one (fails by design: f16 operands)"
         "$cli" verify tests/fixtures/golden_*.safetensors --tile mma32x3
         "$cli" verify tests/fixtures/golden_full_64x64.safetensors --tile mma16x3
+        "$cli" verify tests/fixtures/golden_full_96x64.safetensors --tile mma64x3
         "$cli" verify tests/fixtures/golden_full_64x64.safetensors --tile mma32
         echo "== mma: each fixed tile on 64x64 against the direct f32 frames (the err column; emulated if no matrix units)"
-        "$cli" bench "$w" --sizes 64x64 --frames 3 --precision f32,f16 --tile 16x2,mma16,mma32,mma48,mma64,mma16x3,mma32x3 --weights-memory storage
+        "$cli" bench "$w" --sizes 64x64 --frames 3 --precision f32,f16 --tile 16x2,mma16,mma32,mma48,mma64,mma16x3,mma32x3,mma48x3,mma64x3 --weights-memory storage
         echo "== mma: the same tiles emulated on this GPU (RAE_MATRIX_UNITS=0), for comparison"
         RAE_MATRIX_UNITS=0 "$cli" bench "$w" --sizes 64x64 --frames 3 --precision f32 --tile mma32,mma64,mma32x3 --weights-memory storage
         echo "== mma: 1080p and 720p"
-        "$cli" bench "$w" --sizes 1920x1080,1280x720 --frames 20 --precision f32,f16 --tile tuned,tuned-mma,mma32,mma64,mma16x3,mma32x3 --weights-memory storage --peak-gflops 66900 | grep -E "^ +(size|[0-9]+x[0-9]+) "
+        "$cli" bench "$w" --sizes 1920x1080,1280x720 --frames 20 --precision f32,f16 --tile tuned,tuned-mma,mma32,mma64,mma32x3,mma64x3 --weights-memory storage --peak-gflops 66900 | grep -E "^ +(size|[0-9]+x[0-9]+) "
         echo "== mma: stages of tuned-mma (f16, f32)"
         "$cli" bench "$w" --sizes 1920x1080 --frames 10 --precision f16,f32 --tile tuned-mma --weights-memory storage --layers
         echo "== mma: the sample with tuned-mma, f32 and f16"

@@ -3,13 +3,13 @@
 // pooled, upsampled or both), computed as an implicit GEMM in 16 x 16 x 16 tiles with f16
 // multiplicands and f32 sums.
 //
-// A workgroup of 128 invocations (4 subgroups of 32) computes 4 output rows x 64 pixels x
-// 16 * NT output channels. For each chunk of 16 input channels it stages the 6 x 66 input
-// window of its tile into workgroup memory as f16 (`win`, pixel-major: a pixel's 16 channels
-// are adjacent), and then every subgroup adds, for each of the 9 taps, the products of its
-// row's 4 pixel tiles (A: 16 pixels x 16 channels, read from `win` at the tap's offset) with
-// the tap's NT weight tiles (B: 16 input x 16 output channels, read from the weight buffer):
-// 4 * NT accumulators of 16 x 16 f32. At the end each accumulator goes through `stage` to the
+// A workgroup of 128 invocations (4 subgroups of 32) computes 4 output rows x 16 * MT pixels
+// x 16 * NT output channels. For each chunk of 16 input channels it stages the 6 x (16 MT + 2)
+// input window of its tile into workgroup memory as f16 (`win`, pixel-major: a pixel's 16
+// channels are adjacent), and then every subgroup adds, for each of the 9 taps, the products
+// of its row's MT pixel tiles (A: 16 pixels x 16 channels, read from `win` at the tap's
+// offset) with the tap's NT weight tiles (B: 16 input x 16 output channels, read from the
+// weight buffer): MT * NT accumulators of 16 x 16 f32. At the end each accumulator goes through `stage` to the
 // output texture with the bias, the activation and the clamp.
 //
 // Two entry points share the staging, the indexing and the store: `mma` (conv3x3_mma_coop.wgsl,
@@ -40,21 +40,19 @@
 
 enable f16;
 
-// 16-channel output tiles per workgroup: 1 to 4 (1 or 2 for the split entry points).
+// 16-channel output tiles per workgroup: 1 to 4.
 override NT: u32 = 2u;
+// 16-pixel tiles per subgroup row: 4 for `mma` and `mma_emulated`, 2 for the split entry
+// points, whose window holds the remainders too (kernels::Tile::mma_split).
+override MT: u32 = 4u;
 // Split entry points: the weights carry their remainders (after all the hi tiles, before the
 // bias), and with SPLIT_A the activations too (f32 storage; f16 activations have none).
 override SPLIT: bool = false;
 override SPLIT_A: bool = true;
 
-// Pixels per subgroup row (4 tiles of 16), rows per workgroup (one per subgroup), and the
-// staged window: (ROWS + 2) x (PIXELS + 2) pixels of 16 channels.
-const PIXELS: u32 = 64u;
+// Rows per workgroup (one per subgroup) and the staged window's height (ROWS + 2).
 const ROWS: u32 = 4u;
-const WIN_W: u32 = 66u;
 const WIN_H: u32 = 6u;
-// Texels (4 channels) staged per chunk: WIN_H * WIN_W * 4.
-const WIN_TEXELS: u32 = 1584u;
 // Elements of one 16 x 16 tile.
 const TILE: u32 = 256u;
 // Scale of a split operand's remainder (2^11: one f16 mantissa).
@@ -69,28 +67,45 @@ const LO_SCALE: f32 = 2048.0;
 @group(0) @binding(3) var<storage, read> weights: array<f16>;
 
 // The input window of one chunk, [row][column][channel]; an A tile of pixels p .. p + 15 of a
-// window row is 16 x 16 row-major at stride 16.
-var<workgroup> win: array<f16, 6336>;
+// window row is 16 x 16 row-major at stride 16. The split entry points keep the remainders
+// (scaled by LO_SCALE) after it, from lo_at(). Sized for the larger use: 6 x 66 x 16 = 6336
+// (MT 4), 2 x 6 x 34 x 16 = 6528 (split, MT 2); kernels::MMA_WORKGROUP_BYTES.
+var<workgroup> win: array<f16, 6528>;
 // One 16 x 16 f32 accumulator per subgroup on its way to the output, row-major.
 var<workgroup> stage: array<f32, 1024>;
-// The split entry points' remainders of `win` (scaled by LO_SCALE). The other entry points do
-// not touch it, so their workgroups do not pay for it.
-var<workgroup> win_lo: array<f16, 6336>;
+
+// Pixels per subgroup row, and the staged window's width (2 more).
+fn pixels() -> u32 {
+    return 16u * MT;
+}
+fn win_w() -> u32 {
+    return pixels() + 2u;
+}
+
+// Texels (4 channels) staged per chunk.
+fn win_texels() -> u32 {
+    return WIN_H * win_w() * 4u;
+}
+
+// Where the split entry points' remainders of the window start in `win`.
+fn lo_at() -> u32 {
+    return WIN_H * win_w() * 16u;
+}
 
 // Chunks of 16 input channels (4 blocks; the last one padded with zero weights).
 fn chunks() -> u32 {
     return (params.cin4_total + 3u) / 4u;
 }
 
-// Texel i (< WIN_TEXELS) of chunk c's window whose top-left output pixel is (x0, y0), clamped
+// Texel i (< win_texels()) of chunk c's window whose top-left output pixel is (x0, y0), clamped
 // to f16's range: input block 4c + j (j = i % 4) at window pixel (r, q) is the source texel at
 // (x0 + q - 1, y0 + r - 1). Blocks past cin4_a + cin4_b (padding, or a reset frame's hidden
 // state) are zero. It goes to `win` at win_at(i).
 fn window_texel(i: u32, c: u32, x0: u32, y0: u32) -> vec4<f32> {
     let j = i % 4u;
     let pixel = i / 4u;
-    let x = i32(x0 + pixel % WIN_W) - 1;
-    let y = i32(y0 + pixel / WIN_W) - 1;
+    let x = i32(x0 + pixel % win_w()) - 1;
+    let y = i32(y0 + pixel / win_w()) - 1;
     let ib = 4u * c + j;
     var v = vec4<f32>(0.0);
     if ib < params.cin4_a {
@@ -109,7 +124,7 @@ fn win_at(i: u32) -> u32 {
 
 // Stage chunk c of the window whose top-left output pixel is (x0, y0) into `win`.
 fn stage_chunk(li: u32, c: u32, x0: u32, y0: u32) {
-    for (var i = li; i < WIN_TEXELS; i += 128u) {
+    for (var i = li; i < win_texels(); i += 128u) {
         let h = vec4<f16>(window_texel(i, c, x0, y0));
         let o = win_at(i);
         win[o] = h.x;
@@ -120,17 +135,20 @@ fn stage_chunk(li: u32, c: u32, x0: u32, y0: u32) {
 }
 
 // Stage chunk c as `stage_chunk` does, and with SPLIT_A each value's scaled remainder into
-// `win_lo`.
+// `win` from lo_at().
 //
-// hi is v with its mantissa cut to f16's 10 bits by a mask, not f16(v) widened back: the
+// hi is v cut to what f16 holds exactly, in f32 arithmetic, not f16(v) widened back: the
 // NVIDIA driver (580, H100, session 15) treated v - f32(f16(v)) as if the round trip were
 // exact, so the remainder came out zero and the split tiles gave f16-operand (TF32-like)
-// error. The masked hi converts to f16 exactly (in f16's normal range; below it the lost bits
-// are under 2^-24 absolute), and v - hi is exact in f32 with no conversion to fold.
+// error. In f16's normal range (from 2^-14) the cut is a mask to 10 mantissa bits; below it,
+// where f16's spacing is 2^-24, a truncation to that multiple (exact: powers of two). Either
+// converts to f16 exactly, and v - hi is exact in f32 with no conversion to fold.
 fn stage_chunk_split(li: u32, c: u32, x0: u32, y0: u32) {
-    for (var i = li; i < WIN_TEXELS; i += 128u) {
+    for (var i = li; i < win_texels(); i += 128u) {
         let v = window_texel(i, c, x0, y0);
-        let hi = bitcast<vec4<f32>>(bitcast<vec4<u32>>(v) & vec4<u32>(0xffffe000u));
+        let cut = bitcast<vec4<f32>>(bitcast<vec4<u32>>(v) & vec4<u32>(0xffffe000u));
+        let fine = trunc(v * 16777216.0) * (1.0 / 16777216.0);
+        let hi = select(cut, fine, abs(v) < vec4<f32>(6.103515625e-5));
         let h = vec4<f16>(hi);
         let o = win_at(i);
         win[o] = h.x;
@@ -139,10 +157,10 @@ fn stage_chunk_split(li: u32, c: u32, x0: u32, y0: u32) {
         win[o + 3u] = h.w;
         if SPLIT_A {
             let l = vec4<f16>((v - hi) * LO_SCALE);
-            win_lo[o] = l.x;
-            win_lo[o + 1u] = l.y;
-            win_lo[o + 2u] = l.z;
-            win_lo[o + 3u] = l.w;
+            win[lo_at() + o] = l.x;
+            win[lo_at() + o + 1u] = l.y;
+            win[lo_at() + o + 2u] = l.z;
+            win[lo_at() + o + 3u] = l.w;
         }
     }
 }
@@ -150,7 +168,7 @@ fn stage_chunk_split(li: u32, c: u32, x0: u32, y0: u32) {
 // Where subgroup sg's A tile mt (pixels 16 mt .. 16 mt + 15 of its row) starts in `win` for
 // tap (ky, kx).
 fn a_at(sg: u32, mt: u32, ky: u32, kx: u32) -> u32 {
-    return ((sg + ky) * WIN_W + mt * 16u + kx) * 16u;
+    return ((sg + ky) * win_w() + mt * 16u + kx) * 16u;
 }
 
 // Where weight tile nt of chunk c and tap t starts, for the group at w.
@@ -178,8 +196,8 @@ fn emit(sg: u32, lane: u32, mt: u32, nt: u32, x0: u32, y0: u32, z: u32) {
         if x < params.width && y < params.height && block < params.cout4 {
             let s = sg * TILE + p * 16u + 4u * j;
             let hi = vec4<f32>(f32(weights[bias_at + n]), f32(weights[bias_at + n + 1u]), f32(weights[bias_at + n + 2u]), f32(weights[bias_at + n + 3u]));
-            let lo_at = bias_at + 16u * NT + n;
-            let lo = vec4<f32>(f32(weights[lo_at]), f32(weights[lo_at + 1u]), f32(weights[lo_at + 2u]), f32(weights[lo_at + 3u]));
+            let bias_lo = bias_at + 16u * NT + n;
+            let lo = vec4<f32>(f32(weights[bias_lo]), f32(weights[bias_lo + 1u]), f32(weights[bias_lo + 2u]), f32(weights[bias_lo + 3u]));
             let v = vec4<f32>(stage[s], stage[s + 1u], stage[s + 2u], stage[s + 3u]) + (hi + lo);
             textureStore(dst, vec2<u32>(x, y), block, activate(v));
         }
@@ -213,7 +231,7 @@ fn put_lane(sg: u32, lane: u32, v0: vec4<f32>, v8: vec4<f32>) {
 // q = lane / 16: accumulator (mt, nt) at acc[(mt * NT + nt) * 2] and [.. + 1].
 @compute @workgroup_size(128, 1, 1)
 fn mma_emulated(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
-    let x0 = wg.x * PIXELS;
+    let x0 = wg.x * pixels();
     let y0 = wg.y * ROWS;
     let w = wg.z * params.group_stride;
     let sg = li / 32u;
@@ -228,7 +246,7 @@ fn mma_emulated(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_
         stage_chunk(li, c, x0, y0);
         workgroupBarrier();
         for (var t = 0u; t < 9u; t++) {
-            for (var mt = 0u; mt < 4u; mt++) {
+            for (var mt = 0u; mt < MT; mt++) {
                 let row = a_at(sg, mt, t / 3u, t % 3u) + p * 16u;
                 for (var nt = 0u; nt < NT; nt++) {
                     let b = b_at(w, c, t, nt);
@@ -246,7 +264,7 @@ fn mma_emulated(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_
             }
         }
     }
-    for (var mt = 0u; mt < 4u; mt++) {
+    for (var mt = 0u; mt < MT; mt++) {
         for (var nt = 0u; nt < NT; nt++) {
             workgroupBarrier();
             put_lane(sg, lane, acc[(mt * NT + nt) * 2u], acc[(mt * NT + nt) * 2u + 1u]);
@@ -258,12 +276,12 @@ fn mma_emulated(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_
 
 // ---- Emulated split products: entry point `mma_split_emulated` ----
 
-// `mma_emulated` with split operands (NT <= 2): lane `lane` holds the same elements of the
-// 4 * NT main accumulators at acc[(mt * NT + nt) * 2 ..] and of the remainders' products at
+// `mma_emulated` with split operands (MT 2): lane `lane` holds the same elements of the
+// 2 * NT main accumulators at acc[(mt * NT + nt) * 2 ..] and of the remainders' products at
 // acc[16 + (mt * NT + nt) * 2 ..]; the two meet before the store as `mma_split`'s do.
 @compute @workgroup_size(128, 1, 1)
 fn mma_split_emulated(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
-    let x0 = wg.x * PIXELS;
+    let x0 = wg.x * pixels();
     let y0 = wg.y * ROWS;
     let w = wg.z * params.group_stride;
     let sg = li / 32u;
@@ -278,7 +296,7 @@ fn mma_split_emulated(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invoc
         stage_chunk_split(li, c, x0, y0);
         workgroupBarrier();
         for (var t = 0u; t < 9u; t++) {
-            for (var mt = 0u; mt < 4u; mt++) {
+            for (var mt = 0u; mt < MT; mt++) {
                 let row = a_at(sg, mt, t / 3u, t % 3u) + p * 16u;
                 for (var nt = 0u; nt < NT; nt++) {
                     let b = b_at(w, c, t, nt);
@@ -297,7 +315,7 @@ fn mma_split_emulated(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invoc
                         r0 = fma(a, b_row4(b + lo_tiles(), k, n), r0);
                         r8 = fma(a, b_row4(b + lo_tiles(), k, n + 8u), r8);
                         if SPLIT_A {
-                            let l = vec4<f32>(f32(win_lo[row + k]));
+                            let l = vec4<f32>(f32(win[lo_at() + row + k]));
                             r0 = fma(l, b0, r0);
                             r8 = fma(l, b8, r8);
                         }
@@ -310,7 +328,7 @@ fn mma_split_emulated(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invoc
             }
         }
     }
-    for (var mt = 0u; mt < 4u; mt++) {
+    for (var mt = 0u; mt < MT; mt++) {
         for (var nt = 0u; nt < NT; nt++) {
             workgroupBarrier();
             let i = (mt * NT + nt) * 2u;

@@ -15,7 +15,7 @@ alias TileB = coop_mat16x16<f16, B>;
 
 @compute @workgroup_size(128, 1, 1)
 fn mma(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
-    let x0 = wg.x * PIXELS;
+    let x0 = wg.x * pixels();
     let y0 = wg.y * ROWS;
     let w = wg.z * params.group_stride;
     let sg = li / 32u;
@@ -140,41 +140,27 @@ fn mma(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li
 
 // ---- Split operands in matrix units: entry point `mma_split` ----
 //
-// `mma_split_emulated`'s products in the matrix units (NT 1 or 2): accumulator (mt, nt) is
-// c<mt><nt> for the hi products and d<mt><nt> for the remainders' (hi(a) lo(b), and lo(a)
-// hi(b) with SPLIT_A). At the store each pair meets in `stage` as hi + rest / LO_SCALE, as in
-// the emulation: the rest goes through `stage` first and each lane keeps the 8 elements it
-// will add, so the split kernel needs no second stage (its workgroup memory stays under
-// 32 KiB, kernels::MMA_SPLIT_WORKGROUP_BYTES).
-
-// The 8 elements of subgroup sg's accumulator in `stage` that lane `lane` joins: lane + 32 i.
-fn rest_of(sg: u32, lane: u32) -> array<f32, 8> {
-    var r: array<f32, 8>;
-    for (var i = 0u; i < 8u; i++) {
-        r[i] = stage[sg * TILE + lane + 32u * i];
-    }
-    return r;
-}
-
-// Add the rest `r` (from `rest_of`) to subgroup sg's accumulator in `stage`.
-fn join_rest(sg: u32, lane: u32, r: array<f32, 8>) {
-    for (var i = 0u; i < 8u; i++) {
-        stage[sg * TILE + lane + 32u * i] += r[i] * (1.0 / LO_SCALE);
-    }
-}
+// `mma_split_emulated`'s products in the matrix units (MT 2, NT 1 to 4): accumulator (mt, nt)
+// is c<mt><nt> for the hi products and d<mt><nt> for the remainders' (hi(a) lo(b), and lo(a)
+// hi(b) with SPLIT_A). At the store each pair is joined in the matrix registers, c + d /
+// LO_SCALE (elementwise, as in the emulation), and goes out through `stage` as `mma`'s
+// accumulators do. Two pixel tiles per row rather than
+// `mma`'s four keep the window and its remainders in `win` (kernels::MMA_WORKGROUP_BYTES):
+// with its own 12.7 KB array for the remainders (29.4 KB a workgroup, session 14) the H100
+// ran this kernel 2.5 times slower than `mma` (session 15, docs/PERF.md).
 
 @compute @workgroup_size(128, 1, 1)
 fn mma_split(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
-    let x0 = wg.x * PIXELS;
+    let x0 = wg.x * pixels();
     let y0 = wg.y * ROWS;
     let w = wg.z * params.group_stride;
     let sg = li / 32u;
     let lane = li % 32u;
     // Accumulators (mt, nt): pixels 16 mt .. 16 mt + 15 of row y0 + sg x output tile nt.
-    var c00 = Acc(); var c01 = Acc(); var c10 = Acc(); var c11 = Acc();
-    var c20 = Acc(); var c21 = Acc(); var c30 = Acc(); var c31 = Acc();
-    var d00 = Acc(); var d01 = Acc(); var d10 = Acc(); var d11 = Acc();
-    var d20 = Acc(); var d21 = Acc(); var d30 = Acc(); var d31 = Acc();
+    var c00 = Acc(); var c01 = Acc(); var c02 = Acc(); var c03 = Acc();
+    var c10 = Acc(); var c11 = Acc(); var c12 = Acc(); var c13 = Acc();
+    var d00 = Acc(); var d01 = Acc(); var d02 = Acc(); var d03 = Acc();
+    var d10 = Acc(); var d11 = Acc(); var d12 = Acc(); var d13 = Acc();
     for (var c = 0u; c < chunks(); c++) {
         // The previous chunk's products are done before its window is overwritten.
         workgroupBarrier();
@@ -185,132 +171,97 @@ fn mma_split(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_ind
             let kx = t % 3u;
             let a0 = coopLoadT<TileA>(&win[a_at(sg, 0u, ky, kx)], 16u);
             let a1 = coopLoadT<TileA>(&win[a_at(sg, 1u, ky, kx)], 16u);
-            let a2 = coopLoadT<TileA>(&win[a_at(sg, 2u, ky, kx)], 16u);
-            let a3 = coopLoadT<TileA>(&win[a_at(sg, 3u, ky, kx)], 16u);
-            var l0 = TileA(); var l1 = TileA(); var l2 = TileA(); var l3 = TileA();
+            var l0 = TileA();
+            var l1 = TileA();
             if SPLIT_A {
-                l0 = coopLoadT<TileA>(&win_lo[a_at(sg, 0u, ky, kx)], 16u);
-                l1 = coopLoadT<TileA>(&win_lo[a_at(sg, 1u, ky, kx)], 16u);
-                l2 = coopLoadT<TileA>(&win_lo[a_at(sg, 2u, ky, kx)], 16u);
-                l3 = coopLoadT<TileA>(&win_lo[a_at(sg, 3u, ky, kx)], 16u);
+                l0 = coopLoadT<TileA>(&win[lo_at() + a_at(sg, 0u, ky, kx)], 16u);
+                l1 = coopLoadT<TileA>(&win[lo_at() + a_at(sg, 1u, ky, kx)], 16u);
             }
             let b0 = coopLoadT<TileB>(&weights[b_at(w, c, t, 0u)], 16u);
             let e0 = coopLoadT<TileB>(&weights[b_at(w, c, t, 0u) + lo_tiles()], 16u);
             c00 = coopMultiplyAdd(a0, b0, c00);
             c10 = coopMultiplyAdd(a1, b0, c10);
-            c20 = coopMultiplyAdd(a2, b0, c20);
-            c30 = coopMultiplyAdd(a3, b0, c30);
             d00 = coopMultiplyAdd(a0, e0, d00);
             d10 = coopMultiplyAdd(a1, e0, d10);
-            d20 = coopMultiplyAdd(a2, e0, d20);
-            d30 = coopMultiplyAdd(a3, e0, d30);
             if SPLIT_A {
                 d00 = coopMultiplyAdd(l0, b0, d00);
                 d10 = coopMultiplyAdd(l1, b0, d10);
-                d20 = coopMultiplyAdd(l2, b0, d20);
-                d30 = coopMultiplyAdd(l3, b0, d30);
             }
             if NT > 1u {
                 let b1 = coopLoadT<TileB>(&weights[b_at(w, c, t, 1u)], 16u);
                 let e1 = coopLoadT<TileB>(&weights[b_at(w, c, t, 1u) + lo_tiles()], 16u);
                 c01 = coopMultiplyAdd(a0, b1, c01);
                 c11 = coopMultiplyAdd(a1, b1, c11);
-                c21 = coopMultiplyAdd(a2, b1, c21);
-                c31 = coopMultiplyAdd(a3, b1, c31);
                 d01 = coopMultiplyAdd(a0, e1, d01);
                 d11 = coopMultiplyAdd(a1, e1, d11);
-                d21 = coopMultiplyAdd(a2, e1, d21);
-                d31 = coopMultiplyAdd(a3, e1, d31);
                 if SPLIT_A {
                     d01 = coopMultiplyAdd(l0, b1, d01);
                     d11 = coopMultiplyAdd(l1, b1, d11);
-                    d21 = coopMultiplyAdd(l2, b1, d21);
-                    d31 = coopMultiplyAdd(l3, b1, d31);
+                }
+            }
+            if NT > 2u {
+                let b2 = coopLoadT<TileB>(&weights[b_at(w, c, t, 2u)], 16u);
+                let e2 = coopLoadT<TileB>(&weights[b_at(w, c, t, 2u) + lo_tiles()], 16u);
+                c02 = coopMultiplyAdd(a0, b2, c02);
+                c12 = coopMultiplyAdd(a1, b2, c12);
+                d02 = coopMultiplyAdd(a0, e2, d02);
+                d12 = coopMultiplyAdd(a1, e2, d12);
+                if SPLIT_A {
+                    d02 = coopMultiplyAdd(l0, b2, d02);
+                    d12 = coopMultiplyAdd(l1, b2, d12);
+                }
+            }
+            if NT > 3u {
+                let b3 = coopLoadT<TileB>(&weights[b_at(w, c, t, 3u)], 16u);
+                let e3 = coopLoadT<TileB>(&weights[b_at(w, c, t, 3u) + lo_tiles()], 16u);
+                c03 = coopMultiplyAdd(a0, b3, c03);
+                c13 = coopMultiplyAdd(a1, b3, c13);
+                d03 = coopMultiplyAdd(a0, e3, d03);
+                d13 = coopMultiplyAdd(a1, e3, d13);
+                if SPLIT_A {
+                    d03 = coopMultiplyAdd(l0, b3, d03);
+                    d13 = coopMultiplyAdd(l1, b3, d13);
                 }
             }
         }
     }
-    // Each pair of accumulators joined in `stage`, to the output.
+    // Each pair of accumulators joined, through this subgroup's part of `stage` to the output.
     workgroupBarrier();
-    coopStoreT(d00, &stage[sg * TILE], 16u);
-    workgroupBarrier();
-    let r00 = rest_of(sg, lane);
-    workgroupBarrier();
-    coopStoreT(c00, &stage[sg * TILE], 16u);
-    workgroupBarrier();
-    join_rest(sg, lane, r00);
+    coopStoreT(c00 + d00 * (1.0 / LO_SCALE), &stage[sg * TILE], 16u);
     workgroupBarrier();
     emit(sg, lane, 0u, 0u, x0, y0, wg.z);
     workgroupBarrier();
-    coopStoreT(d10, &stage[sg * TILE], 16u);
-    workgroupBarrier();
-    let r10 = rest_of(sg, lane);
-    workgroupBarrier();
-    coopStoreT(c10, &stage[sg * TILE], 16u);
-    workgroupBarrier();
-    join_rest(sg, lane, r10);
+    coopStoreT(c10 + d10 * (1.0 / LO_SCALE), &stage[sg * TILE], 16u);
     workgroupBarrier();
     emit(sg, lane, 1u, 0u, x0, y0, wg.z);
-    workgroupBarrier();
-    coopStoreT(d20, &stage[sg * TILE], 16u);
-    workgroupBarrier();
-    let r20 = rest_of(sg, lane);
-    workgroupBarrier();
-    coopStoreT(c20, &stage[sg * TILE], 16u);
-    workgroupBarrier();
-    join_rest(sg, lane, r20);
-    workgroupBarrier();
-    emit(sg, lane, 2u, 0u, x0, y0, wg.z);
-    workgroupBarrier();
-    coopStoreT(d30, &stage[sg * TILE], 16u);
-    workgroupBarrier();
-    let r30 = rest_of(sg, lane);
-    workgroupBarrier();
-    coopStoreT(c30, &stage[sg * TILE], 16u);
-    workgroupBarrier();
-    join_rest(sg, lane, r30);
-    workgroupBarrier();
-    emit(sg, lane, 3u, 0u, x0, y0, wg.z);
     if NT > 1u {
         workgroupBarrier();
-        coopStoreT(d01, &stage[sg * TILE], 16u);
-        workgroupBarrier();
-        let r01 = rest_of(sg, lane);
-        workgroupBarrier();
-        coopStoreT(c01, &stage[sg * TILE], 16u);
-        workgroupBarrier();
-        join_rest(sg, lane, r01);
+        coopStoreT(c01 + d01 * (1.0 / LO_SCALE), &stage[sg * TILE], 16u);
         workgroupBarrier();
         emit(sg, lane, 0u, 1u, x0, y0, wg.z);
         workgroupBarrier();
-        coopStoreT(d11, &stage[sg * TILE], 16u);
-        workgroupBarrier();
-        let r11 = rest_of(sg, lane);
-        workgroupBarrier();
-        coopStoreT(c11, &stage[sg * TILE], 16u);
-        workgroupBarrier();
-        join_rest(sg, lane, r11);
+        coopStoreT(c11 + d11 * (1.0 / LO_SCALE), &stage[sg * TILE], 16u);
         workgroupBarrier();
         emit(sg, lane, 1u, 1u, x0, y0, wg.z);
+    }
+    if NT > 2u {
         workgroupBarrier();
-        coopStoreT(d21, &stage[sg * TILE], 16u);
+        coopStoreT(c02 + d02 * (1.0 / LO_SCALE), &stage[sg * TILE], 16u);
         workgroupBarrier();
-        let r21 = rest_of(sg, lane);
+        emit(sg, lane, 0u, 2u, x0, y0, wg.z);
         workgroupBarrier();
-        coopStoreT(c21, &stage[sg * TILE], 16u);
+        coopStoreT(c12 + d12 * (1.0 / LO_SCALE), &stage[sg * TILE], 16u);
         workgroupBarrier();
-        join_rest(sg, lane, r21);
+        emit(sg, lane, 1u, 2u, x0, y0, wg.z);
+    }
+    if NT > 3u {
         workgroupBarrier();
-        emit(sg, lane, 2u, 1u, x0, y0, wg.z);
+        coopStoreT(c03 + d03 * (1.0 / LO_SCALE), &stage[sg * TILE], 16u);
         workgroupBarrier();
-        coopStoreT(d31, &stage[sg * TILE], 16u);
+        emit(sg, lane, 0u, 3u, x0, y0, wg.z);
         workgroupBarrier();
-        let r31 = rest_of(sg, lane);
+        coopStoreT(c13 + d13 * (1.0 / LO_SCALE), &stage[sg * TILE], 16u);
         workgroupBarrier();
-        coopStoreT(c31, &stage[sg * TILE], 16u);
-        workgroupBarrier();
-        join_rest(sg, lane, r31);
-        workgroupBarrier();
-        emit(sg, lane, 3u, 1u, x0, y0, wg.z);
+        emit(sg, lane, 1u, 3u, x0, y0, wg.z);
     }
 }

@@ -509,12 +509,14 @@ fn conv_mma_split_tiles_match_cpu_in_f32() {
     // The split matrix-unit kernel (emulated here unless the device has cooperative matrices)
     // holds f32 convolutions to the direct kernel's tolerance: mma32x3 over a pooled and a
     // direct source (5 chunks, the last partial) with 43 outputs in groups of two tiles on a
-    // level spanning partial workgroups; mma16x3 on upsampled sources at a thousandth of the
-    // scale, where an unscaled remainder would be an f16 subnormal.
+    // level spanning partial workgroups; mma64x3 (four tiles a group, one group short of its
+    // last two) on the same; mma16x3 on upsampled sources at a thousandth of the scale, where
+    // an unscaled remainder would be an f16 subnormal.
     check_conv_mma_split((tensor(41, 18, 140, 320), Read::Pool), Some((tensor(22, 9, 70, 321), Read::Direct)), 43, true, 70, 9, 322, Tile::mma_split(32).unwrap(), 1.0);
+    check_conv_mma_split((tensor(41, 18, 140, 326), Read::Pool), Some((tensor(22, 9, 70, 327), Read::Direct)), 43, true, 70, 9, 328, Tile::mma_split(64).unwrap(), 1.0);
     check_conv_mma_split((tensor(6, 3, 7, 323), Read::Upsample), Some((tensor(5, 6, 14, 324), Read::PoolUpsample)), 20, false, 14, 6, 325, Tile::mma_split(16).unwrap(), 1e-3);
     assert_eq!(Tile::mma_split(32).unwrap().to_string(), "mma32x3");
-    assert_eq!(Tile::mma_split(48), None, "two sets of accumulators: at most 32 channels");
+    assert_eq!(Tile::mma_split(80), None, "at most four 16-channel tiles");
 }
 
 #[test]

@@ -1,6 +1,6 @@
 //! Every WGSL file parses and validates with naga: no GPU needed, a broken shader fails here.
 
-use rae_core::kernels::{MMA_ENABLE, MMA_SPLIT_WORKGROUP_BYTES, MMA_WORKGROUP_BYTES, ROWS_STUB, SHADERS, STORAGE_SOURCES, STORAGE_WEIGHTS, UNIFORM_WEIGHTS, WITHOUT_SUBGROUPS, conv_module_source, mma_source, shader_source};
+use rae_core::kernels::{MMA_ENABLE, MMA_WORKGROUP_BYTES, ROWS_STUB, SHADERS, STORAGE_SOURCES, STORAGE_WEIGHTS, UNIFORM_WEIGHTS, WITHOUT_SUBGROUPS, conv_module_source, mma_source, shader_source};
 
 #[test]
 fn every_shader_validates_with_naga() {
@@ -86,9 +86,10 @@ fn the_matrix_unit_kernel_translates_to_spirv() {
 
 #[test]
 fn each_matrix_unit_entry_point_uses_only_its_workgroup_memory() {
-    // Workgroup memory is the sum of the workgroup arrays an entry point uses: the plain entry
-    // points must not touch the split ones' remainder window (or every mma tile would pay for
-    // it), and the sums are the byte counts ConvPlan checks against the device's limit.
+    // Workgroup memory is the sum of the workgroup arrays an entry point uses, the byte count
+    // ConvPlan checks against the device's limit: the split entry points keep their
+    // remainders inside the window array (a second array made them 2.5x slower on the H100,
+    // docs/PERF.md session 15), so every entry point uses the same.
     let source = mma_source(true);
     let module = naga::front::wgsl::parse_str(&source).unwrap_or_else(|e| panic!("{}", e.emit_to_string(&source)));
     let info = naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all()).validate(&module).unwrap();
@@ -99,14 +100,10 @@ fn each_matrix_unit_entry_point_uses_only_its_workgroup_memory() {
         let size = used.iter().map(|(_, g)| module.types[g.ty].inner.size(module.to_ctx())).sum();
         (size, used.iter().map(|(_, g)| g.name.clone().unwrap_or_default()).collect())
     };
-    for entry in ["mma", "mma_emulated"] {
+    for entry in ["mma", "mma_emulated", "mma_split", "mma_split_emulated"] {
         let (size, names) = bytes(entry);
         assert_eq!(size, MMA_WORKGROUP_BYTES, "{entry} uses {names:?}");
-        assert!(!names.iter().any(|n| n == "win_lo"), "{entry} uses {names:?}");
-    }
-    for entry in ["mma_split", "mma_split_emulated"] {
-        let (size, names) = bytes(entry);
-        assert_eq!(size, MMA_SPLIT_WORKGROUP_BYTES, "{entry} uses {names:?}");
+        assert_eq!(names, ["win", "stage"], "{entry}");
     }
 }
 

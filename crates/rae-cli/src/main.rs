@@ -124,7 +124,7 @@ enum Command {
         /// `denoise` uses). `mma16`, `mma32`, `mma48`, `mma64`: the matrix-unit kernel (f16
         /// products summed in f32, 16 to 64 output channels per workgroup; tensor cores where
         /// wgpu's cooperative matrices have 16x16x16 f16 -> f32, emulated and slow elsewhere;
-        /// storage weights and SHADER_F16); `mma16x3`, `mma32x3`: the same with every operand
+        /// storage weights and SHADER_F16); `mma16x3` to `mma64x3`: the same with every operand
         /// split into two f16 halves and three products (f32-class results); `tuned-mma`:
         /// `tuned` with the split tiles (f32) or the plain ones (f16) among the candidates where
         /// the device has matrix units.
@@ -178,7 +178,7 @@ fn parse_tile(s: &str) -> Result<TileChoice> {
             Some(split) => split.parse().ok().and_then(Tile::mma_split),
             None => channels.parse().ok().and_then(Tile::mma),
         };
-        return tile.map(TileChoice::Fixed).with_context(|| format!("tile `{s}`: matrix-unit tiles are mma16, mma32, mma48 or mma64 (output channels per workgroup), or split mma16x3 or mma32x3"));
+        return tile.map(TileChoice::Fixed).with_context(|| format!("tile `{s}`: matrix-unit tiles are mma16, mma32, mma48 or mma64 (output channels per workgroup), or split mma16x3 to mma64x3"));
     }
     let bad = || format!("tile `{s}` is not [wino|lanes]ROWSxBLOCKS[wCOLS][gGROUPX][kSPLIT], tuned or auto");
     let (winograd, s2) = s.strip_prefix("wino").map_or((false, s), |r| (true, r));

@@ -397,7 +397,7 @@ fn the_shipped_model_that_fits_is_chosen() {
 
 #[test]
 fn bench_refuses_a_tile_the_kernel_does_not_have() {
-    for (tile, shown) in [("3x1", "3x1"), ("8x1w3", "8x1w3"), ("8x1g128", "8x1g128"), ("big", "big"), ("lanes16x4w2", "lanes16x4w2"), ("mma24", "mma24"), ("mma", "mma"), ("mma48x3", "mma48x3"), ("mma32x2", "mma32x2")] {
+    for (tile, shown) in [("3x1", "3x1"), ("8x1w3", "8x1w3"), ("8x1g128", "8x1g128"), ("big", "big"), ("lanes16x4w2", "lanes16x4w2"), ("mma24", "mma24"), ("mma", "mma"), ("mma80x3", "mma80x3"), ("mma32x2", "mma32x2")] {
         let out = rae().args(["bench", &fixture("weights_full.safetensors"), "--sizes", "32x32", "--tile", tile]).output().unwrap();
         assert!(!out.status.success(), "--tile {tile} must fail");
         let err = String::from_utf8(out.stderr).unwrap();

@@ -35,7 +35,7 @@ use std::time::Instant;
 use crate::error::{Error, Result};
 use crate::frame::{FrameInputs, FrameTimings};
 use crate::graph::{Graph, Read, Value};
-use crate::kernels::{ConvPlan, ConvSpec, Kernels, MMA_SPLIT_WORKGROUP_BYTES, Method, OutputParams, PrepParams, Precision, SourceAccess, Tile, WORKGROUP, WeightMemory, blocks};
+use crate::kernels::{ConvPlan, ConvSpec, Kernels, MMA_WORKGROUP_BYTES, Method, OutputParams, PrepParams, Precision, SourceAccess, Tile, WORKGROUP, WeightMemory, blocks};
 use crate::model::{Arch, InputBuffer, Transfer};
 use crate::weights::Weights;
 
@@ -148,10 +148,12 @@ pub const MMA_TILES: [Tile; 4] = [
 ];
 
 /// The split matrix-unit tiles [`TileChoice::TunedMma`] adds to [`TUNE_TILES`] with f32
-/// activations: 16 and 32 output channels per workgroup ([`Tile::mma_split`]).
-pub const MMA_SPLIT_TILES: [Tile; 2] = [
+/// activations: 16 to 64 output channels per workgroup ([`Tile::mma_split`]).
+pub const MMA_SPLIT_TILES: [Tile; 4] = [
     Tile { rows: 4, blocks: 4, cols: 1, group_x: 8, method: Method::MmaSplit, split: 1 },
     Tile { rows: 4, blocks: 8, cols: 1, group_x: 8, method: Method::MmaSplit, split: 1 },
+    Tile { rows: 4, blocks: 12, cols: 1, group_x: 8, method: Method::MmaSplit, split: 1 },
+    Tile { rows: 4, blocks: 16, cols: 1, group_x: 8, method: Method::MmaSplit, split: 1 },
 ];
 
 /// The tiles [`TileChoice::Tuned`] times.
@@ -371,11 +373,9 @@ impl Denoiser {
             TileChoice::TunedAmong(candidates) if timestamps && !candidates.is_empty() => tune(device, queue, &mut kernels, &specs, &node_views, candidates)?,
             TileChoice::TunedMma if timestamps => {
                 let mut candidates = TUNE_TILES.to_vec();
-                if kernels.matrix_units() && memory == WeightMemory::Storage {
+                if kernels.matrix_units() && memory == WeightMemory::Storage && device.limits().max_compute_workgroup_storage_size >= MMA_WORKGROUP_BYTES {
                     match precision {
-                        // Split tiles where the device has their workgroup memory.
-                        Precision::F32 if device.limits().max_compute_workgroup_storage_size >= MMA_SPLIT_WORKGROUP_BYTES => candidates.extend(MMA_SPLIT_TILES),
-                        Precision::F32 => {}
+                        Precision::F32 => candidates.extend(MMA_SPLIT_TILES),
                         Precision::F16 => candidates.extend(MMA_TILES),
                     }
                 }

@@ -179,17 +179,20 @@ pub fn mma_source(matrix_units: bool) -> String {
     format!("{}\n{}", base.replacen(MMA_ENABLE, "enable f16;\nenable wgpu_cooperative_matrix;", 1), shader_source("conv3x3_mma_coop"))
 }
 
-/// Workgroup memory of conv3x3_mma.wgsl: its input window (6 x 66 pixels x 16 f16 channels)
-/// and one 16 x 16 f32 tile per subgroup (4); more than WebGPU's default limit (16 KiB), so a
-/// device opened with default limits cannot run Mma tiles ([`crate::Gpu`] asks for the
-/// adapter's).
-pub const MMA_WORKGROUP_BYTES: u32 = 6 * 66 * 16 * 2 + 4 * 256 * 4;
+/// Workgroup memory of conv3x3_mma.wgsl's entry points: the input window, sized for the larger
+/// of 6 x 66 pixels x 16 f16 channels ([`Method::Mma`], 64-pixel rows) and twice 6 x 34 x 16
+/// ([`Method::MmaSplit`]: 32-pixel rows, the remainders beside the window), and one 16 x 16 f32
+/// tile per subgroup (4). More than WebGPU's default limit (16 KiB), so a device opened with
+/// default limits cannot run Mma tiles ([`crate::Gpu`] asks for the adapter's).
+pub const MMA_WORKGROUP_BYTES: u32 = 2 * 6 * 34 * 16 * 2 + 4 * 256 * 4;
+const _: () = assert!(6 * 66 * 16 <= 2 * 6 * 34 * 16, "the plain tiles' window fits the split tiles'");
 
-/// Workgroup memory of conv3x3_mma.wgsl's split entry points ([`Method::MmaSplit`]): the
-/// window's remainders beside [`MMA_WORKGROUP_BYTES`], under the 32 KiB many devices have
-/// (lavapipe and Apple GPUs among them).
-pub const MMA_SPLIT_WORKGROUP_BYTES: u32 = MMA_WORKGROUP_BYTES + 6 * 66 * 16 * 2;
-const _: () = assert!(MMA_SPLIT_WORKGROUP_BYTES <= 32 * 1024, "split tiles fit the 32 KiB many devices have");
+/// Pixels a row of a [`Method::Mma`] workgroup covers (conv3x3_mma.wgsl's MT = 4 tiles of 16).
+pub const MMA_PIXELS: u32 = 64;
+
+/// Pixels a row of a [`Method::MmaSplit`] workgroup covers (MT = 2): half of [`MMA_PIXELS`], so
+/// that the window's remainders fit beside it in [`MMA_WORKGROUP_BYTES`].
+pub const MMA_SPLIT_PIXELS: u32 = 32;
 
 /// Whether a device runs [`Method::Mma`] in matrix units: it has wgpu's cooperative matrices
 /// ([`crate::Gpu`] enables them only where [`crate::gpu::has_matrix_units`]: 16 x 16 x 16
@@ -699,7 +702,8 @@ impl Kernels {
         let (label, module, entry) = if v.method.is_mma() {
             // Split tiles split the activations too where they are f32 (f16 ones are exact).
             let split = v.method == Method::MmaSplit;
-            constants.extend([("NT", v.ob as f64), ("SPLIT", split as u32 as f64), ("SPLIT_A", (split && self.precision == Precision::F32) as u32 as f64)]);
+            let pixels = if split { MMA_SPLIT_PIXELS } else { MMA_PIXELS };
+            constants.extend([("NT", v.ob as f64), ("MT", (pixels / 16) as f64), ("SPLIT", split as u32 as f64), ("SPLIT_A", (split && self.precision == Precision::F32) as u32 as f64)]);
             let entry = match (self.matrix_units, split) {
                 (true, _) => v.method.entry_point(),
                 (false, false) => "mma_emulated",
@@ -832,17 +836,17 @@ impl Tile {
         [16, 32, 48, 64].contains(&channels).then_some(Tile { rows: 4, blocks: channels / 4, cols: 1, group_x: WORKGROUP, method: Method::Mma, split: 1 })
     }
 
-    /// A split matrix-unit tile ([`Method::MmaSplit`]): [`Tile::mma`]'s workgroups with 16 or
-    /// 32 output channels (its second set of accumulators takes the registers of more), if the
-    /// kernel has it. Each operand x goes in as hi = f16(x) and its remainder scaled by 2^11,
-    /// lo = f16(2^11 (x - hi)), and a product as hi(a) hi(b) + (hi(a) lo(b) + lo(a) hi(b)) /
-    /// 2^11: 22-bit operands, so f32 activations get f32-class results (held to the golden tolerance) for
+    /// A split matrix-unit tile ([`Method::MmaSplit`]): workgroups of 4 rows x 32 pixels
+    /// ([`MMA_SPLIT_PIXELS`]) x `channels` output channels (16, 32, 48 or 64), if the kernel has
+    /// it. Each operand x goes in as hi and its remainder scaled by 2^11, lo = f16(2^11 (x -
+    /// hi)) (hi = f16(x) for the weights, x cut to f16's 10 mantissa bits for the activations),
+    /// and a product as hi(a) hi(b) + (hi(a) lo(b) + lo(a) hi(b)) / 2^11: 21- to 22-bit
+    /// operands, so f32 activations get f32-class results (held to the golden tolerance) for
     /// three times the matrix products, and f16 activations (exact in f16) two. Inputs are
     /// clamped to +-65504 as for [`Tile::mma`] (the default model's activations stay under 26,
-    /// docs/STABILITY.md). Needs what [`Tile::mma`] needs and [`MMA_SPLIT_WORKGROUP_BYTES`] of
-    /// workgroup memory.
+    /// docs/STABILITY.md). Needs what [`Tile::mma`] needs.
     pub fn mma_split(channels: u32) -> Option<Self> {
-        [16, 32].contains(&channels).then_some(Tile { method: Method::MmaSplit, ..Tile::mma(channels)? })
+        Some(Tile { method: Method::MmaSplit, ..Tile::mma(channels)? })
     }
 
     /// Weights per input-output channel pair ([`Method::taps`]).
@@ -1174,10 +1178,9 @@ impl ConvPlan {
                     return Err(unsupported(format!("Mma tiles need SHADER_F16, which {} lacks", device.adapter_info().name)));
                 }
                 let split = tile.method == Method::MmaSplit;
-                let needed = if split { MMA_SPLIT_WORKGROUP_BYTES } else { MMA_WORKGROUP_BYTES };
                 let shared = device.limits().max_compute_workgroup_storage_size;
-                if shared < needed {
-                    return Err(unsupported(format!("{tile} uses {needed} bytes of workgroup memory; the device allows {shared}")));
+                if shared < MMA_WORKGROUP_BYTES {
+                    return Err(unsupported(format!("{tile} uses {MMA_WORKGROUP_BYTES} bytes of workgroup memory; the device allows {shared}")));
                 }
                 // Tiles of 16 output channels, at most as many per group as the conv has.
                 let tiles16 = s.cout.div_ceil(16) as u32;
@@ -1196,8 +1199,9 @@ impl ConvPlan {
                     weights.extend_from_slice(bytemuck::cast_slice(&packed));
                 }
                 let variant = ConvVariant { read_a: s.read_a, read_b: s.read_b, source_b: s.cb > 0, leaky: s.leaky, ob: nt, rows: 1, cols: 1, group_x: WORKGROUP, method: tile.method, split: 1, reduce: false };
-                // Workgroups of 4 rows x 64 pixels (conv3x3_mma.wgsl's ROWS and PIXELS).
-                pending.push((variant, (s.width.div_ceil(64), s.height.div_ceil(4)), 1, vec![group], None));
+                // Workgroups of 4 rows (conv3x3_mma.wgsl's ROWS) x 64 or 32 pixels (16 MT).
+                let pixels = if split { MMA_SPLIT_PIXELS } else { MMA_PIXELS };
+                pending.push((variant, (s.width.div_ceil(pixels), s.height.div_ceil(4)), 1, vec![group], None));
                 used.push(Tile { blocks: 4 * nt, ..tile });
                 continue;
             }
