@@ -120,7 +120,7 @@ enum Command {
         /// two columns at most 8 rows, e.g. lanes8x2w2, the CPU drivers' default) or
         /// winoROWSxBLOCKS[gGROUPX] (Winograd F(2x2, 3x3); rows 2, 4) for one tile everywhere,
         /// `tuned` (each conv timed with every candidate on this device while building), or
-        /// `auto` (tuned on GPUs; on CPU drivers lanes8x2w2, or 16x4 without subgroups: what
+        /// `auto` (tuned-mma on GPUs; on CPU drivers lanes8x2w2, or 16x4 without subgroups: what
         /// `denoise` uses). `mma16`, `mma32`, `mma48`, `mma64`: the matrix-unit kernel (f16
         /// products summed in f32, 16 to 64 output channels per workgroup; tensor cores where
         /// wgpu's cooperative matrices have 16x16x16 f16 -> f32, emulated and slow elsewhere;

@@ -115,7 +115,8 @@ struct Profiler {
 /// How a [`Denoiser`] picks the conv kernel's register tile.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub enum TileChoice {
-    /// [`TileChoice::Tuned`] on GPUs that have timestamps inside passes, [`Tile::cpu`] on CPU
+    /// [`TileChoice::TunedMma`] on GPUs that have timestamps inside passes (that is
+    /// [`TileChoice::Tuned`] where the device has no matrix units), [`Tile::cpu`] on CPU
     /// drivers (lavapipe compiles each variant for seconds, and 16 x 4 with weights across the
     /// subgroup is its fastest everywhere), the default tile elsewhere.
     #[default]
@@ -132,9 +133,10 @@ pub enum TileChoice {
     /// matrix units ([`crate::kernels::matrix_units_supported`]) and the weights are in a
     /// storage buffer, those that keep the precision's accuracy: with f32 activations the split
     /// tiles [`MMA_SPLIT_TILES`] (f32-class results, [`Tile::mma_split`]), with f16 ones
-    /// [`MMA_TILES`] (f16 products summed in f32, [`Tile::mma`]). Opt-in: never what
-    /// [`TileChoice::Auto`] picks. The TF32-like plain tiles with f32 activations are fixed
-    /// tiles only (`Fixed(Tile::mma(32))`).
+    /// [`MMA_TILES`] (f16 products summed in f32, [`Tile::mma`]). What [`TileChoice::Auto`]
+    /// does on GPUs (session 15: on the H100 the split tiles pass the goldens, and f32 frames
+    /// take 0.89x the time of [`TileChoice::Tuned`]'s, docs/PERF.md). The TF32-like plain tiles
+    /// with f32 activations are fixed tiles only (`Fixed(Tile::mma(32))`).
     TunedMma,
 }
 
@@ -369,9 +371,9 @@ impl Denoiser {
         let tiles = match tiles {
             TileChoice::Fixed(t) => vec![t],
             TileChoice::Auto if device_type == wgpu::DeviceType::Cpu => vec![Tile::cpu(device)],
-            TileChoice::Auto | TileChoice::Tuned if timestamps => tune(device, queue, &mut kernels, &specs, &node_views, &TUNE_TILES)?,
+            TileChoice::Tuned if timestamps => tune(device, queue, &mut kernels, &specs, &node_views, &TUNE_TILES)?,
             TileChoice::TunedAmong(candidates) if timestamps && !candidates.is_empty() => tune(device, queue, &mut kernels, &specs, &node_views, candidates)?,
-            TileChoice::TunedMma if timestamps => {
+            TileChoice::Auto | TileChoice::TunedMma if timestamps => {
                 let mut candidates = TUNE_TILES.to_vec();
                 if kernels.matrix_units() && memory == WeightMemory::Storage && device.limits().max_compute_workgroup_storage_size >= MMA_WORKGROUP_BYTES {
                     match precision {
