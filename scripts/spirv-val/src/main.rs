@@ -2,7 +2,7 @@
 //!
 //! Each shader of `rae_core::kernels::SHADERS` (conv3x3_mma.wgsl with the cooperative-matrix
 //! entry points, as on a device with matrix units; f32 and f16 storage, sampled and storage
-//! sources; every tile width NT, split for NT 1-2) is parsed and validated by naga with every capability, its
+//! sources; every tile width NT, plain and split) is parsed and validated by naga with every capability, its
 //! overrides set, and each entry point written as SPIR-V 1.3 and validated for Vulkan 1.3.
 //! Exits non-zero on the first invalid module.
 
@@ -58,11 +58,12 @@ fn main() {
                 src = src.replace("rgba32float", "rgba16float");
             }
             for nt in 1..=4 {
-                let label = format!("conv3x3_mma ({}, {} sources, NT = {nt})", if f16 { "f16" } else { "f32" }, if storage { "storage" } else { "sampled" });
-                // Split (its entry points' NT is 1 or 2), with the activations split in f32.
-                let split = nt <= 2;
-                let label = format!("{label}{}", if split { ", SPLIT" } else { "" });
-                modules.push((label, src.clone(), vec![("NT", nt as f64), ("MODE_A", 1.0), ("MODE_B", 3.0), ("SPLIT", split as u32 as f64), ("SPLIT_A", !f16 as u32 as f64)]));
+                // Plain (MT 4) and split (MT 2, the activations split in f32), as ConvPlan sets them.
+                for split in [false, true] {
+                    let label = format!("conv3x3_mma ({}, {} sources, NT = {nt}{})", if f16 { "f16" } else { "f32" }, if storage { "storage" } else { "sampled" }, if split { ", SPLIT" } else { "" });
+                    let mt = if split { 2.0 } else { 4.0 };
+                    modules.push((label, src.clone(), vec![("NT", nt as f64), ("MT", mt), ("MODE_A", 1.0), ("MODE_B", 3.0), ("SPLIT", split as u32 as f64), ("SPLIT_A", (split && !f16) as u32 as f64)]));
+                }
             }
         }
     }
