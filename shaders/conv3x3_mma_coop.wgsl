@@ -7,7 +7,7 @@
 // of the one-dimensional workgroup, so sg is uniform over each subgroup, as the cooperative
 // operations need. The accumulators are named, not an array, so that no driver has to prove
 // an index constant to keep them in registers; tiles past NT sit behind `if NT > n`, which the
-// override removes.
+// override removes. `mma` is written for MT 4 (four pixel tiles a row), `mma_split` for MT 2.
 
 alias Acc = coop_mat16x16<f32, C>;
 alias TileA = coop_mat16x16<f16, A>;
