@@ -61,13 +61,16 @@ fn gpu_conv(a: (&Chw, Read), b: Option<(&Chw, Read)>, weight: &[f32], bias: &[f3
     gpu_conv_with(a, b, weight, bias, leaky, w, h, tile, memory, sources)
 }
 
-/// [`gpu_conv`] with the sources read as `sources` says.
+/// [`gpu_conv`] with the sources read as `sources` says: the conv's own choice in a plan
+/// ([`ConvPlan::with_sources`]) on kernels whose default is the other kind, as a tuned
+/// denoiser mixes them.
 #[allow(clippy::too_many_arguments)]
 fn gpu_conv_with(a: (&Chw, Read), b: Option<(&Chw, Read)>, weight: &[f32], bias: &[f32], leaky: bool, w: usize, h: usize, tile: Tile, memory: WeightMemory, sources: SourceAccess) -> Chw {
     let g = gpu();
     let dev = &g.device;
     let cout = bias.len();
-    let mut kernels = Kernels::with_sources(dev, kernels::Precision::F32, memory, sources);
+    let other = if sources == SourceAccess::Sampled { SourceAccess::Storage } else { SourceAccess::Sampled };
+    let mut kernels = Kernels::with_sources(dev, kernels::Precision::F32, memory, other);
     let cb = b.map_or(0, |b| b.0.c);
     let spec = ConvSpec {
         name: "test",
@@ -84,7 +87,8 @@ fn gpu_conv_with(a: (&Chw, Read), b: Option<(&Chw, Read)>, weight: &[f32], bias:
         slope: 0.1,
         b_is_hidden: false,
     };
-    let plan = ConvPlan::new(dev, &mut kernels, &[spec], &[tile]).unwrap();
+    let plan = ConvPlan::with_sources(dev, &mut kernels, &[spec], &[tile], &[sources]).unwrap();
+    assert_eq!(plan.sources(), [sources]);
     let ta = upload(a.0);
     let tb = upload(b.map_or(&Chw::zeros(1, 1, 1), |b| b.0));
     let out = dev.create_texture(&wgpu::TextureDescriptor {
@@ -97,7 +101,7 @@ fn gpu_conv_with(a: (&Chw, Read), b: Option<(&Chw, Read)>, weight: &[f32], bias:
         usage: wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC,
         view_formats: &[],
     });
-    let group = plan.bind_group(dev, &kernels, &array_view(&ta), &array_view(&tb), &array_view(&out));
+    let group = plan.bind_group(dev, &kernels, 0, &array_view(&ta), &array_view(&tb), &array_view(&out));
     let mut enc = dev.create_command_encoder(&Default::default());
     {
         let mut pass = enc.begin_compute_pass(&Default::default());
@@ -396,6 +400,14 @@ fn plans_make_each_pipeline_once() {
     assert_eq!(kernels.conv_pipelines(), 2);
     ConvPlan::new(&g.device, &mut kernels, &specs[..1], &[tile.with_split(2).unwrap()]).unwrap();
     assert_eq!(kernels.conv_pipelines(), 4, "the split conv and its reduce pass");
+    // Sources chosen per conv: the first conv's variant again, the other two as storage-texture
+    // readers (one new pipeline each, in the other kind's layout).
+    let (sampled, storage) = (SourceAccess::Sampled, SourceAccess::Storage);
+    let default = kernels.source_access();
+    let mixed = [default, if default == sampled { storage } else { sampled }];
+    let plan = kernels::ConvPlan::with_sources(&g.device, &mut kernels, &specs, &[tile], &[mixed[0], mixed[1], mixed[1]]).unwrap();
+    assert_eq!(plan.sources(), [mixed[0], mixed[1], mixed[1]]);
+    assert_eq!(kernels.conv_pipelines(), 6);
 }
 
 #[test]

@@ -135,8 +135,9 @@ enum Command {
         #[arg(long, value_delimiter = ',', default_value = "auto")]
         weights_memory: Vec<String>,
         /// How the convs read their input activations: `sampled` (sampled textures, read at
-        /// level 0), `storage` (read-only storage textures) or `auto` (storage on CPU drivers,
-        /// where lavapipe's sampler sets up every fetch with a level; sampled on GPUs).
+        /// level 0), `storage` (read-only storage textures) or `auto` (with a tuned tile, each
+        /// conv the faster kind as timed; else storage on CPU drivers, where lavapipe's sampler
+        /// sets up every fetch with a level, and sampled on GPUs).
         #[arg(long, value_delimiter = ',', default_value = "auto")]
         sources: Vec<String>,
         /// Build every combination first, then time them in turn, one frame each per round, for
@@ -248,7 +249,7 @@ fn bench(path: &Path, sizes: &[(u32, u32)], frames: usize, layers: bool, sweep: 
     println!("resident: GPU timestamps around a frame on GPU buffers (the path of a renderer that records rae into its own encoder), frames submitted back to back; pipelined: wall time per frame of that run; GFLOP/s from resident where the device has encoder timestamps, else from gpu");
     println!("peak MiB: the buffers and textures the denoiser holds (frames allocate nothing); alloc MiB: the device allocator's live total, wgpu's own included, where the backend reports it");
     println!("precisions: f32, f16 (f16 = rgba16float activations, f32 arithmetic; SHADER_F16 {})", gpu.device.features().contains(wgpu::Features::SHADER_F16));
-    println!("tile: the conv tile (rows x output blocks per invocation), `tuned` per conv on this device; weights: uniform chunks or one storage buffer; sources: the convs' inputs as sampled or storage textures; build: seconds to build the denoiser (compiling, tuning)");
+    println!("tile: the conv tile (rows x output blocks per invocation), `tuned` per conv on this device; weights: uniform chunks or one storage buffer; sources: the convs' inputs as sampled or storage textures (`mixed`: tuned per conv); build: seconds to build the denoiser (compiling, tuning)");
     println!("err: the last timed frame's largest difference from the same frames in f32 with the {} tile, over that frame's largest value", reference_tile(&gpu.device));
     println!("matrix units (mma tiles on tensor cores): {}", if rae_core::kernels::matrix_units_supported(&gpu.device) { "yes" } else { "no (mma tiles emulated)" });
     println!(
@@ -314,7 +315,7 @@ fn bench(path: &Path, sizes: &[(u32, u32)], frames: usize, layers: bool, sweep: 
                 precision.name(),
                 tile_name(tiles),
                 d.weight_memory().name(),
-                d.source_access().name(),
+                d.sources_name(),
                 median(&mut total),
                 median(&mut up),
                 median(&mut down)
@@ -412,7 +413,7 @@ fn bench_interleaved(path: &Path, sizes: &[(u32, u32)], rounds: usize, sweep: &S
                 precision.name(),
                 tile_name(*tiles),
                 d.weight_memory().name(),
-                d.source_access().name(),
+                d.sources_name(),
                 median(ms),
                 median(&mut ratio)
             );
@@ -461,8 +462,8 @@ fn stage_table(d: &mut Denoiser, frame: &rae_core::FrameInputs, out: &mut [f32],
     let runs: Vec<Vec<(String, f64)>> = (0..frames).map(|_| d.denoise_profiled(frame, out)).collect::<rae_core::Result<_>>()?;
     let (pw, ph) = d.padded_size();
     let nodes = &d.graph().nodes;
-    let tiles = d.conv_tiles();
-    let mut rows: Vec<(String, f64, String, f64, String)> = Vec::new();
+    let (tiles, sources) = (d.conv_tiles(), d.conv_sources());
+    let mut rows: Vec<(String, f64, String, f64, String, &str)> = Vec::new();
     for (k, (name, _)) in runs[0].iter().enumerate() {
         let mut t: Vec<f64> = runs.iter().map(|r| r[k].1).collect();
         let ms = median(&mut t);
@@ -472,13 +473,14 @@ fn stage_table(d: &mut Denoiser, frame: &rae_core::FrameInputs, out: &mut [f32],
             (format!("L{} {}->{}", n.level, n.cin(), n.cout), 2.0 * 9.0 * (n.cin() * n.cout) as f64 * px)
         });
         let tile = k.checked_sub(1).and_then(|i| tiles.get(i)).map_or(String::new(), |t| t.to_string());
-        rows.push((name.clone(), ms, shape, flop, tile));
+        let source = k.checked_sub(1).and_then(|i| sources.get(i)).map_or("", |s| s.name());
+        rows.push((name.clone(), ms, shape, flop, tile, source));
     }
     let total: f64 = rows.iter().map(|r| r.1).sum();
-    println!("    {:<16} {:<16} {:>5} {:>9} {:>7} {:>9}", "stage", "level cin->cout", "tile", "GPU ms", "share", "GFLOP/s");
-    for (name, ms, shape, flop, tile) in &rows {
+    println!("    {:<16} {:<16} {:>5} {:>7} {:>9} {:>7} {:>9}", "stage", "level cin->cout", "tile", "sources", "GPU ms", "share", "GFLOP/s");
+    for (name, ms, shape, flop, tile, source) in &rows {
         let rate = if *flop > 0.0 { format!("{:.2}", flop / (ms * 1e-3) / 1e9) } else { String::new() };
-        println!("    {name:<16} {shape:<16} {tile:>5} {ms:>9.2} {:>6.1}% {rate:>9}", 100.0 * ms / total);
+        println!("    {name:<16} {shape:<16} {tile:>5} {source:>7} {ms:>9.2} {:>6.1}% {rate:>9}", 100.0 * ms / total);
     }
     println!("    {:<16} {:<16} {total:>9.2}", "sum", "");
     Ok(())

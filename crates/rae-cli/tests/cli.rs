@@ -194,7 +194,7 @@ fn frame_range_selects_frames() {
     let (ok, so, se) = denoise(&seq, &["-o", out.to_str().unwrap(), "--frames", "1..1", "--reset-at", "1", "--tile", "2x1"]);
     assert!(ok, "{so}{se}");
     assert_eq!(listing(&out), ["denoised_0001.exr"]);
-    assert!(so.contains("tile:    2x1 at full resolution (--tile)"), "{so}");
+    assert!(so.contains("tile:    2x1 at full resolution, storage sources (--tile)"), "{so}");
     // A tile the kernel does not have is refused before anything is written.
     let out = tmp.path().join("o2");
     expect_error(&seq, &["-o", out.to_str().unwrap(), "--tile", "lanes16x2w2"], &["tile `lanes16x2w2`", "at most 8 rows"]);

@@ -22,8 +22,9 @@
 //!   every invocation of a workgroup reads the same weight at once, which lavapipe broadcasts
 //!   from one load. On GPUs, one read-only storage buffer and one dispatch per conv, so the
 //!   deep levels' few pixels still fill the machine ([`WeightMemory`]).
-//! - **Tiles**: on GPUs each conv's register tile is chosen while building, by timing every
-//!   candidate on the device ([`TileChoice::Tuned`]); the candidates' plans are dropped after.
+//! - **Tiles**: on GPUs each conv's register tile, and whether it reads its sources as sampled
+//!   or storage textures, is chosen while building, by timing the candidates on the device
+//!   ([`TileChoice::Tuned`], [`Options::sources`]); the candidates' plans are dropped after.
 //!
 //! Frames are `width x height`; the network runs at the size padded to a multiple of
 //! `2^levels` (the prep kernel replicates edge pixels into the padding) and the output kernel
@@ -205,7 +206,10 @@ pub struct Options {
     /// Where the conv reads weights; `None`: by adapter type ([`WeightMemory::for_device_type`]),
     /// or storage for a fixed Mma tile ([`Tile::mma`], [`Tile::mma_split`]).
     pub weights: Option<WeightMemory>,
-    /// How the conv reads its sources; `None`: by adapter type ([`SourceAccess::for_device_type`]).
+    /// How the convs read their sources. `None`: where tiles are tuned, each conv the faster
+    /// of both kinds as timed with its tile (on the H100 storage-texture sources took 0.88x the
+    /// time of sampled ones in one direct conv and were slower in the matrix-unit tiles,
+    /// docs/PERF.md session 15); elsewhere by adapter type ([`SourceAccess::for_device_type`]).
     pub sources: Option<SourceAccess>,
 }
 
@@ -284,7 +288,7 @@ impl Denoiser {
             TileChoice::Fixed(t) if t.method.is_mma() => WeightMemory::Storage,
             _ => WeightMemory::for_device_type(device_type),
         });
-        let sources = sources.unwrap_or(SourceAccess::for_device_type(device_type));
+        let default_sources = sources.unwrap_or(SourceAccess::for_device_type(device_type));
         let arch = weights.arch.clone();
         let multiple = 1u32 << arch.levels();
         let limits = device.limits();
@@ -297,7 +301,7 @@ impl Denoiser {
             return Err(size_err(format!("exceeds the device's texture limit {}", limits.max_texture_dimension_2d)));
         }
         let graph = Graph::new(&arch);
-        let mut kernels = Kernels::with_sources(device, precision, memory, sources);
+        let mut kernels = Kernels::with_sources(device, precision, memory, default_sources);
         let format = precision.format();
         let mut textures = Vec::new();
         let mut bytes = 0u64;
@@ -368,11 +372,15 @@ impl Denoiser {
             .map(|n| [view(n.a.value, 0).clone(), n.b.map_or(&dummy_view, |b| view(b.value, 0)).clone(), view(n.out, 0).clone()])
             .collect();
         let timestamps = device.features().contains(wgpu::Features::TIMESTAMP_QUERY_INSIDE_PASSES);
-        let tiles = match tiles {
-            TileChoice::Fixed(t) => vec![t],
-            TileChoice::Auto if device_type == wgpu::DeviceType::Cpu => vec![Tile::cpu(device)],
-            TileChoice::Tuned if timestamps => tune(device, queue, &mut kernels, &specs, &node_views, &TUNE_TILES)?,
-            TileChoice::TunedAmong(candidates) if timestamps && !candidates.is_empty() => tune(device, queue, &mut kernels, &specs, &node_views, candidates)?,
+        // Tuning times both source kinds unless the caller fixed one.
+        let both = [default_sources, if default_sources == SourceAccess::Sampled { SourceAccess::Storage } else { SourceAccess::Sampled }];
+        let accesses = if sources.is_some() { &both[..1] } else { &both[..] };
+        let tune_among = |kernels: &mut Kernels, candidates: &[Tile]| tune(device, queue, kernels, &specs, &node_views, candidates, accesses);
+        let (tiles, conv_sources) = match tiles {
+            TileChoice::Fixed(t) => (vec![t], vec![default_sources]),
+            TileChoice::Auto if device_type == wgpu::DeviceType::Cpu => (vec![Tile::cpu(device)], vec![default_sources]),
+            TileChoice::Tuned if timestamps => tune_among(&mut kernels, &TUNE_TILES)?,
+            TileChoice::TunedAmong(candidates) if timestamps && !candidates.is_empty() => tune_among(&mut kernels, candidates)?,
             TileChoice::Auto | TileChoice::TunedMma if timestamps => {
                 let mut candidates = TUNE_TILES.to_vec();
                 if kernels.matrix_units() && memory == WeightMemory::Storage && device.limits().max_compute_workgroup_storage_size >= MMA_WORKGROUP_BYTES {
@@ -381,11 +389,11 @@ impl Denoiser {
                         Precision::F16 => candidates.extend(MMA_TILES),
                     }
                 }
-                tune(device, queue, &mut kernels, &specs, &node_views, &candidates)?
+                tune_among(&mut kernels, &candidates)?
             }
-            TileChoice::Auto | TileChoice::Tuned | TileChoice::TunedAmong(_) | TileChoice::TunedMma => vec![Tile::default()],
+            TileChoice::Auto | TileChoice::Tuned | TileChoice::TunedAmong(_) | TileChoice::TunedMma => (vec![Tile::default()], vec![default_sources]),
         };
-        let convs = ConvPlan::new(device, &mut kernels, &specs, &tiles)?;
+        let convs = ConvPlan::with_sources(device, &mut kernels, &specs, &tiles, &conv_sources)?;
         debug_assert_eq!(bytes, activation_bytes(&graph, pwidth, pheight, precision));
         bytes += convs.bytes();
         // Bind groups of both parities (the reset variant only changes the dynamic offset).
@@ -393,9 +401,10 @@ impl Denoiser {
             graph
                 .nodes
                 .iter()
-                .map(|node| {
+                .enumerate()
+                .map(|(i, node)| {
                     let src_b = node.b.map_or(&dummy_view, |b| view(b.value, parity));
-                    convs.bind_group(device, &kernels, view(node.a.value, parity), src_b, view(node.out, parity))
+                    convs.bind_group(device, &kernels, i, view(node.a.value, parity), src_b, view(node.out, parity))
                 })
                 .collect()
         });
@@ -842,9 +851,18 @@ impl Denoiser {
         self.kernels.weight_memory()
     }
 
-    /// How the convs read their sources.
-    pub fn source_access(&self) -> SourceAccess {
-        self.kernels.source_access()
+    /// How each conv reads its sources, in [`Graph::nodes`] order.
+    pub fn conv_sources(&self) -> &[SourceAccess] {
+        self.convs.sources()
+    }
+
+    /// How the convs read their sources, for tables: the kind's name where all read alike,
+    /// else `mixed`.
+    pub fn sources_name(&self) -> &'static str {
+        match self.conv_sources() {
+            [first, rest @ ..] if rest.iter().all(|s| s == first) => first.name(),
+            _ => "mixed",
+        }
     }
 
     /// Textures held (for memory reports and tests).
@@ -911,43 +929,102 @@ fn finish_host_frame(device: &wgpu::Device, host: &HostIo, out: &mut [f32]) -> R
     Ok(())
 }
 
-/// The fastest of `candidates` for each conv on this device: every candidate plan runs the
-/// convs `ROUNDS` times in one pass with a timestamp after each dispatch group, and each conv
-/// keeps the tile of its lowest median. The activations hold whatever they hold (zeros on a
-/// fresh denoiser): the kernel's time does not depend on values (no data-dependent branches).
-fn tune(device: &wgpu::Device, queue: &wgpu::Queue, kernels: &mut Kernels, specs: &[ConvSpec], views: &[[wgpu::TextureView; 3]], candidates: &[Tile]) -> Result<Vec<Tile>> {
-    const ROUNDS: usize = 5;
+/// Timed runs of the convs per timing of a candidate plan ([`tune`]).
+const TUNE_ROUNDS: usize = 5;
+
+/// Tiles per conv that the first round of [`tune`] passes to the second.
+const TUNE_SHORTLIST: usize = 2;
+
+/// The fastest tile and source access for each conv on this device, among `candidates` and
+/// `accesses`, in two rounds:
+/// 1. Every candidate with `accesses[0]`, one plan at a time; each conv's
+///    [`TUNE_SHORTLIST`] fastest tiles go on.
+/// 2. Every tile some conv shortlisted, with every access, all plans built first and then
+///    timed twice, in one order and then the reverse, with nothing compiled between; each conv
+///    keeps the tile and access of its lowest time. Timing the finalists side by side, and
+///    each in both halves of the run, is what makes the picks steady: in round 1 each
+///    candidate is timed right after its own pipelines were compiled, at whatever clock the
+///    GPU had come back to, and picks of near-equal tiles varied from build to build (about
+///    0.3 ms of a 1080p frame on the H100, docs/PERF.md session 15).
+///
+/// A timing runs the plan's convs once untimed (first dispatches) and then [`TUNE_ROUNDS`]
+/// times in one pass, with a timestamp after each conv; a conv's time is the median of its
+/// rounds. The activations hold whatever they hold (zeros on a fresh denoiser): the kernel's
+/// time does not depend on values (no data-dependent branches).
+fn tune(device: &wgpu::Device, queue: &wgpu::Queue, kernels: &mut Kernels, specs: &[ConvSpec], views: &[[wgpu::TextureView; 3]], candidates: &[Tile], accesses: &[SourceAccess]) -> Result<(Vec<Tile>, Vec<SourceAccess>)> {
     let n = specs.len();
-    let count = ((n + 1) * ROUNDS) as u32;
+    if candidates.len() == 1 && accesses.len() == 1 {
+        return Ok((candidates.to_vec(), accesses.to_vec()));
+    }
+    let count = ((n + 1) * (TUNE_ROUNDS + 1)) as u32;
     let queries = device.create_query_set(&wgpu::QuerySetDescriptor { label: Some("tile tuning"), ty: wgpu::QueryType::Timestamp, count });
-    let period = queue.get_timestamp_period() as f64;
-    let mut best = vec![(f64::INFINITY, Tile::default()); n];
+    let build = |kernels: &mut Kernels, tile: Tile, access: SourceAccess| -> Result<(ConvPlan, Vec<wgpu::BindGroup>)> {
+        let plan = ConvPlan::with_sources(device, kernels, specs, &[tile], &[access])?;
+        let groups = views.iter().enumerate().map(|(i, [a, b, o])| plan.bind_group(device, kernels, i, a, b, o)).collect();
+        Ok((plan, groups))
+    };
+    // Round 1: each conv's times of every candidate, then its shortlist.
+    let mut times: Vec<Vec<f64>> = vec![Vec::with_capacity(candidates.len()); n];
     for &tile in candidates {
-        let plan = ConvPlan::new(device, kernels, specs, &[tile])?;
-        let groups: Vec<wgpu::BindGroup> = views.iter().map(|[a, b, o]| plan.bind_group(device, kernels, a, b, o)).collect();
-        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("tile tuning") });
-        {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("tile tuning"), timestamp_writes: None });
-            for r in 0..ROUNDS {
-                let base = (r * (n + 1)) as u32;
-                pass.write_timestamp(&queries, base);
-                for (i, group) in groups.iter().enumerate() {
-                    plan.record(&mut pass, i, false, group);
-                    pass.write_timestamp(&queries, base + 1 + i as u32);
-                }
-            }
+        let (plan, groups) = build(kernels, tile, accesses[0])?;
+        for (conv, t) in times.iter_mut().zip(time_plan(device, queue, &queries, &plan, &groups)?) {
+            conv.push(t);
         }
-        queue.submit(Some(encoder.finish()));
-        let ticks = read_timestamps(device, queue, &queries, count)?;
-        for (i, b) in best.iter_mut().enumerate() {
-            let mut t: Vec<f64> = (0..ROUNDS).map(|r| ticks[r * (n + 1) + i + 1].saturating_sub(ticks[r * (n + 1) + i]) as f64 * period).collect();
-            t.sort_by(f64::total_cmp);
-            if t[ROUNDS / 2] < b.0 {
-                *b = (t[ROUNDS / 2], tile);
+    }
+    let mut finalists: Vec<Tile> = Vec::new();
+    for conv in &times {
+        let mut order: Vec<usize> = (0..candidates.len()).collect();
+        order.sort_by(|&a, &b| conv[a].total_cmp(&conv[b]));
+        for &k in order.iter().take(TUNE_SHORTLIST) {
+            if !finalists.contains(&candidates[k]) {
+                finalists.push(candidates[k]);
             }
         }
     }
-    Ok(best.into_iter().map(|(_, t)| t).collect())
+    // Round 2: the finalists with every access, side by side, forwards then backwards.
+    let entries: Vec<(Tile, SourceAccess)> = accesses.iter().flat_map(|&a| finalists.iter().map(move |&t| (t, a))).collect();
+    let plans: Vec<(ConvPlan, Vec<wgpu::BindGroup>)> = entries.iter().map(|&(t, a)| build(kernels, t, a)).collect::<Result<_>>()?;
+    let mut best = vec![(f64::INFINITY, Tile::default(), accesses[0]); n];
+    let order: Vec<usize> = (0..plans.len()).chain((0..plans.len()).rev()).collect();
+    for k in order {
+        let (plan, groups) = &plans[k];
+        for (b, t) in best.iter_mut().zip(time_plan(device, queue, &queries, plan, groups)?) {
+            if t < b.0 {
+                *b = (t, entries[k].0, entries[k].1);
+            }
+        }
+    }
+    Ok(best.into_iter().map(|(_, t, a)| (t, a)).unzip())
+}
+
+/// One timing of a candidate plan for [`tune`]: the median time of each conv over
+/// [`TUNE_ROUNDS`] rounds after an untimed one, in nanoseconds.
+fn time_plan(device: &wgpu::Device, queue: &wgpu::Queue, queries: &wgpu::QuerySet, plan: &ConvPlan, groups: &[wgpu::BindGroup]) -> Result<Vec<f64>> {
+    let n = groups.len();
+    let rounds = TUNE_ROUNDS + 1;
+    let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("tile tuning") });
+    {
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("tile tuning"), timestamp_writes: None });
+        for r in 0..rounds {
+            let base = (r * (n + 1)) as u32;
+            pass.write_timestamp(queries, base);
+            for (i, group) in groups.iter().enumerate() {
+                plan.record(&mut pass, i, false, group);
+                pass.write_timestamp(queries, base + 1 + i as u32);
+            }
+        }
+    }
+    queue.submit(Some(encoder.finish()));
+    let ticks = read_timestamps(device, queue, queries, (rounds * (n + 1)) as u32)?;
+    let period = queue.get_timestamp_period() as f64;
+    Ok((0..n)
+        .map(|i| {
+            // Round 0 is the untimed one.
+            let mut t: Vec<f64> = (1..rounds).map(|r| ticks[r * (n + 1) + i + 1].saturating_sub(ticks[r * (n + 1) + i]) as f64 * period).collect();
+            t.sort_by(f64::total_cmp);
+            t[t.len() / 2]
+        })
+        .collect())
 }
 
 /// Resolve the first `count` timestamps of `queries` (written by work already submitted) and

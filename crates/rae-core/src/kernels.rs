@@ -185,6 +185,7 @@ pub fn mma_source(matrix_units: bool) -> String {
 /// tile per subgroup (4). More than WebGPU's default limit (16 KiB), so a device opened with
 /// default limits cannot run Mma tiles ([`crate::Gpu`] asks for the adapter's).
 pub const MMA_WORKGROUP_BYTES: u32 = 2 * 6 * 34 * 16 * 2 + 4 * 256 * 4;
+#[allow(clippy::assertions_on_constants)]
 const _: () = assert!(6 * 66 * 16 <= 2 * 6 * 34 * 16, "the plain tiles' window fits the split tiles'");
 
 /// Pixels a row of a [`Method::Mma`] workgroup covers (conv3x3_mma.wgsl's MT = 4 tiles of 16).
@@ -397,6 +398,8 @@ pub struct ConvVariant {
     pub split: u32,
     /// The pipeline of split-K's second pass (entry point `reduce`) rather than the conv's.
     pub reduce: bool,
+    /// How the conv reads its sources (the module and bind-group layout it is made with).
+    pub sources: SourceAccess,
 }
 
 impl ConvVariant {
@@ -455,10 +458,24 @@ impl Method {
     }
 }
 
+/// The conv modules of one [`SourceAccess`], each made when a pipeline first needs it.
+#[derive(Default)]
+struct ConvModules {
+    /// conv3x3.wgsl as rewritten for the precision, memory, device and access.
+    main: Option<wgpu::ShaderModule>,
+    /// The conv module with conv3x3_rows.wgsl (two-column lanes tiles, [`ROWS_STUB`]).
+    rows: Option<wgpu::ShaderModule>,
+    /// conv3x3_mma.wgsl ([`mma_source`]) as rewritten for the precision and access.
+    mma: Option<wgpu::ShaderModule>,
+}
+
 /// Shader modules, layouts and pipelines of one device; conv pipelines are cached by variant.
+///
+/// A conv reads its sources as its variant says ([`ConvVariant::sources`]), so one `Kernels`
+/// serves plans that mix sampled and storage-texture sources conv by conv (tuning picks per
+/// conv, [`crate::Denoiser`]); each access has its own bind-group layout, and its modules are
+/// made only when a pipeline of that access is.
 pub struct Kernels {
-    /// Layout of conv3x3.wgsl's group 0.
-    pub conv_layout: wgpu::BindGroupLayout,
     /// Layout of prep.wgsl's group 0.
     pub prep_layout: wgpu::BindGroupLayout,
     /// Layout of output.wgsl's group 0.
@@ -471,20 +488,20 @@ pub struct Kernels {
     pub prep: wgpu::ComputePipeline,
     /// The output pipeline.
     pub output: wgpu::ComputePipeline,
-    conv_module: wgpu::ShaderModule,
-    /// conv3x3.wgsl as rewritten for this precision, memory and device.
-    conv_source: String,
-    /// The conv module with conv3x3_rows.wgsl, made when a two-column lanes tile first needs it.
-    conv_rows_module: Option<wgpu::ShaderModule>,
-    /// conv3x3_mma.wgsl ([`mma_source`]) as rewritten for this precision and device, made when
-    /// an Mma tile first needs it.
-    mma_module: Option<wgpu::ShaderModule>,
+    /// Layouts of the conv's group 0, `[SourceAccess as usize]`.
+    conv_layouts: [wgpu::BindGroupLayout; 2],
+    /// Pipeline layouts over [`Kernels::conv_layouts`], likewise.
+    conv_pipeline_layouts: [wgpu::PipelineLayout; 2],
+    /// The conv modules, likewise.
+    modules: [ConvModules; 2],
     /// The device runs Mma tiles in matrix units ([`matrix_units_supported`]).
     matrix_units: bool,
-    conv_pipeline_layout: wgpu::PipelineLayout,
+    /// The device has subgroup operations (else [`WITHOUT_SUBGROUPS`] rewrites conv3x3.wgsl).
+    subgroups: bool,
     conv: HashMap<ConvVariant, wgpu::ComputePipeline>,
     precision: Precision,
     memory: WeightMemory,
+    /// The access of plans that do not choose per conv ([`ConvPlan::new`]).
     sources: SourceAccess,
 }
 
@@ -506,48 +523,25 @@ impl Kernels {
     /// [`Kernels::new`] with the conv's sources read as `sources` says (rewritten by
     /// [`STORAGE_SOURCES`] for storage textures, before the f16 rewrite).
     pub fn with_sources(device: &wgpu::Device, precision: Precision, memory: WeightMemory, sources: SourceAccess) -> Self {
-        let matrix_units = matrix_units_supported(device);
-        let source = |name: &str| {
-            let mut src = conv_module_source(name);
-            if sources == SourceAccess::Storage && name == "conv3x3" {
-                for (from, to) in STORAGE_SOURCES {
-                    assert!(src.contains(from), "conv3x3.wgsl has {from}");
-                    src = src.replace(from, to);
-                }
-            }
-            if precision == Precision::F16 {
-                src = src.replace("rgba32float", "rgba16float");
-            }
-            if !device.features().contains(wgpu::Features::SUBGROUP) && name == "conv3x3" {
-                for (from, to) in WITHOUT_SUBGROUPS {
-                    assert!(src.contains(from), "conv3x3.wgsl has {from}");
-                    src = src.replace(from, to);
-                }
-            }
-            if memory == WeightMemory::Storage && name == "conv3x3" {
-                assert!(src.contains(UNIFORM_WEIGHTS), "conv3x3.wgsl declares its weights as kernels::UNIFORM_WEIGHTS");
-                src = src.replace(UNIFORM_WEIGHTS, STORAGE_WEIGHTS);
-            }
-            src
-        };
-        let module = |name: &str| shader_module(device, name, source(name));
         let layout = |label, entries: &[wgpu::BindGroupLayoutEntry]| {
             device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some(label), entries })
         };
-        let conv_layout = layout(
-            "conv3x3",
-            &[
-                dynamic_entry(0, wgpu::BufferBindingType::Uniform, std::mem::size_of::<ConvParams>() as u64),
-                source_entry(1, sources, precision.format()),
-                source_entry(2, sources, precision.format()),
-                match memory {
-                    WeightMemory::Uniform => dynamic_entry(3, wgpu::BufferBindingType::Uniform, WEIGHT_CHUNK_BYTES),
-                    WeightMemory::Storage => dynamic_entry(3, wgpu::BufferBindingType::Storage { read_only: true }, 16),
-                },
-                storage_texture_entry(4, precision.format()),
-                storage_entry(5, false),
-            ],
-        );
+        let conv_layout = |access: SourceAccess| {
+            layout(
+                "conv3x3",
+                &[
+                    dynamic_entry(0, wgpu::BufferBindingType::Uniform, std::mem::size_of::<ConvParams>() as u64),
+                    source_entry(1, access, precision.format()),
+                    source_entry(2, access, precision.format()),
+                    match memory {
+                        WeightMemory::Uniform => dynamic_entry(3, wgpu::BufferBindingType::Uniform, WEIGHT_CHUNK_BYTES),
+                        WeightMemory::Storage => dynamic_entry(3, wgpu::BufferBindingType::Storage { read_only: true }, 16),
+                    },
+                    storage_texture_entry(4, precision.format()),
+                    storage_entry(5, false),
+                ],
+            )
+        };
         let prep_layout = layout(
             "prep",
             &[
@@ -570,6 +564,11 @@ impl Kernels {
                 immediate_size: 0,
             })
         };
+        // prep, output and pool: f16 storage is their only rewrite.
+        let module = |name: &str| {
+            let src = conv_module_source(name);
+            shader_module(device, name, if precision == Precision::F16 { src.replace("rgba32float", "rgba16float") } else { src })
+        };
         let pipeline = |label, layout: &wgpu::PipelineLayout, module: &wgpu::ShaderModule, constants: &[(&str, f64)]| {
             device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                 label: Some(label),
@@ -588,14 +587,13 @@ impl Kernels {
         let output = pipeline("output", &pipeline_layout(&output_layout), &module("output"), &[]);
         let pool_layout = layout("pool", &[texture_entry(0), storage_texture_entry(1, precision.format())]);
         let pool = pipeline("pool", &pipeline_layout(&pool_layout), &module("pool"), &[]);
+        let conv_layouts = [conv_layout(SourceAccess::Sampled), conv_layout(SourceAccess::Storage)];
         Self {
-            conv_pipeline_layout: pipeline_layout(&conv_layout),
-            conv_module: module("conv3x3"),
-            conv_source: source("conv3x3"),
-            conv_rows_module: None,
-            mma_module: None,
-            matrix_units,
-            conv_layout,
+            conv_pipeline_layouts: [pipeline_layout(&conv_layouts[0]), pipeline_layout(&conv_layouts[1])],
+            conv_layouts,
+            modules: Default::default(),
+            matrix_units: matrix_units_supported(device),
+            subgroups: device.features().contains(wgpu::Features::SUBGROUP),
             prep_layout,
             output_layout,
             pool_layout,
@@ -609,6 +607,52 @@ impl Kernels {
         }
     }
 
+    /// conv3x3.wgsl as this device, precision, weight memory and source access run it (the
+    /// rewrites of [`Kernels::new`]).
+    fn conv_text(&self, access: SourceAccess) -> String {
+        let mut src = conv_module_source("conv3x3");
+        if access == SourceAccess::Storage {
+            for (from, to) in STORAGE_SOURCES {
+                assert!(src.contains(from), "conv3x3.wgsl has {from}");
+                src = src.replace(from, to);
+            }
+        }
+        if self.precision == Precision::F16 {
+            src = src.replace("rgba32float", "rgba16float");
+        }
+        if !self.subgroups {
+            for (from, to) in WITHOUT_SUBGROUPS {
+                assert!(src.contains(from), "conv3x3.wgsl has {from}");
+                src = src.replace(from, to);
+            }
+        }
+        if self.memory == WeightMemory::Storage {
+            assert!(src.contains(UNIFORM_WEIGHTS), "conv3x3.wgsl declares its weights as kernels::UNIFORM_WEIGHTS");
+            src = src.replace(UNIFORM_WEIGHTS, STORAGE_WEIGHTS);
+        }
+        src
+    }
+
+    /// conv3x3_mma.wgsl as this device, precision and source access run it.
+    fn mma_text(&self, access: SourceAccess) -> String {
+        let mut src = mma_source(self.matrix_units);
+        if access == SourceAccess::Storage {
+            for (from, to) in STORAGE_SOURCES {
+                assert!(src.contains(from), "conv3x3_mma.wgsl has {from}");
+                src = src.replace(from, to);
+            }
+        }
+        if self.precision == Precision::F16 {
+            src = src.replace("rgba32float", "rgba16float");
+        }
+        src
+    }
+
+    /// Layout of the conv's group 0 for sources read as `access` says.
+    pub fn conv_layout(&self, access: SourceAccess) -> &wgpu::BindGroupLayout {
+        &self.conv_layouts[access as usize]
+    }
+
     /// How many conv pipelines are made (one per variant; [`Kernels::prepare`]).
     pub fn conv_pipelines(&self) -> usize {
         self.conv.len()
@@ -619,7 +663,7 @@ impl Kernels {
         self.memory
     }
 
-    /// How the conv reads its sources.
+    /// How the convs of a plan that does not choose per conv read their sources.
     pub fn source_access(&self) -> SourceAccess {
         self.sources
     }
@@ -651,24 +695,27 @@ impl Kernels {
         if missing.is_empty() {
             return;
         }
-        // Mma tiles run conv3x3_mma.wgsl, rewritten as conv3x3.wgsl is (sources, f16 storage).
-        if missing.iter().any(|v| v.method.is_mma()) && self.mma_module.is_none() {
-            let mut src = mma_source(self.matrix_units);
-            if self.sources == SourceAccess::Storage {
-                for (from, to) in STORAGE_SOURCES {
-                    assert!(src.contains(from), "conv3x3_mma.wgsl has {from}");
-                    src = src.replace(from, to);
-                }
-            }
-            if self.precision == Precision::F16 {
-                src = src.replace("rgba32float", "rgba16float");
-            }
-            self.mma_module = Some(shader_module(device, "conv3x3_mma", src));
-        }
-        // Two-column lanes tiles run in the module with conv3x3_rows.wgsl ([`ROWS_STUB`]).
-        if missing.iter().any(|v| v.runs_rows()) && self.conv_rows_module.is_none() {
-            assert!(self.conv_source.contains(ROWS_STUB), "conv3x3.wgsl has kernels::ROWS_STUB");
-            self.conv_rows_module = Some(shader_module(device, "conv3x3 (two-column lanes)", self.conv_source.replace(ROWS_STUB, shader_source("conv3x3_rows"))));
+        // The modules the missing variants run, per source access: conv3x3.wgsl, the module
+        // with conv3x3_rows.wgsl for two-column lanes tiles ([`ROWS_STUB`]), conv3x3_mma.wgsl.
+        for access in [SourceAccess::Sampled, SourceAccess::Storage] {
+            let of_access = || missing.iter().filter(|v| v.sources == access);
+            let m = &self.modules[access as usize];
+            let (need_main, need_rows, need_mma) = (
+                m.main.is_none() && of_access().any(|v| !v.method.is_mma() && !v.runs_rows()),
+                m.rows.is_none() && of_access().any(|v| v.runs_rows()),
+                m.mma.is_none() && of_access().any(|v| v.method.is_mma()),
+            );
+            let text = if need_main || need_rows { self.conv_text(access) } else { String::new() };
+            let mma = need_mma.then(|| shader_module(device, "conv3x3_mma", self.mma_text(access)));
+            let rows = need_rows.then(|| {
+                assert!(text.contains(ROWS_STUB), "conv3x3.wgsl has kernels::ROWS_STUB");
+                shader_module(device, "conv3x3 (two-column lanes)", text.replace(ROWS_STUB, shader_source("conv3x3_rows")))
+            });
+            let main = need_main.then(|| shader_module(device, "conv3x3", text));
+            let m = &mut self.modules[access as usize];
+            m.main = m.main.take().or(main);
+            m.rows = m.rows.take().or(rows);
+            m.mma = m.mma.take().or(mma);
         }
         let threads = std::thread::available_parallelism().map_or(1, |n| n.get()).min(missing.len());
         let this = &*self;
@@ -691,6 +738,7 @@ impl Kernels {
 
     /// Create one conv pipeline (its module made by [`Kernels::prepare`]).
     fn create_conv(&self, device: &wgpu::Device, v: ConvVariant) -> wgpu::ComputePipeline {
+        let modules = &self.modules[v.sources as usize];
         // conv_common.wgsl's overrides, then the kernel's own.
         let mut constants = vec![
             ("MODE_A", v.read_a as u32 as f64),
@@ -709,7 +757,7 @@ impl Kernels {
                 (false, false) => "mma_emulated",
                 (false, true) => "mma_split_emulated",
             };
-            ("conv3x3_mma", self.mma_module.as_ref().expect("made by prepare"), entry)
+            ("conv3x3_mma", modules.mma.as_ref().expect("made by prepare"), entry)
         } else {
             constants.extend([
                 ("OB", v.ob as f64),
@@ -720,12 +768,12 @@ impl Kernels {
                 ("SPLIT", v.split as f64),
                 ("LANES", if v.method == Method::Lanes { 1.0 } else { 0.0 }),
             ]);
-            let module = if v.runs_rows() { self.conv_rows_module.as_ref().expect("made by prepare") } else { &self.conv_module };
+            let module = if v.runs_rows() { modules.rows.as_ref() } else { modules.main.as_ref() }.expect("made by prepare");
             ("conv3x3", module, if v.reduce { "reduce" } else { v.method.entry_point() })
         };
         device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
             label: Some(label),
-            layout: Some(&self.conv_pipeline_layout),
+            layout: Some(&self.conv_pipeline_layouts[v.sources as usize]),
             module,
             entry_point: Some(entry),
             compilation_options: wgpu::PipelineCompilationOptions { constants: &constants, zero_initialize_workgroup_memory: false },
@@ -1111,6 +1159,8 @@ fn push_params(params: &mut Vec<u8>, align: usize, s: &ConvSpec, ob0: u32, group
 /// A planned convolution: its pipeline, workgroups and groups, and split-K's second pass.
 struct Planned {
     pipeline: wgpu::ComputePipeline,
+    /// How the conv reads its sources (its bind groups' layout).
+    sources: SourceAccess,
     workgroups: (u32, u32),
     /// Parts per group (workgroup z runs over groups x parts).
     split: u32,
@@ -1131,16 +1181,27 @@ pub struct ConvPlan {
     weight_binding: u64,
     convs: Vec<Planned>,
     tiles: Vec<Tile>,
+    sources: Vec<SourceAccess>,
 }
 
 impl ConvPlan {
     /// Pack and upload every conv's weights and parameters, conv `i` with at most `tiles[i]`
     /// (one tile for all when `tiles` has one entry; a split is capped so that the partial sums
     /// fit [`PARTIAL_LAYERS`] layers at the largest conv's resolution); fails when a conv is too
-    /// wide for one uniform weight chunk.
+    /// wide for one uniform weight chunk. Every conv reads its sources as `kernels` does by
+    /// default ([`Kernels::source_access`]).
     pub fn new(device: &wgpu::Device, kernels: &mut Kernels, specs: &[ConvSpec], tiles: &[Tile]) -> crate::Result<Self> {
+        let sources = kernels.sources;
+        Self::with_sources(device, kernels, specs, tiles, &[sources])
+    }
+
+    /// [`ConvPlan::new`] with conv `i` reading its sources as `sources[i]` says (one entry: all
+    /// alike), as tuning picks them where both kinds run ([`crate::Denoiser`]).
+    pub fn with_sources(device: &wgpu::Device, kernels: &mut Kernels, specs: &[ConvSpec], tiles: &[Tile], sources: &[SourceAccess]) -> crate::Result<Self> {
         use wgpu::util::DeviceExt;
         assert!(tiles.len() == 1 || tiles.len() == specs.len(), "one tile, or one per conv");
+        assert!(sources.len() == 1 || sources.len() == specs.len(), "one source access, or one per conv");
+        let access = |i: usize| sources[if sources.len() == 1 { 0 } else { i }];
         if let Some(t) = tiles.iter().find(|t| t.method == Method::Lanes && !lanes_supported(device)) {
             let info = device.adapter_info();
             return Err(crate::Error::UnsupportedTile {
@@ -1198,7 +1259,7 @@ impl ConvPlan {
                     debug_assert_eq!(packed.len() as u32, stride);
                     weights.extend_from_slice(bytemuck::cast_slice(&packed));
                 }
-                let variant = ConvVariant { read_a: s.read_a, read_b: s.read_b, source_b: s.cb > 0, leaky: s.leaky, ob: nt, rows: 1, cols: 1, group_x: WORKGROUP, method: tile.method, split: 1, reduce: false };
+                let variant = ConvVariant { read_a: s.read_a, read_b: s.read_b, source_b: s.cb > 0, leaky: s.leaky, ob: nt, rows: 1, cols: 1, group_x: WORKGROUP, method: tile.method, split: 1, reduce: false, sources: access(i) };
                 // Workgroups of 4 rows (conv3x3_mma.wgsl's ROWS) x 64 or 32 pixels (16 MT).
                 let pixels = if split { MMA_SPLIT_PIXELS } else { MMA_PIXELS };
                 pending.push((variant, (s.width.div_ceil(pixels), s.height.div_ceil(4)), 1, vec![group], None));
@@ -1233,7 +1294,7 @@ impl ConvPlan {
             let part_bytes = cout4 as u64 * s.width as u64 * s.height as u64 * 16;
             let split = if tile.method != Method::Winograd { tile.split.min(cin4).min((partial_budget / part_bytes) as u32).max(1) } else { 1 };
             let used_tile = Tile { rows, blocks: ob, cols, group_x: tile.group_x, method: tile.method, split };
-            let variant = ConvVariant { read_a: s.read_a, read_b: s.read_b, source_b: s.cb > 0, leaky: s.leaky, ob, rows, cols, group_x: tile.group_x, method: tile.method, split, reduce: false };
+            let variant = ConvVariant { read_a: s.read_a, read_b: s.read_b, source_b: s.cb > 0, leaky: s.leaky, ob, rows, cols, group_x: tile.group_x, method: tile.method, split, reduce: false, sources: access(i) };
             // Split-K's partial sums: one buffer for the largest split conv, which every split
             // conv overwrites in turn (the reduce of one runs before the next conv starts).
             if split > 1 {
@@ -1274,6 +1335,7 @@ impl ConvPlan {
             .into_iter()
             .map(|(variant, workgroups, split, groups, reduce)| Planned {
                 pipeline: kernels.conv(device, variant),
+                sources: variant.sources,
                 workgroups,
                 split,
                 groups,
@@ -1298,6 +1360,7 @@ impl ConvPlan {
             weights: init("conv weights", &weights, weight_usage),
             partial: device.create_buffer(&wgpu::BufferDescriptor { label: Some("conv partial sums"), size: partial.max(16), usage: wgpu::BufferUsages::STORAGE, mapped_at_creation: false }),
             weight_binding,
+            sources: convs.iter().map(|c| c.sources).collect(),
             convs,
             tiles: used,
         })
@@ -1306,6 +1369,11 @@ impl ConvPlan {
     /// The tile each conv runs with (after the level-height and weight-chunk limits).
     pub fn tiles(&self) -> &[Tile] {
         &self.tiles
+    }
+
+    /// How each conv reads its sources.
+    pub fn sources(&self) -> &[SourceAccess] {
+        &self.sources
     }
 
     /// Bytes of the weight, parameter and partial-sum buffers.
@@ -1318,14 +1386,15 @@ impl ConvPlan {
         self.convs.iter().map(|c| c.groups.len()).sum()
     }
 
-    /// A bind group of the convs over the given textures (offsets are supplied per dispatch).
-    pub fn bind_group(&self, device: &wgpu::Device, kernels: &Kernels, a: &wgpu::TextureView, b: &wgpu::TextureView, dst: &wgpu::TextureView) -> wgpu::BindGroup {
+    /// A bind group of conv `i` over the given textures (offsets are supplied per dispatch), in
+    /// the layout of its source access.
+    pub fn bind_group(&self, device: &wgpu::Device, kernels: &Kernels, i: usize, a: &wgpu::TextureView, b: &wgpu::TextureView, dst: &wgpu::TextureView) -> wgpu::BindGroup {
         let buffer = |buffer, size| {
             wgpu::BindingResource::Buffer(wgpu::BufferBinding { buffer, offset: 0, size: wgpu::BufferSize::new(size) })
         };
         device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("conv3x3"),
-            layout: &kernels.conv_layout,
+            layout: kernels.conv_layout(self.convs[i].sources),
             entries: &[
                 wgpu::BindGroupEntry { binding: 0, resource: buffer(&self.params, std::mem::size_of::<ConvParams>() as u64) },
                 wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(a) },
