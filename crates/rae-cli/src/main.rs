@@ -127,7 +127,8 @@ enum Command {
         /// storage weights and SHADER_F16); `mma16x3` to `mma64x3`: the same with every operand
         /// split into two f16 halves and three products (f32-class results); `tuned-mma`:
         /// `tuned` with the split tiles (f32) or the plain ones (f16) among the candidates where
-        /// the device has matrix units.
+        /// the device has matrix units; `tuned:T+T+...`: tuned among these tiles only (fewer
+        /// pipelines to compile; with `--sources auto` it still picks each conv's source kind).
         #[arg(long, value_delimiter = ',', default_value = "auto")]
         tile: Vec<String>,
         /// Where the convs read weights: `uniform` (64 KiB chunks), `storage` (one buffer, a
@@ -173,6 +174,17 @@ fn parse_tile(s: &str) -> Result<TileChoice> {
         "tuned" => return Ok(TileChoice::Tuned),
         "tuned-mma" => return Ok(TileChoice::TunedMma),
         _ => {}
+    }
+    // Tuned among the listed tiles: the list lives as long as the program (a few per run).
+    if let Some(list) = s.strip_prefix("tuned:") {
+        let tiles = list
+            .split('+')
+            .map(|t| match parse_tile(t)? {
+                TileChoice::Fixed(tile) => Ok(tile),
+                _ => bail!("`{t}` in tile `{s}`: tuned:T+T+... lists fixed tiles"),
+            })
+            .collect::<Result<Vec<Tile>>>()?;
+        return Ok(TileChoice::TunedAmong(Vec::leak(tiles)));
     }
     if let Some(channels) = s.strip_prefix("mma") {
         let tile = match channels.strip_suffix("x3") {
@@ -227,7 +239,8 @@ fn parse_memory(s: &str) -> Result<Option<WeightMemory>> {
 fn tile_name(t: TileChoice) -> String {
     match t {
         TileChoice::Auto => "auto".into(),
-        TileChoice::Tuned | TileChoice::TunedAmong(_) => "tuned".into(),
+        TileChoice::Tuned => "tuned".into(),
+        TileChoice::TunedAmong(tiles) => format!("tuned:{}", tiles.iter().map(|t| t.to_string()).collect::<Vec<_>>().join("+")),
         TileChoice::TunedMma => "tuned-mma".into(),
         TileChoice::Fixed(t) => t.to_string(),
     }
@@ -477,12 +490,12 @@ fn stage_table(d: &mut Denoiser, frame: &rae_core::FrameInputs, out: &mut [f32],
         rows.push((name.clone(), ms, shape, flop, tile, source));
     }
     let total: f64 = rows.iter().map(|r| r.1).sum();
-    println!("    {:<16} {:<16} {:>5} {:>7} {:>9} {:>7} {:>9}", "stage", "level cin->cout", "tile", "sources", "GPU ms", "share", "GFLOP/s");
+    println!("    {:<16} {:<16} {:>10} {:>7} {:>9} {:>7} {:>9}", "stage", "level cin->cout", "tile", "sources", "GPU ms", "share", "GFLOP/s");
     for (name, ms, shape, flop, tile, source) in &rows {
         let rate = if *flop > 0.0 { format!("{:.2}", flop / (ms * 1e-3) / 1e9) } else { String::new() };
-        println!("    {name:<16} {shape:<16} {tile:>5} {source:>7} {ms:>9.2} {:>6.1}% {rate:>9}", 100.0 * ms / total);
+        println!("    {name:<16} {shape:<16} {tile:>10} {source:>7} {ms:>9.2} {:>6.1}% {rate:>9}", 100.0 * ms / total);
     }
-    println!("    {:<16} {:<16} {total:>9.2}", "sum", "");
+    println!("    {:<16} {:<16} {:>10} {:>7} {total:>9.2}", "sum", "", "", "");
     Ok(())
 }
 
@@ -590,5 +603,22 @@ fn main() -> Result<()> {
             };
             if interleave { bench_interleaved(&weights, &sizes, frames, &sweep) } else { bench(&weights, &sizes, frames, layers, &sweep, peak_gflops) }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tuned_among_a_list_parses_and_names_itself() {
+        let choice = parse_tile("tuned:16x2+lanes8x2w2+mma32x3").unwrap();
+        let TileChoice::TunedAmong(tiles) = choice else { panic!("{choice:?}") };
+        assert_eq!(tiles, [Tile::new(16, 2).unwrap(), Tile::lanes(8, 2, 2).unwrap(), Tile::mma_split(32).unwrap()]);
+        assert_eq!(tile_name(choice), "tuned:16x2+lanes8x2w2+mma32x3");
+        assert_eq!(parse_tile(&tile_name(choice)).unwrap(), choice);
+        let err = parse_tile("tuned:16x2+auto").unwrap_err().to_string();
+        assert!(err.contains("`auto` in tile `tuned:16x2+auto`"), "{err}");
+        assert!(parse_tile("tuned:16x2+9x9").is_err());
     }
 }
