@@ -184,6 +184,19 @@ fn tuned_tiles_and_storage_weights_give_the_frames_of_the_default_plan() {
     let default = SourceAccess::for_device_type(g.device.adapter_info().device_type);
     assert!(a.conv_sources().iter().all(|&s| s == default), "an untuned plan reads as the device type suits");
     assert_eq!((a.sources_name(), b.conv_sources().len()), (default.name(), b.graph().nodes.len()));
+    // Tuning's report: per conv, every finalist with both kinds, timed, fastest first, the
+    // first being what the conv runs.
+    assert!(a.tuning().is_empty());
+    assert_eq!(b.tuning().len(), b.graph().nodes.len());
+    for (i, f) in b.tuning().iter().enumerate() {
+        assert!(f.len() >= 2 && f.len() % 2 == 0, "conv {i}: each finalist tile with both kinds");
+        assert!(f.windows(2).all(|w| w[0].ns <= w[1].ns) && f[0].ns > 0.0 && f.iter().all(|x| x.ns.is_finite()), "conv {i}: {f:?}");
+        assert_eq!(f[0].sources, b.conv_sources()[i]);
+        assert!(CANDIDATES.contains(&f[0].tile) && f[0].tile.rows >= b.conv_tiles()[i].rows, "conv {i}: {f:?}");
+        for kind in [SourceAccess::Sampled, SourceAccess::Storage] {
+            assert_eq!(f.iter().filter(|x| x.sources == kind).count(), f.len() / 2);
+        }
+    }
     assert_eq!(b.conv_tiles().len(), b.graph().nodes.len());
     for t in b.conv_tiles() {
         assert!(CANDIDATES.iter().any(|c| c.rows >= t.rows && c.blocks >= t.blocks && c.cols >= t.cols), "tile {t} comes from a candidate");

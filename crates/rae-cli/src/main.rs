@@ -475,8 +475,8 @@ fn stage_table(d: &mut Denoiser, frame: &rae_core::FrameInputs, out: &mut [f32],
     let runs: Vec<Vec<(String, f64)>> = (0..frames).map(|_| d.denoise_profiled(frame, out)).collect::<rae_core::Result<_>>()?;
     let (pw, ph) = d.padded_size();
     let nodes = &d.graph().nodes;
-    let (tiles, sources) = (d.conv_tiles(), d.conv_sources());
-    let mut rows: Vec<(String, f64, String, f64, String, &str)> = Vec::new();
+    let (tiles, sources, tuning) = (d.conv_tiles(), d.conv_sources(), d.tuning());
+    let mut rows: Vec<(String, f64, String, f64, String, &str, String)> = Vec::new();
     for (k, (name, _)) in runs[0].iter().enumerate() {
         let mut t: Vec<f64> = runs.iter().map(|r| r[k].1).collect();
         let ms = median(&mut t);
@@ -487,13 +487,18 @@ fn stage_table(d: &mut Denoiser, frame: &rae_core::FrameInputs, out: &mut [f32],
         });
         let tile = k.checked_sub(1).and_then(|i| tiles.get(i)).map_or(String::new(), |t| t.to_string());
         let source = k.checked_sub(1).and_then(|i| sources.get(i)).map_or("", |s| s.name());
-        rows.push((name.clone(), ms, shape, flop, tile, source));
+        // The second-fastest finalist of tuning, and how much slower it was there.
+        let next = match k.checked_sub(1).and_then(|i| tuning.get(i)).map(|f| f.as_slice()) {
+            Some([first, second, ..]) if first.ns > 0.0 => format!("{} {} +{:.1}%", second.tile, second.sources.name(), 100.0 * (second.ns / first.ns - 1.0)),
+            _ => String::new(),
+        };
+        rows.push((name.clone(), ms, shape, flop, tile, source, next));
     }
     let total: f64 = rows.iter().map(|r| r.1).sum();
-    println!("    {:<16} {:<16} {:>10} {:>7} {:>9} {:>7} {:>9}", "stage", "level cin->cout", "tile", "sources", "GPU ms", "share", "GFLOP/s");
-    for (name, ms, shape, flop, tile, source) in &rows {
+    println!("    {:<16} {:<16} {:>10} {:>7} {:>9} {:>7} {:>9}  {}", "stage", "level cin->cout", "tile", "sources", "GPU ms", "share", "GFLOP/s", if tuning.is_empty() { "" } else { "tuning's runner-up" });
+    for (name, ms, shape, flop, tile, source, next) in &rows {
         let rate = if *flop > 0.0 { format!("{:.2}", flop / (ms * 1e-3) / 1e9) } else { String::new() };
-        println!("    {name:<16} {shape:<16} {tile:>10} {source:>7} {ms:>9.2} {:>6.1}% {rate:>9}", 100.0 * ms / total);
+        println!("    {name:<16} {shape:<16} {tile:>10} {source:>7} {ms:>9.2} {:>6.1}% {rate:>9}  {next}", 100.0 * ms / total);
     }
     println!("    {:<16} {:<16} {:>10} {:>7} {total:>9.2}", "sum", "", "", "");
     Ok(())

@@ -245,6 +245,8 @@ pub struct Denoiser {
     bytes: u64,
     host: Option<HostIo>,
     profiler: Option<Profiler>,
+    /// Each conv's tuning finalists, fastest first (empty where not tuned).
+    tuning: Vec<Vec<Finalist>>,
     parity: usize,
     reset_pending: bool,
 }
@@ -376,9 +378,9 @@ impl Denoiser {
         let both = [default_sources, if default_sources == SourceAccess::Sampled { SourceAccess::Storage } else { SourceAccess::Sampled }];
         let accesses = if sources.is_some() { &both[..1] } else { &both[..] };
         let tune_among = |kernels: &mut Kernels, candidates: &[Tile]| tune(device, queue, kernels, &specs, &node_views, candidates, accesses);
-        let (tiles, conv_sources) = match tiles {
-            TileChoice::Fixed(t) => (vec![t], vec![default_sources]),
-            TileChoice::Auto if device_type == wgpu::DeviceType::Cpu => (vec![Tile::cpu(device)], vec![default_sources]),
+        let tuning: Vec<Vec<Finalist>> = match tiles {
+            TileChoice::Fixed(_) => Vec::new(),
+            TileChoice::Auto if device_type == wgpu::DeviceType::Cpu => Vec::new(),
             TileChoice::Tuned if timestamps => tune_among(&mut kernels, &TUNE_TILES)?,
             TileChoice::TunedAmong(candidates) if timestamps && !candidates.is_empty() => tune_among(&mut kernels, candidates)?,
             TileChoice::Auto | TileChoice::TunedMma if timestamps => {
@@ -391,7 +393,14 @@ impl Denoiser {
                 }
                 tune_among(&mut kernels, &candidates)?
             }
-            TileChoice::Auto | TileChoice::Tuned | TileChoice::TunedAmong(_) | TileChoice::TunedMma => (vec![Tile::default()], vec![default_sources]),
+            TileChoice::Auto | TileChoice::Tuned | TileChoice::TunedAmong(_) | TileChoice::TunedMma => Vec::new(),
+        };
+        // Each conv's fastest finalist where tuned, else one tile and kind for all.
+        let (tiles, conv_sources): (Vec<Tile>, Vec<SourceAccess>) = match tiles {
+            _ if !tuning.is_empty() => tuning.iter().map(|f| (f[0].tile, f[0].sources)).unzip(),
+            TileChoice::Fixed(t) => (vec![t], vec![default_sources]),
+            TileChoice::Auto if device_type == wgpu::DeviceType::Cpu => (vec![Tile::cpu(device)], vec![default_sources]),
+            _ => (vec![Tile::default()], vec![default_sources]),
         };
         let convs = ConvPlan::with_sources(device, &mut kernels, &specs, &tiles, &conv_sources)?;
         debug_assert_eq!(bytes, activation_bytes(&graph, pwidth, pheight, precision));
@@ -482,6 +491,7 @@ impl Denoiser {
             bytes,
             host: None,
             profiler: None,
+            tuning,
             parity: 0,
             reset_pending: true,
         })
@@ -851,6 +861,13 @@ impl Denoiser {
         self.kernels.weight_memory()
     }
 
+    /// Each conv's tuning finalists in [`Graph::nodes`] order, fastest (the one it runs) first:
+    /// how close the runners-up came. Empty where the tiles were not tuned; without a choice
+    /// to make (one candidate, one kind) each conv's one entry has no time (NaN).
+    pub fn tuning(&self) -> &[Vec<Finalist>] {
+        &self.tuning
+    }
+
     /// How each conv reads its sources, in [`Graph::nodes`] order.
     pub fn conv_sources(&self) -> &[SourceAccess] {
         self.convs.sources()
@@ -929,6 +946,18 @@ fn finish_host_frame(device: &wgpu::Device, host: &HostIo, out: &mut [f32]) -> R
     Ok(())
 }
 
+/// A tile and source kind that reached the second round of tuning for a conv, with its time
+/// there ([`Denoiser::tuning`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Finalist {
+    /// The candidate tile (before a conv's size shrinks it, [`Denoiser::conv_tiles`]).
+    pub tile: Tile,
+    /// How the conv read its sources.
+    pub sources: SourceAccess,
+    /// The conv's time with them: the lower of its two medians, in nanoseconds.
+    pub ns: f64,
+}
+
 /// Timed runs of the convs per timing of a candidate plan ([`tune`]).
 const TUNE_ROUNDS: usize = 5;
 
@@ -951,10 +980,10 @@ const TUNE_SHORTLIST: usize = 2;
 /// times in one pass, with a timestamp after each conv; a conv's time is the median of its
 /// rounds. The activations hold whatever they hold (zeros on a fresh denoiser): the kernel's
 /// time does not depend on values (no data-dependent branches).
-fn tune(device: &wgpu::Device, queue: &wgpu::Queue, kernels: &mut Kernels, specs: &[ConvSpec], views: &[[wgpu::TextureView; 3]], candidates: &[Tile], accesses: &[SourceAccess]) -> Result<(Vec<Tile>, Vec<SourceAccess>)> {
+fn tune(device: &wgpu::Device, queue: &wgpu::Queue, kernels: &mut Kernels, specs: &[ConvSpec], views: &[[wgpu::TextureView; 3]], candidates: &[Tile], accesses: &[SourceAccess]) -> Result<Vec<Vec<Finalist>>> {
     let n = specs.len();
     if candidates.len() == 1 && accesses.len() == 1 {
-        return Ok((candidates.to_vec(), accesses.to_vec()));
+        return Ok(vec![vec![Finalist { tile: candidates[0], sources: accesses[0], ns: f64::NAN }]; n]);
     }
     let count = ((n + 1) * (TUNE_ROUNDS + 1)) as u32;
     let queries = device.create_query_set(&wgpu::QuerySetDescriptor { label: Some("tile tuning"), ty: wgpu::QueryType::Timestamp, count });
@@ -984,17 +1013,18 @@ fn tune(device: &wgpu::Device, queue: &wgpu::Queue, kernels: &mut Kernels, specs
     // Round 2: the finalists with every access, side by side, forwards then backwards.
     let entries: Vec<(Tile, SourceAccess)> = accesses.iter().flat_map(|&a| finalists.iter().map(move |&t| (t, a))).collect();
     let plans: Vec<(ConvPlan, Vec<wgpu::BindGroup>)> = entries.iter().map(|&(t, a)| build(kernels, t, a)).collect::<Result<_>>()?;
-    let mut best = vec![(f64::INFINITY, Tile::default(), accesses[0]); n];
+    let mut finals: Vec<Vec<Finalist>> = vec![entries.iter().map(|&(tile, sources)| Finalist { tile, sources, ns: f64::INFINITY }).collect(); n];
     let order: Vec<usize> = (0..plans.len()).chain((0..plans.len()).rev()).collect();
     for k in order {
         let (plan, groups) = &plans[k];
-        for (b, t) in best.iter_mut().zip(time_plan(device, queue, &queries, plan, groups)?) {
-            if t < b.0 {
-                *b = (t, entries[k].0, entries[k].1);
-            }
+        for (conv, t) in finals.iter_mut().zip(time_plan(device, queue, &queries, plan, groups)?) {
+            conv[k].ns = conv[k].ns.min(t);
         }
     }
-    Ok(best.into_iter().map(|(_, t, a)| (t, a)).unzip())
+    for conv in &mut finals {
+        conv.sort_by(|a, b| a.ns.total_cmp(&b.ns));
+    }
+    Ok(finals)
 }
 
 /// One timing of a candidate plan for [`tune`]: the median time of each conv over

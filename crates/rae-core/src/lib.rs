@@ -18,7 +18,7 @@ pub mod kernels;
 pub mod model;
 pub mod weights;
 
-pub use denoiser::{Denoiser, GpuFrameIo, IoBinding, Options, TileChoice};
+pub use denoiser::{Denoiser, Finalist, GpuFrameIo, IoBinding, Options, TileChoice};
 pub use kernels::{Method, Precision, SourceAccess, Tile, WeightMemory};
 pub use error::{Error, Result};
 pub use frame::{FrameInputs, FrameTimings};
