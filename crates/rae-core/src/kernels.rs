@@ -206,6 +206,16 @@ pub fn matrix_units_supported(device: &wgpu::Device) -> bool {
 /// Texture format of activations at f32 (weights-independent tests upload in it).
 pub const ACTIVATION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 
+/// `src` (the text of `file`) with each pair's first string replaced by its second; each must
+/// occur (a rewrite that finds nothing means the shader changed under it).
+fn rewrite(mut src: String, file: &str, rewrites: &[(&str, &str)]) -> String {
+    for (from, to) in rewrites {
+        assert!(src.contains(from), "{file} has {from}");
+        src = src.replace(from, to);
+    }
+    src
+}
+
 /// A WGSL module from source text.
 fn shader_module(device: &wgpu::Device, label: &str, source: String) -> wgpu::ShaderModule {
     device.create_shader_module(wgpu::ShaderModuleDescriptor { label: Some(label), source: wgpu::ShaderSource::Wgsl(source.into()) })
@@ -607,45 +617,29 @@ impl Kernels {
         }
     }
 
+    /// A conv kernel's text (`src`, from `file`) with the rewrites both conv modules take: the
+    /// source access ([`STORAGE_SOURCES`]) and f16 storage.
+    fn conv_kernel_text(&self, file: &str, src: String, access: SourceAccess) -> String {
+        let src = if access == SourceAccess::Storage { rewrite(src, file, &STORAGE_SOURCES) } else { src };
+        if self.precision == Precision::F16 { src.replace("rgba32float", "rgba16float") } else { src }
+    }
+
     /// conv3x3.wgsl as this device, precision, weight memory and source access run it (the
     /// rewrites of [`Kernels::new`]).
     fn conv_text(&self, access: SourceAccess) -> String {
-        let mut src = conv_module_source("conv3x3");
-        if access == SourceAccess::Storage {
-            for (from, to) in STORAGE_SOURCES {
-                assert!(src.contains(from), "conv3x3.wgsl has {from}");
-                src = src.replace(from, to);
-            }
-        }
-        if self.precision == Precision::F16 {
-            src = src.replace("rgba32float", "rgba16float");
-        }
+        let mut src = self.conv_kernel_text("conv3x3.wgsl", conv_module_source("conv3x3"), access);
         if !self.subgroups {
-            for (from, to) in WITHOUT_SUBGROUPS {
-                assert!(src.contains(from), "conv3x3.wgsl has {from}");
-                src = src.replace(from, to);
-            }
+            src = rewrite(src, "conv3x3.wgsl", &WITHOUT_SUBGROUPS);
         }
         if self.memory == WeightMemory::Storage {
-            assert!(src.contains(UNIFORM_WEIGHTS), "conv3x3.wgsl declares its weights as kernels::UNIFORM_WEIGHTS");
-            src = src.replace(UNIFORM_WEIGHTS, STORAGE_WEIGHTS);
+            src = rewrite(src, "conv3x3.wgsl", &[(UNIFORM_WEIGHTS, STORAGE_WEIGHTS)]);
         }
         src
     }
 
     /// conv3x3_mma.wgsl as this device, precision and source access run it.
     fn mma_text(&self, access: SourceAccess) -> String {
-        let mut src = mma_source(self.matrix_units);
-        if access == SourceAccess::Storage {
-            for (from, to) in STORAGE_SOURCES {
-                assert!(src.contains(from), "conv3x3_mma.wgsl has {from}");
-                src = src.replace(from, to);
-            }
-        }
-        if self.precision == Precision::F16 {
-            src = src.replace("rgba32float", "rgba16float");
-        }
-        src
+        self.conv_kernel_text("conv3x3_mma.wgsl", mma_source(self.matrix_units), access)
     }
 
     /// Layout of the conv's group 0 for sources read as `access` says.
