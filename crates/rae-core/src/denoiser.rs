@@ -378,11 +378,17 @@ impl Denoiser {
         let both = [default_sources, if default_sources == SourceAccess::Sampled { SourceAccess::Storage } else { SourceAccess::Sampled }];
         let accesses = if sources.is_some() { &both[..1] } else { &both[..] };
         let tune_among = |kernels: &mut Kernels, candidates: &[Tile]| tune(device, queue, kernels, &specs, &node_views, candidates, accesses);
-        let tuning: Vec<Vec<Finalist>> = match tiles {
-            TileChoice::Fixed(_) => Vec::new(),
-            TileChoice::Auto if device_type == wgpu::DeviceType::Cpu => Vec::new(),
-            TileChoice::Tuned if timestamps => tune_among(&mut kernels, &TUNE_TILES)?,
-            TileChoice::TunedAmong(candidates) if timestamps && !candidates.is_empty() => tune_among(&mut kernels, candidates)?,
+        // One tile and kind for every conv, or each conv's fastest tuning finalist.
+        let fixed = |t: Tile| (vec![t], vec![default_sources], Vec::new());
+        let picks = |finalists: Vec<Vec<Finalist>>| {
+            let (tiles, sources) = finalists.iter().map(|f| (f[0].tile, f[0].sources)).unzip();
+            (tiles, sources, finalists)
+        };
+        let (tiles, conv_sources, tuning): (Vec<Tile>, Vec<SourceAccess>, Vec<Vec<Finalist>>) = match tiles {
+            TileChoice::Fixed(t) => fixed(t),
+            TileChoice::Auto if device_type == wgpu::DeviceType::Cpu => fixed(Tile::cpu(device)),
+            TileChoice::Tuned if timestamps => picks(tune_among(&mut kernels, &TUNE_TILES)?),
+            TileChoice::TunedAmong(candidates) if timestamps && !candidates.is_empty() => picks(tune_among(&mut kernels, candidates)?),
             TileChoice::Auto | TileChoice::TunedMma if timestamps => {
                 let mut candidates = TUNE_TILES.to_vec();
                 if kernels.matrix_units() && memory == WeightMemory::Storage && device.limits().max_compute_workgroup_storage_size >= MMA_WORKGROUP_BYTES {
@@ -391,16 +397,9 @@ impl Denoiser {
                         Precision::F16 => candidates.extend(MMA_TILES),
                     }
                 }
-                tune_among(&mut kernels, &candidates)?
+                picks(tune_among(&mut kernels, &candidates)?)
             }
-            TileChoice::Auto | TileChoice::Tuned | TileChoice::TunedAmong(_) | TileChoice::TunedMma => Vec::new(),
-        };
-        // Each conv's fastest finalist where tuned, else one tile and kind for all.
-        let (tiles, conv_sources): (Vec<Tile>, Vec<SourceAccess>) = match tiles {
-            _ if !tuning.is_empty() => tuning.iter().map(|f| (f[0].tile, f[0].sources)).unzip(),
-            TileChoice::Fixed(t) => (vec![t], vec![default_sources]),
-            TileChoice::Auto if device_type == wgpu::DeviceType::Cpu => (vec![Tile::cpu(device)], vec![default_sources]),
-            _ => (vec![Tile::default()], vec![default_sources]),
+            TileChoice::Auto | TileChoice::Tuned | TileChoice::TunedAmong(_) | TileChoice::TunedMma => fixed(Tile::default()),
         };
         let convs = ConvPlan::with_sources(device, &mut kernels, &specs, &tiles, &conv_sources)?;
         debug_assert_eq!(bytes, activation_bytes(&graph, pwidth, pheight, precision));
