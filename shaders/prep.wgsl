@@ -10,6 +10,15 @@
 // It also records the frame's largest prepared color value in `stats` (cleared by the host
 // before the pass), which output.wgsl uses to bound the result. Prepared color is >= 0, so its
 // bits order like u32s and an atomicMax on the bits is a max on the values.
+//
+// Written for CPU drivers as much as GPUs (docs/PERF.md, session 17). A pixel's channels are
+// picked by comparisons with the override offsets, not gathered in an indexed local array
+// (lavapipe keeps such an array in per-lane scratch memory and writes it lane by lane). The
+// frame's maximum needs no workgroup memory or barrier (on lavapipe a barrier splits the
+// shader into coroutines): an invocation reads the running maximum and adds its own with
+// atomicMax only when larger. The stored value only grows, so a stale read can cost an extra
+// atomicMax but never lose a maximum; most pixels stop at the read (at worst, a frame that
+// brightens in dispatch order, every pixel does both).
 
 const NONE: u32 = 0xffffffffu;
 const RADIANCE_MAX: f32 = 1e8;
@@ -18,23 +27,25 @@ const DEPTH_MAX: f32 = 1e6;
 // Largest magnitude stored: f32::MAX for f32 activations, 65504 for f16.
 override STORE_MAX: f32 = 3.4028234e38;
 
+// The model's input layout (kernels::PrepLayout), one pipeline per Denoiser: the first channel
+// of each buffer in the packed input (NONE: not packed), the channel blocks written, whether
+// color is divided by (albedo + ALBEDO_EPS), and its transfer (0: none, 1: log1p). As
+// overrides, every test of them folds away and each output channel's source is known.
+override OFF_COLOR: u32 = 0xffffffffu;
+override OFF_ALBEDO: u32 = 0xffffffffu;
+override OFF_NORMAL: u32 = 0xffffffffu;
+override OFF_DEPTH: u32 = 0xffffffffu;
+override OFF_ROUGHNESS: u32 = 0xffffffffu;
+override LAYERS: u32 = 1u;
+override DEMODULATE: bool = false;
+override TRANSFER: u32 = 0u;
+override ALBEDO_EPS: f32 = 1e-3;
+
 struct Params {
     width: u32,        // frame size
     height: u32,
     pwidth: u32,       // padded size (the network's)
     pheight: u32,
-    off_color: u32,    // first channel of each buffer in the packed input, or NONE
-    off_albedo: u32,
-    off_normal: u32,
-    off_depth: u32,
-    off_roughness: u32,
-    layers: u32,       // channel blocks written
-    demodulate: u32,   // 1: color / (albedo + albedo_eps)
-    transfer: u32,     // 0: none, 1: log1p
-    albedo_eps: f32,
-    _pad0: u32,
-    _pad1: u32,
-    _pad2: u32,
 }
 
 @group(0) @binding(0) var<uniform> params: Params;
@@ -46,8 +57,6 @@ struct Params {
 @group(0) @binding(6) var dst: texture_storage_2d_array<rgba32float, write>;
 // [0]: bits of the largest prepared color value of the frame.
 @group(0) @binding(7) var<storage, read_write> stats: array<atomic<u32>, 4>;
-
-var<workgroup> group_max: atomic<u32>;
 
 // NaN -> 0, +Inf -> posinf, -Inf -> lo, then clamp to [lo, hi]. Decided on the bits, so no
 // compiler assumption about NaN can remove the test.
@@ -75,67 +84,100 @@ fn albedo_at(i: u32) -> vec3<f32> {
     );
 }
 
+// A pixel's prepared values, each buffer's (zero where the model does not read it).
+struct Pixel {
+    color: vec3<f32>,
+    albedo: vec3<f32>,
+    normal: vec3<f32>,
+    depth: f32,
+    roughness: f32,
+}
+
+// Component k (0, 1, 2) of v, by selects: no dynamic index into a vector.
+fn component(v: vec3<f32>, k: u32) -> f32 {
+    return select(select(v.z, v.y, k == 1u), v.x, k == 0u);
+}
+
+// Whether channel c is one of the `n` channels packed from `off` (NONE: never).
+fn packed(c: u32, off: u32, n: u32) -> bool {
+    return off != NONE && c >= off && c < off + n;
+}
+
+// Channel c of the network input: the buffer packed there, or zero (the padding channels of the
+// last block).
+fn channel(px: Pixel, c: u32) -> f32 {
+    var v = 0.0;
+    if packed(c, OFF_COLOR, 3u) {
+        v = component(px.color, c - OFF_COLOR);
+    }
+    if packed(c, OFF_ALBEDO, 3u) {
+        v = component(px.albedo, c - OFF_ALBEDO);
+    }
+    if packed(c, OFF_NORMAL, 3u) {
+        v = component(px.normal, c - OFF_NORMAL);
+    }
+    if packed(c, OFF_DEPTH, 1u) {
+        v = px.depth;
+    }
+    if packed(c, OFF_ROUGHNESS, 1u) {
+        v = px.roughness;
+    }
+    return v;
+}
+
 @compute @workgroup_size(8, 8, 1)
-fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) li: u32) {
-    if li == 0u {
-        atomicStore(&group_max, 0u);
+fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if gid.x >= params.pwidth || gid.y >= params.pheight {
+        return;
     }
-    workgroupBarrier();
-    let inside = gid.x < params.pwidth && gid.y < params.pheight;
-    if inside {
-        atomicMax(&group_max, prepare(gid.xy));
-    }
-    workgroupBarrier();
-    if li == 0u {
-        atomicMax(&stats[0], atomicLoad(&group_max));
+    let m = prepare(gid.xy);
+    // Test first: most pixels are below the running maximum, and a load is cheaper than an
+    // atomic read-modify-write on one address that every invocation hits.
+    if m > atomicLoad(&stats[0]) {
+        atomicMax(&stats[0], m);
     }
 }
 
 // Prepare and store one pixel of the padded input; returns the bits of its largest color value.
 fn prepare(gid: vec2<u32>) -> u32 {
     let i = min(gid.y, params.height - 1u) * params.width + min(gid.x, params.width - 1u);
-    var ch: array<f32, 16>;
+    var px = Pixel(vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), 0.0, 0.0);
     var color_max = 0.0;
 
-    if params.off_color != NONE {
+    // Albedo is read once, for demodulation and as an input channel alike.
+    if OFF_ALBEDO != NONE || (OFF_COLOR != NONE && DEMODULATE) {
+        px.albedo = albedo_at(i);
+    }
+    if OFF_COLOR != NONE {
         let c = vec3<f32>(color[3u * i], color[3u * i + 1u], color[3u * i + 2u]);
         var s = vec3<f32>(
             sanitize(c.x, 0.0, RADIANCE_MAX, RADIANCE_MAX),
             sanitize(c.y, 0.0, RADIANCE_MAX, RADIANCE_MAX),
             sanitize(c.z, 0.0, RADIANCE_MAX, RADIANCE_MAX),
         );
-        if params.demodulate != 0u {
-            s = s / (albedo_at(i) + vec3<f32>(params.albedo_eps));
+        if DEMODULATE {
+            s = s / (px.albedo + vec3<f32>(ALBEDO_EPS));
         }
-        if params.transfer == 1u {
+        if TRANSFER == 1u {
             s = log(vec3<f32>(1.0) + s);
         }
         color_max = max(s.x, max(s.y, s.z));
-        ch[params.off_color] = s.x;
-        ch[params.off_color + 1u] = s.y;
-        ch[params.off_color + 2u] = s.z;
+        px.color = s;
     }
-    if params.off_albedo != NONE {
-        let a = albedo_at(i);
-        ch[params.off_albedo] = a.x;
-        ch[params.off_albedo + 1u] = a.y;
-        ch[params.off_albedo + 2u] = a.z;
-    }
-    if params.off_normal != NONE {
+    if OFF_NORMAL != NONE {
         let n = vec3<f32>(normal[3u * i], normal[3u * i + 1u], normal[3u * i + 2u]);
-        ch[params.off_normal] = sanitize(n.x, -1.0, 1.0, 0.0);
-        ch[params.off_normal + 1u] = sanitize(n.y, -1.0, 1.0, 0.0);
-        ch[params.off_normal + 2u] = sanitize(n.z, -1.0, 1.0, 0.0);
+        px.normal = vec3<f32>(sanitize(n.x, -1.0, 1.0, 0.0), sanitize(n.y, -1.0, 1.0, 0.0), sanitize(n.z, -1.0, 1.0, 0.0));
     }
-    if params.off_depth != NONE {
-        ch[params.off_depth] = log(1.0 + sanitize(depth[i], 0.0, DEPTH_MAX, DEPTH_MAX));
+    if OFF_DEPTH != NONE {
+        px.depth = log(1.0 + sanitize(depth[i], 0.0, DEPTH_MAX, DEPTH_MAX));
     }
-    if params.off_roughness != NONE {
-        ch[params.off_roughness] = sanitize(roughness[i], 0.0, 1.0, 0.0);
+    if OFF_ROUGHNESS != NONE {
+        px.roughness = sanitize(roughness[i], 0.0, 1.0, 0.0);
     }
-    for (var l = 0u; l < params.layers; l++) {
-        let v = clamp(vec4<f32>(ch[4u * l], ch[4u * l + 1u], ch[4u * l + 2u], ch[4u * l + 3u]), vec4<f32>(-STORE_MAX), vec4<f32>(STORE_MAX));
-        textureStore(dst, vec2<u32>(gid.x, gid.y), l, v);
+    for (var l = 0u; l < LAYERS; l++) {
+        let c = 4u * l;
+        let v = vec4<f32>(channel(px, c), channel(px, c + 1u), channel(px, c + 2u), channel(px, c + 3u));
+        textureStore(dst, vec2<u32>(gid.x, gid.y), l, clamp(v, vec4<f32>(-STORE_MAX), vec4<f32>(STORE_MAX)));
     }
     return bitcast<u32>(color_max);
 }

@@ -635,6 +635,24 @@ fn prep_matches_cpu_with_padding_and_extreme_values() {
         let (pw, ph) = d.padded_size();
         let want = cpu::prepare(&weights.arch, &frame_of(&buffers), w, h, pw as usize, ph as usize);
         crate::assert_close(Tolerance { rel: 1e-6 }, &format!("prep {name}"), &d.read_input().unwrap(), &want.data);
+        // The frame's largest prepared color, reduced over every invocation, bounds the output:
+        // this frame's, then frames whose brightest pixel is the first, one in the middle and
+        // the last (every invocation's value has to reach the maximum).
+        let (got, expected) = (d.read_color_max().unwrap(), cpu::color_max(&want));
+        assert!(expected > 0.0 && (got - expected).abs() <= 1e-6 * expected, "{name}: color max {got}, CPU {expected}");
+        let n = w * h;
+        for pos in [0, n / 2 + 3, n - 1] {
+            let mut b = wild_frame(w, h);
+            b[0] = noise(3 * n, 55).iter().map(|v| (v * 2.0).exp()).collect();
+            b[0][3 * pos..3 * pos + 3].copy_from_slice(&[1e6, 2e6, 1e6]);
+            b[1][3 * pos..3 * pos + 3].copy_from_slice(&[0.5, 0.5, 0.5]);
+            d.denoise(&frame_of(&b)).unwrap();
+            let x = cpu::prepare(&weights.arch, &frame_of(&b), w, h, pw as usize, ph as usize);
+            let (got, expected) = (d.read_color_max().unwrap(), cpu::color_max(&x));
+            let bright = (0..3).map(|c| x.data[c * x.h * x.w + pw as usize * (pos / w) + pos % w]).fold(0.0f32, f32::max);
+            assert!(bright == expected, "{name}: pixel {pos} is the brightest ({bright} against {expected})");
+            assert!((got - expected).abs() <= 1e-6 * expected, "{name}: brightest pixel {pos}: color max {got}, CPU {expected}");
+        }
     }
 }
 

@@ -36,7 +36,7 @@ use std::time::Instant;
 use crate::error::{Error, Result};
 use crate::frame::{FrameInputs, FrameTimings};
 use crate::graph::{Graph, Read, Value};
-use crate::kernels::{ConvPlan, ConvSpec, Kernels, MMA_WORKGROUP_BYTES, Method, OutputParams, PrepParams, Precision, SourceAccess, Tile, WORKGROUP, WeightMemory, blocks};
+use crate::kernels::{ConvPlan, ConvSpec, Kernels, MMA_WORKGROUP_BYTES, Method, OutputParams, PrepLayout, PrepParams, Precision, SourceAccess, Tile, WORKGROUP, WeightMemory, blocks};
 use crate::model::{Arch, InputBuffer, Transfer};
 use crate::weights::Weights;
 
@@ -225,6 +225,8 @@ pub struct Denoiser {
     pwidth: u32,
     pheight: u32,
     kernels: Kernels,
+    /// prep.wgsl specialised to this model's input layout.
+    prep: wgpu::ComputePipeline,
     convs: ConvPlan,
     /// `[parity][node]`.
     conv_groups: [Vec<wgpu::BindGroup>; 2],
@@ -436,33 +438,24 @@ impl Denoiser {
         });
 
         // Prep and output uniforms.
-        let mut offsets5 = [u32::MAX; 5];
+        let mut offsets = [None; 5];
         let mut ch = 0u32;
         for b in &arch.inputs {
-            offsets5[InputBuffer::ALL.iter().position(|x| x == b).expect("known buffer")] = ch;
+            offsets[InputBuffer::ALL.iter().position(|x| x == b).expect("known buffer")] = Some(ch);
             ch += b.channels() as u32;
         }
         let transfer = match arch.transfer {
             Transfer::None => 0,
             Transfer::Log1p => 1,
         };
-        let prep = PrepParams {
-            width,
-            height,
-            pwidth,
-            pheight,
-            offsets: offsets5,
-            layers: blocks(graph.in_channels),
-            demodulate: arch.demodulate as u32,
-            transfer,
-            albedo_eps: arch.albedo_eps,
-            _pad: [0; 3],
-        };
+        let prep_layout = PrepLayout { offsets, layers: blocks(graph.in_channels), demodulate: arch.demodulate, log1p: transfer == 1, albedo_eps: arch.albedo_eps };
+        let prep_pipeline = kernels.prep_pipeline(device, &prep_layout);
+        let prep = PrepParams { width, height, pwidth, pheight };
         let out = OutputParams { width, height, demodulate: arch.demodulate as u32, transfer, albedo_eps: arch.albedo_eps, _pad: [0; 3] };
         let prep_params = create_init(device, "prep params", bytemuck::bytes_of(&prep), wgpu::BufferUsages::UNIFORM);
         let output_params = create_init(device, "output params", bytemuck::bytes_of(&out), wgpu::BufferUsages::UNIFORM);
         let dummy = create_init(device, "absent buffer", &[0u8; 16], wgpu::BufferUsages::STORAGE);
-        let stats = create_init(device, "frame stats", &[0u8; 16], wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST);
+        let stats = create_init(device, "frame stats", &[0u8; 16], wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC);
 
         Ok(Self {
             id: NEXT_ID.fetch_add(1, Ordering::Relaxed),
@@ -475,6 +468,7 @@ impl Denoiser {
             pwidth,
             pheight,
             kernels,
+            prep: prep_pipeline,
             convs,
             conv_groups,
             pool_groups,
@@ -611,7 +605,7 @@ impl Denoiser {
                 }
             };
             stamp(&mut pass, 0);
-            pass.set_pipeline(&self.kernels.prep);
+            pass.set_pipeline(&self.prep);
             pass.set_bind_group(0, &io.prep, &[]);
             pass.dispatch_workgroups(self.pwidth.div_ceil(WORKGROUP), self.pheight.div_ceil(WORKGROUP), 1);
             stamp(&mut pass, 1);
@@ -664,7 +658,7 @@ impl Denoiser {
                 }
                 self.convs.record_compile(&mut pass, i, group);
             }
-            pass.set_pipeline(&self.kernels.prep);
+            pass.set_pipeline(&self.prep);
             pass.set_bind_group(0, &host.binding.prep, &[]);
             pass.dispatch_workgroups(1, 1, 1);
         }
@@ -830,6 +824,18 @@ impl Denoiser {
             let (ch, p) = (i / (h * w), i % (h * w));
             all[((ch / 4) * h * w + p) * 4 + ch % 4]
         }).collect())
+    }
+
+    /// The largest prepared (demodulated, transfer-space) color value of the last frame, as
+    /// prep recorded it for the output's bound: for checking the prep kernel's reduction.
+    pub fn read_color_max(&self) -> Result<f32> {
+        let readback = self.device.create_buffer(&wgpu::BufferDescriptor { label: Some("stats readback"), size: 16, usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST, mapped_at_creation: false });
+        let mut encoder = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("read stats") });
+        encoder.copy_buffer_to_buffer(&self.stats, 0, &readback, 0, 16);
+        self.queue.submit(Some(encoder.finish()));
+        let mut v = [0f32; 4];
+        read_buffer(&self.device, &readback, &mut v)?;
+        Ok(v[0])
     }
 
     /// Storage precision of activations and hidden state.

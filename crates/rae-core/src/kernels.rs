@@ -265,7 +265,7 @@ pub struct ConvParams {
     pub _pad: [u32; 3],
 }
 
-/// Uniform block of prep.wgsl.
+/// Uniform block of prep.wgsl: the sizes (the model's layout is [`PrepLayout`], overrides).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable)]
 pub struct PrepParams {
@@ -277,18 +277,40 @@ pub struct PrepParams {
     pub pwidth: u32,
     /// Padded height.
     pub pheight: u32,
-    /// Channel offsets of color, albedo, normal, depth, roughness (`u32::MAX`: not packed).
-    pub offsets: [u32; 5],
-    /// Layers written.
+}
+
+/// How a model packs its input (prep.wgsl's override constants): fixed per model, so each
+/// [`crate::Denoiser`] builds its own prep pipeline ([`Kernels::prep_pipeline`]) and the kernel
+/// knows at compile time which buffer feeds each channel.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PrepLayout {
+    /// First channel of color, albedo, normal, depth, roughness in the packed input (`None`:
+    /// not packed).
+    pub offsets: [Option<u32>; 5],
+    /// Channel blocks written.
     pub layers: u32,
-    /// 1: demodulate.
-    pub demodulate: u32,
-    /// 0: none, 1: log1p.
-    pub transfer: u32,
+    /// Color is divided by (albedo + `albedo_eps`).
+    pub demodulate: bool,
+    /// Color goes through log1p.
+    pub log1p: bool,
     /// Demodulation epsilon.
     pub albedo_eps: f32,
-    /// Padding to 64 bytes.
-    pub _pad: [u32; 3],
+}
+
+impl PrepLayout {
+    /// The pipeline constants that specialise prep.wgsl to this layout.
+    fn constants(&self, store_max: f32) -> Vec<(&'static str, f64)> {
+        let names = ["OFF_COLOR", "OFF_ALBEDO", "OFF_NORMAL", "OFF_DEPTH", "OFF_ROUGHNESS"];
+        let mut c: Vec<(&'static str, f64)> = names.iter().zip(self.offsets).map(|(&n, o)| (n, o.unwrap_or(u32::MAX) as f64)).collect();
+        c.extend([
+            ("LAYERS", self.layers as f64),
+            ("DEMODULATE", if self.demodulate { 1.0 } else { 0.0 }),
+            ("TRANSFER", if self.log1p { 1.0 } else { 0.0 }),
+            ("ALBEDO_EPS", self.albedo_eps as f64),
+            ("STORE_MAX", store_max as f64),
+        ]);
+        c
+    }
 }
 
 /// Uniform block of output.wgsl.
@@ -494,8 +516,10 @@ pub struct Kernels {
     pub pool_layout: wgpu::BindGroupLayout,
     /// The 2x2 max-pool pipeline (one pass per encoder block, [`crate::graph::Pool`]).
     pub pool: wgpu::ComputePipeline,
-    /// The input-preparation pipeline.
-    pub prep: wgpu::ComputePipeline,
+    /// prep.wgsl, specialised per model by [`Kernels::prep_pipeline`].
+    prep_module: wgpu::ShaderModule,
+    /// The pipeline layout over [`Kernels::prep_layout`].
+    prep_pipeline_layout: wgpu::PipelineLayout,
     /// The output pipeline.
     pub output: wgpu::ComputePipeline,
     /// Layouts of the conv's group 0, `[SourceAccess as usize]`.
@@ -592,8 +616,6 @@ impl Kernels {
                 cache: None,
             })
         };
-        let store_max = [("STORE_MAX", precision.store_max() as f64)];
-        let prep = pipeline("prep", &pipeline_layout(&prep_layout), &module("prep"), &store_max);
         let output = pipeline("output", &pipeline_layout(&output_layout), &module("output"), &[]);
         let pool_layout = layout("pool", &[texture_entry(0), storage_texture_entry(1, precision.format())]);
         let pool = pipeline("pool", &pipeline_layout(&pool_layout), &module("pool"), &[]);
@@ -604,11 +626,12 @@ impl Kernels {
             modules: Default::default(),
             matrix_units: matrix_units_supported(device),
             subgroups: device.features().contains(wgpu::Features::SUBGROUP),
+            prep_pipeline_layout: pipeline_layout(&prep_layout),
+            prep_module: module("prep"),
             prep_layout,
             output_layout,
             pool_layout,
             pool,
-            prep,
             output,
             conv: HashMap::new(),
             precision,
@@ -640,6 +663,20 @@ impl Kernels {
     /// conv3x3_mma.wgsl as this device, precision and source access run it.
     fn mma_text(&self, access: SourceAccess) -> String {
         self.conv_kernel_text("conv3x3_mma.wgsl", mma_source(self.matrix_units), access)
+    }
+
+    /// The input-preparation pipeline for a model whose input is packed as `layout` says
+    /// (prep.wgsl specialised by override constants; one per [`crate::Denoiser`]).
+    pub fn prep_pipeline(&self, device: &wgpu::Device, layout: &PrepLayout) -> wgpu::ComputePipeline {
+        let constants = layout.constants(self.precision.store_max());
+        device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("prep"),
+            layout: Some(&self.prep_pipeline_layout),
+            module: &self.prep_module,
+            entry_point: Some("main"),
+            compilation_options: wgpu::PipelineCompilationOptions { constants: &constants, zero_initialize_workgroup_memory: false },
+            cache: None,
+        })
     }
 
     /// Layout of the conv's group 0 for sources read as `access` says.
