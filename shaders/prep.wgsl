@@ -15,10 +15,10 @@
 // picked by comparisons with the override offsets, not gathered in an indexed local array
 // (lavapipe keeps such an array in per-lane scratch memory and writes it lane by lane). The
 // frame's maximum needs no workgroup memory or barrier (on lavapipe a barrier splits the
-// shader into coroutines): an invocation reads the running maximum and adds its own with
-// atomicMax only when larger. The stored value only grows, so a stale read can cost an extra
-// atomicMax but never lose a maximum; most pixels stop at the read (at worst, a frame that
-// brightens in dispatch order, every pixel does both).
+// shader into coroutines): each subgroup's largest value is read against the running maximum
+// and added with atomicMax only when larger. The stored value only grows, so a stale read can
+// cost an extra atomicMax but never lose a maximum; most subgroups stop at the read (at worst,
+// a frame that brightens in dispatch order, every subgroup does both).
 
 const NONE: u32 = 0xffffffffu;
 const RADIANCE_MAX: f32 = 1e8;
@@ -127,15 +127,25 @@ fn channel(px: Pixel, c: u32) -> f32 {
 
 @compute @workgroup_size(8, 8, 1)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    if gid.x >= params.pwidth || gid.y >= params.pheight {
-        return;
+    // No early return: every invocation reaches subgroupMax (subgroup-uniform control flow).
+    var m = 0u;
+    if gid.x < params.pwidth && gid.y < params.pheight {
+        m = prepare(gid.xy);
     }
-    let m = prepare(gid.xy);
-    // Test first: most pixels are below the running maximum, and a load is cheaper than an
-    // atomic read-modify-write on one address that every invocation hits.
-    if m > atomicLoad(&stats[0]) {
+    // The subgroup's maximum first, so that one lane per subgroup (those holding it) goes on to
+    // the global maximum: a GPU's first wave would otherwise send every lane's atomicMax to one
+    // address. Then test before writing: most values are below the running maximum, and a
+    // load is cheaper than an atomic read-modify-write.
+    let top = subgroupMax(m);
+    if m == top && m > atomicLoad(&stats[0]) {
         atomicMax(&stats[0], m);
     }
+}
+
+// What subgroupMax becomes on a device without subgroups (kernels::PREP_WITHOUT_SUBGROUPS):
+// every lane is its own subgroup, and each tests and writes its value.
+fn no_subgroup_max(v: u32) -> u32 {
+    return v;
 }
 
 // Prepare and store one pixel of the padded input; returns the bits of its largest color value.

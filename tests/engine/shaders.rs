@@ -1,6 +1,6 @@
 //! Every WGSL file parses and validates with naga: no GPU needed, a broken shader fails here.
 
-use rae_core::kernels::{MMA_ENABLE, MMA_WORKGROUP_BYTES, ROWS_STUB, SHADERS, STORAGE_SOURCES, STORAGE_WEIGHTS, UNIFORM_WEIGHTS, WITHOUT_SUBGROUPS, conv_module_source, mma_source, shader_source};
+use rae_core::kernels::{MMA_ENABLE, MMA_WORKGROUP_BYTES, PREP_WITHOUT_SUBGROUPS, ROWS_STUB, SHADERS, STORAGE_SOURCES, STORAGE_WEIGHTS, UNIFORM_WEIGHTS, WITHOUT_SUBGROUPS, conv_module_source, mma_source, shader_source};
 
 #[test]
 fn every_shader_validates_with_naga() {
@@ -22,7 +22,14 @@ fn every_shader_validates_with_naga() {
         assert!(src.contains(from), "conv3x3.wgsl has {from}");
         src.replace(from, to)
     });
+    let prep = shader_source("prep").to_string();
+    let prep_without_subgroups = PREP_WITHOUT_SUBGROUPS.iter().fold(prep, |src, (from, to)| {
+        assert!(src.contains(from), "prep.wgsl has {from}");
+        src.replace(from, to)
+    });
+    assert!(!prep_without_subgroups.contains("subgroupMax("), "no subgroup operation is left in prep");
     let rewritten = [
+        ("prep (without subgroups)", prep_without_subgroups),
         ("conv3x3 (two-column lanes)", conv.replace(ROWS_STUB, shader_source("conv3x3_rows"))),
         ("conv3x3 (storage sources, two-column lanes, f16)", storage_sources.replace(ROWS_STUB, shader_source("conv3x3_rows")).replace("rgba32float", "rgba16float")),
         ("conv3x3 (f16, storage weights)", conv.replace("rgba32float", "rgba16float").replace(UNIFORM_WEIGHTS, STORAGE_WEIGHTS)),

@@ -157,6 +157,10 @@ pub const WITHOUT_SUBGROUPS: [(&str, &str); 3] = [
     ("@builtin(subgroup_invocation_id)", "@builtin(local_invocation_index)"),
 ];
 
+/// The rewrite of prep.wgsl for devices without [`wgpu::Features::SUBGROUP`]: the frame's
+/// maximum skips the subgroup step, every invocation testing its own value against it.
+pub const PREP_WITHOUT_SUBGROUPS: [(&str, &str); 1] = [("subgroupMax(", "no_subgroup_max(")];
+
 /// Whether a device runs [`Method::Lanes`]: it has subgroups, and of at least 8 lanes (a tap's
 /// weights are spread over lanes 0 to 7).
 pub fn lanes_supported(device: &wgpu::Device) -> bool {
@@ -598,9 +602,13 @@ impl Kernels {
                 immediate_size: 0,
             })
         };
-        // prep, output and pool: f16 storage is their only rewrite.
+        // prep, output and pool: f16 storage is their only rewrite (and prep's without subgroups).
+        let subgroups = device.features().contains(wgpu::Features::SUBGROUP);
         let module = |name: &str| {
-            let src = conv_module_source(name);
+            let mut src = conv_module_source(name);
+            if name == "prep" && !subgroups {
+                src = rewrite(src, "prep.wgsl", &PREP_WITHOUT_SUBGROUPS);
+            }
             shader_module(device, name, if precision == Precision::F16 { src.replace("rgba32float", "rgba16float") } else { src })
         };
         let pipeline = |label, layout: &wgpu::PipelineLayout, module: &wgpu::ShaderModule, constants: &[(&str, f64)]| {
@@ -625,7 +633,7 @@ impl Kernels {
             conv_layouts,
             modules: Default::default(),
             matrix_units: matrix_units_supported(device),
-            subgroups: device.features().contains(wgpu::Features::SUBGROUP),
+            subgroups,
             prep_pipeline_layout: pipeline_layout(&prep_layout),
             prep_module: module("prep"),
             prep_layout,
