@@ -2,6 +2,14 @@
 
 use rae_core::kernels::{MMA_ENABLE, MMA_WORKGROUP_BYTES, PREP_WITHOUT_SUBGROUPS, ROWS_STUB, SHADERS, STORAGE_SOURCES, STORAGE_WEIGHTS, UNIFORM_WEIGHTS, WITHOUT_SUBGROUPS, conv_module_source, mma_source, shader_source};
 
+/// `src` (from `file`) with each of `rewrites` made, each of which must find its text.
+fn apply(src: String, file: &str, rewrites: &[(&str, &str)]) -> String {
+    rewrites.iter().fold(src, |src, (from, to)| {
+        assert!(src.contains(from), "{file} has {from}");
+        src.replace(from, to)
+    })
+}
+
 #[test]
 fn every_shader_validates_with_naga() {
     assert!(SHADERS.len() >= 3);
@@ -13,20 +21,10 @@ fn every_shader_validates_with_naga() {
     let conv = conv.as_str();
     assert!(conv.contains(UNIFORM_WEIGHTS), "the weight declaration Kernels::new rewrites");
     assert!(conv.contains(ROWS_STUB), "the empty accumulate_rows Kernels::conv replaces");
-    let without_subgroups = WITHOUT_SUBGROUPS.iter().fold(conv.to_string(), |src, (from, to)| {
-        assert!(src.contains(from), "conv3x3.wgsl has {from}");
-        src.replace(from, to)
-    });
+    let without_subgroups = apply(conv.to_string(), "conv3x3.wgsl", &WITHOUT_SUBGROUPS);
     assert!(WITHOUT_SUBGROUPS.iter().all(|(from, _)| !without_subgroups.contains(from)), "no subgroup operation is left");
-    let storage_sources = STORAGE_SOURCES.iter().fold(conv.to_string(), |src, (from, to)| {
-        assert!(src.contains(from), "conv3x3.wgsl has {from}");
-        src.replace(from, to)
-    });
-    let prep = shader_source("prep").to_string();
-    let prep_without_subgroups = PREP_WITHOUT_SUBGROUPS.iter().fold(prep, |src, (from, to)| {
-        assert!(src.contains(from), "prep.wgsl has {from}");
-        src.replace(from, to)
-    });
+    let storage_sources = apply(conv.to_string(), "conv3x3.wgsl", &STORAGE_SOURCES);
+    let prep_without_subgroups = apply(shader_source("prep").to_string(), "prep.wgsl", &PREP_WITHOUT_SUBGROUPS);
     assert!(!prep_without_subgroups.contains("subgroupMax("), "no subgroup operation is left in prep");
     let rewritten = [
         ("prep (without subgroups)", prep_without_subgroups),
@@ -39,10 +37,7 @@ fn every_shader_validates_with_naga() {
     // (conv3x3_mma_coop.wgsl, only used inside it), both with storage-texture sources and f16.
     let mma = shader_source("conv3x3_mma");
     assert!(mma.contains(MMA_ENABLE), "the enable mma_source extends");
-    let storage_mma = |src: String| STORAGE_SOURCES.iter().fold(src, |src, (from, to)| {
-        assert!(src.contains(from), "conv3x3_mma.wgsl has {from}");
-        src.replace(from, to)
-    });
+    let storage_mma = |src: String| apply(src, "conv3x3_mma.wgsl", &STORAGE_SOURCES);
     let mma_rewritten = [
         ("conv3x3_mma (matrix units)", mma_source(true)),
         ("conv3x3_mma (matrix units, storage sources, f16)", storage_mma(mma_source(true)).replace("rgba32float", "rgba16float")),
