@@ -448,7 +448,7 @@ impl Denoiser {
             Transfer::None => 0,
             Transfer::Log1p => 1,
         };
-        let prep_layout = PrepLayout { offsets, layers: blocks(graph.in_channels), demodulate: arch.demodulate, log1p: transfer == 1, albedo_eps: arch.albedo_eps };
+        let prep_layout = PrepLayout { offsets, layers: blocks(graph.in_channels), demodulate: arch.demodulate, log1p: matches!(arch.transfer, Transfer::Log1p), albedo_eps: arch.albedo_eps };
         let prep_pipeline = kernels.prep_pipeline(device, &prep_layout);
         let prep = PrepParams { width, height, pwidth, pheight };
         let out = OutputParams { width, height, demodulate: arch.demodulate as u32, transfer, albedo_eps: arch.albedo_eps, _pad: [0; 3] };
