@@ -49,6 +49,11 @@ override MT: u32 = 4u;
 // bias), and with SPLIT_A the activations too (f32 storage; f16 activations have none).
 override SPLIT: bool = false;
 override SPLIT_A: bool = true;
+// Split entry points: load chunk c + 1's window into registers (`Prefetch`) before chunk c's
+// products, so that its texture reads are in flight while the matrix products run, and write
+// it to `win` after them (kernels::Method::MmaSplitPrefetch). Without it, a workgroup waits on
+// its reads between the two barriers, with nothing of its own to compute.
+override PREFETCH: bool = false;
 
 // Rows per workgroup (one per subgroup) and the staged window's height (ROWS + 2).
 const ROWS: u32 = 4u;
@@ -57,6 +62,11 @@ const WIN_H: u32 = 6u;
 const TILE: u32 = 256u;
 // Scale of a split operand's remainder (2^11: one f16 mantissa).
 const LO_SCALE: f32 = 2048.0;
+// Window texels an invocation holds with PREFETCH: the split tiles' 6 x 34 x 4 = 816 texels
+// over 128 invocations, rounded up (kernels::MMA_PREFETCH_TEXELS checks it).
+const PREFETCH_TEXELS: u32 = 7u;
+// One invocation's share of a chunk's window, as read from the sources (not yet clamped).
+alias Prefetch = array<vec4<f32>, PREFETCH_TEXELS>;
 
 // Weights of group z (16 * NT output channels from 4 * params.ob0 + z * 16 * NT), f16 from
 // w = z * group_stride: for chunk c (input blocks 4c .. 4c + 3) and tap t = ky * 3 + kx, NT
@@ -97,11 +107,11 @@ fn chunks() -> u32 {
     return (params.cin4_total + 3u) / 4u;
 }
 
-// Texel i (< win_texels()) of chunk c's window whose top-left output pixel is (x0, y0), clamped
-// to f16's range: input block 4c + j (j = i % 4) at window pixel (r, q) is the source texel at
+// Texel i (< win_texels()) of chunk c's window whose top-left output pixel is (x0, y0), as the
+// sources hold it: input block 4c + j (j = i % 4) at window pixel (r, q) is the source texel at
 // (x0 + q - 1, y0 + r - 1). Blocks past cin4_a + cin4_b (padding, or a reset frame's hidden
-// state) are zero. It goes to `win` at win_at(i).
-fn window_texel(i: u32, c: u32, x0: u32, y0: u32) -> vec4<f32> {
+// state) are zero. It goes to `win` at win_at(i), clamped by `to_f16_range`.
+fn window_source(i: u32, c: u32, x0: u32, y0: u32) -> vec4<f32> {
     let j = i % 4u;
     let pixel = i / 4u;
     let x = i32(x0 + pixel % win_w()) - 1;
@@ -113,8 +123,17 @@ fn window_texel(i: u32, c: u32, x0: u32, y0: u32) -> vec4<f32> {
     } else if SOURCE_B && ib < params.cin4_a + params.cin4_b {
         v = fetch(src_b, MODE_B, x, y, ib - params.cin4_a);
     }
-    // f16 has no room past 65504: clamp rather than overflow to infinity.
+    return v;
+}
+
+// f16 has no room past 65504: clamp rather than overflow to infinity.
+fn to_f16_range(v: vec4<f32>) -> vec4<f32> {
     return clamp(v, vec4<f32>(-65504.0), vec4<f32>(65504.0));
+}
+
+// Texel i of chunk c's window, clamped to f16's range.
+fn window_texel(i: u32, c: u32, x0: u32, y0: u32) -> vec4<f32> {
+    return to_f16_range(window_source(i, c, x0, y0));
 }
 
 // Where texel i of the window goes in `win`: pixel i / 4, channels 4 (i % 4) .. + 3.
@@ -135,7 +154,15 @@ fn stage_chunk(li: u32, c: u32, x0: u32, y0: u32) {
 }
 
 // Stage chunk c as `stage_chunk` does, and with SPLIT_A each value's scaled remainder into
-// `win` from lo_at().
+// `win` from lo_at() (`put_texel_split`).
+fn stage_chunk_split(li: u32, c: u32, x0: u32, y0: u32) {
+    for (var i = li; i < win_texels(); i += 128u) {
+        put_texel_split(i, window_source(i, c, x0, y0));
+    }
+}
+
+// Window texel i, as read from the sources (`window_source`), into `win` at win_at(i): clamped
+// to f16's range, hi, and with SPLIT_A its scaled remainder from lo_at().
 //
 // hi is v cut to what f16 holds exactly, in f32 arithmetic, not f16(v) widened back: the
 // NVIDIA driver (580, H100, session 15) treated v - f32(f16(v)) as if the round trip were
@@ -143,25 +170,66 @@ fn stage_chunk(li: u32, c: u32, x0: u32, y0: u32) {
 // error. In f16's normal range (from 2^-14) the cut is a mask to 10 mantissa bits; below it,
 // where f16's spacing is 2^-24, a truncation to that multiple (exact: powers of two). Either
 // converts to f16 exactly, and v - hi is exact in f32 with no conversion to fold.
-fn stage_chunk_split(li: u32, c: u32, x0: u32, y0: u32) {
-    for (var i = li; i < win_texels(); i += 128u) {
-        let v = window_texel(i, c, x0, y0);
-        let cut = bitcast<vec4<f32>>(bitcast<vec4<u32>>(v) & vec4<u32>(0xffffe000u));
-        let fine = trunc(v * 16777216.0) * (1.0 / 16777216.0);
-        let hi = select(cut, fine, abs(v) < vec4<f32>(6.103515625e-5));
-        let h = vec4<f16>(hi);
-        let o = win_at(i);
-        win[o] = h.x;
-        win[o + 1u] = h.y;
-        win[o + 2u] = h.z;
-        win[o + 3u] = h.w;
-        if SPLIT_A {
-            let l = vec4<f16>((v - hi) * LO_SCALE);
-            win[lo_at() + o] = l.x;
-            win[lo_at() + o + 1u] = l.y;
-            win[lo_at() + o + 2u] = l.z;
-            win[lo_at() + o + 3u] = l.w;
+fn put_texel_split(i: u32, source: vec4<f32>) {
+    let v = to_f16_range(source);
+    let cut = bitcast<vec4<f32>>(bitcast<vec4<u32>>(v) & vec4<u32>(0xffffe000u));
+    let fine = trunc(v * 16777216.0) * (1.0 / 16777216.0);
+    let hi = select(cut, fine, abs(v) < vec4<f32>(6.103515625e-5));
+    let h = vec4<f16>(hi);
+    let o = win_at(i);
+    win[o] = h.x;
+    win[o + 1u] = h.y;
+    win[o + 2u] = h.z;
+    win[o + 3u] = h.w;
+    if SPLIT_A {
+        let l = vec4<f16>((v - hi) * LO_SCALE);
+        win[lo_at() + o] = l.x;
+        win[lo_at() + o + 1u] = l.y;
+        win[lo_at() + o + 2u] = l.z;
+        win[lo_at() + o + 3u] = l.w;
+    }
+}
+
+// PREFETCH: invocation li's texels of chunk c's window (li + 128 k for k < PREFETCH_TEXELS,
+// those under win_texels()) into `regs`, read but not yet used. The loop has a constant count,
+// so a driver can unroll it and keep `regs` in registers.
+fn fetch_chunk(regs: ptr<function, Prefetch>, li: u32, c: u32, x0: u32, y0: u32) {
+    for (var k = 0u; k < PREFETCH_TEXELS; k++) {
+        let i = li + 128u * k;
+        if i < win_texels() {
+            (*regs)[k] = window_source(i, c, x0, y0);
         }
+    }
+}
+
+// PREFETCH: what `fetch_chunk` read into `regs`, into `win` as `stage_chunk_split` puts it.
+fn put_chunk_split(regs: ptr<function, Prefetch>, li: u32) {
+    for (var k = 0u; k < PREFETCH_TEXELS; k++) {
+        let i = li + 128u * k;
+        if i < win_texels() {
+            put_texel_split(i, (*regs)[k]);
+        }
+    }
+}
+
+// Chunk c's window into `win` for a split entry point: from `regs`, where `fetch_chunk` read it
+// during the previous chunk's products (PREFETCH; the first chunk is read here), or read now.
+fn stage_split(regs: ptr<function, Prefetch>, li: u32, c: u32, x0: u32, y0: u32) {
+    if PREFETCH {
+        if c == 0u {
+            fetch_chunk(regs, li, 0u, x0, y0);
+        }
+        put_chunk_split(regs, li);
+    } else {
+        stage_chunk_split(li, c, x0, y0);
+    }
+}
+
+// PREFETCH: start reading chunk c + 1's window (if there is one) into `regs`, after chunk c's
+// is in `win` and before its products.
+fn prefetch_next(regs: ptr<function, Prefetch>, li: u32, c: u32, x0: u32, y0: u32) {
+    if PREFETCH && c + 1u < chunks() {
+        fetch_chunk(regs, li, c + 1u, x0, y0);
     }
 }
 
@@ -290,11 +358,13 @@ fn mma_split_emulated(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invoc
     let n = 4u * (lane / 16u);
     // Zero, as WGSL initialises a var without an initialiser.
     var acc: array<vec4<f32>, 32>;
+    var regs: Prefetch;
     for (var c = 0u; c < chunks(); c++) {
         // The previous chunk's products are done before its window is overwritten.
         workgroupBarrier();
-        stage_chunk_split(li, c, x0, y0);
+        stage_split(&regs, li, c, x0, y0);
         workgroupBarrier();
+        prefetch_next(&regs, li, c, x0, y0);
         for (var t = 0u; t < 9u; t++) {
             for (var mt = 0u; mt < MT; mt++) {
                 let row = a_at(sg, mt, t / 3u, t % 3u) + p * 16u;

@@ -532,6 +532,39 @@ fn conv_mma_split_tiles_match_cpu_in_f32() {
 }
 
 #[test]
+fn prefetching_split_tiles_give_the_split_tiles_output() {
+    // Reading the next chunk's window into registers during the products (conv3x3_mma.wgsl's
+    // PREFETCH) changes when the window is read, not what is summed: every output bit is the
+    // split tile's. Five chunks (the last partial) over a pooled and a direct source on a level
+    // of partial workgroups, for one to four tiles a group; one chunk (nothing to prefetch);
+    // two chunks, one source upsampled, on a level one pixel high.
+    // (a's channels, height, width), b's, how each is read, outputs, the level's width, height.
+    type Shape = (usize, usize, usize);
+    type Case = (Shape, Option<Shape>, Read, Read, usize, usize, usize);
+    let cases: [Case; 3] = [
+        ((41, 18, 140), Some((22, 9, 70)), Read::Pool, Read::Direct, 43, 70, 9),
+        ((12, 5, 19), None, Read::Direct, Read::Direct, 29, 19, 5),
+        ((20, 1, 5), Some((9, 1, 9)), Read::Upsample, Read::Direct, 20, 9, 1),
+    ];
+    for (n, ((ca, ha, wa), b, read_a, read_b, cout, w, h)) in cases.into_iter().enumerate() {
+        let seed = 340 + 10 * n as u64;
+        let a = tensor(ca, ha, wa, seed);
+        let b = b.map(|(cb, hb, wb)| tensor(cb, hb, wb, seed + 1));
+        let weight: Vec<f32> = noise(cout * (ca + b.as_ref().map_or(0, |b| b.c)) * 9, seed + 2).iter().map(|v| v * 0.3).collect();
+        let bias = noise(cout, seed + 3);
+        for channels in [16, 32, 48, 64] {
+            let conv = |tile: Tile| gpu_conv((&a, read_a), b.as_ref().map(|b| (b, read_b)), &weight, &bias, true, w, h, tile, WeightMemory::Storage);
+            let (split, prefetch) = (Tile::mma_split(channels).unwrap(), Tile::mma_split_prefetch(channels).unwrap());
+            let (want, got) = (conv(split), conv(prefetch));
+            let differ = want.data.iter().zip(&got.data).filter(|(x, y)| x.to_bits() != y.to_bits()).count();
+            assert_eq!(differ, 0, "case {n}: {prefetch} differs from {split} in {differ} of {} values", want.data.len());
+        }
+    }
+    assert_eq!(Tile::mma_split_prefetch(32).unwrap().to_string(), "mma32x3p");
+    assert_eq!(Tile::mma_split_prefetch(80), None, "at most four 16-channel tiles");
+}
+
+#[test]
 fn mma_tiles_need_storage_weights() {
     let g = gpu();
     let mut kernels = Kernels::new(&g.device, kernels::Precision::F32, WeightMemory::Uniform);

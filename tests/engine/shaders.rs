@@ -1,6 +1,6 @@
 //! Every WGSL file parses and validates with naga: no GPU needed, a broken shader fails here.
 
-use rae_core::kernels::{MMA_ENABLE, MMA_WORKGROUP_BYTES, PREP_WITHOUT_SUBGROUPS, ROWS_STUB, SHADERS, STORAGE_SOURCES, STORAGE_WEIGHTS, UNIFORM_WEIGHTS, WITHOUT_SUBGROUPS, conv_module_source, mma_source, shader_source};
+use rae_core::kernels::{MMA_ENABLE, MMA_PREFETCH_TEXELS, MMA_SPLIT_PIXELS, MMA_WORKGROUP_BYTES, PREP_WITHOUT_SUBGROUPS, ROWS_STUB, SHADERS, STORAGE_SOURCES, STORAGE_WEIGHTS, UNIFORM_WEIGHTS, WITHOUT_SUBGROUPS, conv_module_source, mma_source, shader_source};
 
 /// `src` (from `file`) with each of `rewrites` made, each of which must find its text.
 fn apply(src: String, file: &str, rewrites: &[(&str, &str)]) -> String {
@@ -71,10 +71,10 @@ fn the_matrix_unit_kernel_translates_to_spirv() {
     assert!(module.types.iter().any(|(_, t)| matches!(t.inner, naga::TypeInner::CooperativeMatrix { .. })), "cooperative matrix types");
     let info = naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all()).validate(&module).unwrap_or_else(|e| panic!("{}", e.emit_to_string(&source)));
     let plain = (1..=4).map(|nt| ("mma", nt, false, false));
-    let split = (1..=2).flat_map(|nt| [("mma_split", nt, true, true), ("mma_split", nt, true, false)]);
-    for (entry, nt, split, split_a) in plain.chain(split) {
-        let case = format!("{entry} NT = {nt} SPLIT_A = {split_a}");
-        let constants: naga::back::PipelineConstants = [("NT", nt as f64), ("SPLIT", split as u32 as f64), ("SPLIT_A", split_a as u32 as f64)].into_iter().map(|(k, v)| (k.to_string(), v)).collect();
+    let split = (1..=2).flat_map(|nt| [(nt, true, false), (nt, false, false), (nt, true, true)].map(|(nt, split_a, prefetch)| ("mma_split", nt, true, split_a, prefetch)));
+    for (entry, nt, split, split_a, prefetch) in plain.map(|(e, nt, s, a)| (e, nt, s, a, false)).chain(split) {
+        let case = format!("{entry} NT = {nt} SPLIT_A = {split_a} PREFETCH = {prefetch}");
+        let constants: naga::back::PipelineConstants = [("NT", nt as f64), ("SPLIT", split as u32 as f64), ("SPLIT_A", split_a as u32 as f64), ("PREFETCH", prefetch as u32 as f64)].into_iter().map(|(k, v)| (k.to_string(), v)).collect();
         let (module, info) = naga::back::pipeline_constants::process_overrides(&module, &info, None, &constants).unwrap();
         let options = naga::back::spv::Options { lang_version: (1, 3), ..Default::default() };
         let pipeline = naga::back::spv::PipelineOptions { shader_stage: naga::ShaderStage::Compute, entry_point: entry.to_string() };
@@ -84,6 +84,19 @@ fn the_matrix_unit_kernel_translates_to_spirv() {
         assert!(has(17, &[6022]), "{case}: OpCapability CooperativeMatrixKHR");
         assert!(has(14, &[0, 3]), "{case}: OpMemoryModel Logical Vulkan");
     }
+}
+
+#[test]
+fn the_prefetch_registers_hold_a_split_window() {
+    // conv3x3_mma.wgsl's PREFETCH_TEXELS is kernels::MMA_PREFETCH_TEXELS: the split tiles'
+    // window shared out over a workgroup's 128 invocations, none left over and none spare.
+    let source = mma_source(false);
+    let module = naga::front::wgsl::parse_str(&source).unwrap_or_else(|e| panic!("{}", e.emit_to_string(&source)));
+    let (_, constant) = module.constants.iter().find(|(_, c)| c.name.as_deref() == Some("PREFETCH_TEXELS")).expect("conv3x3_mma.wgsl has PREFETCH_TEXELS");
+    let naga::Expression::Literal(naga::Literal::U32(texels)) = module.global_expressions[constant.init] else { panic!("PREFETCH_TEXELS is a u32 literal") };
+    assert_eq!(texels, MMA_PREFETCH_TEXELS);
+    let window = 6 * (MMA_SPLIT_PIXELS + 2) * 4;
+    assert!(128 * texels >= window && 128 * (texels - 1) < window, "{texels} texels a lane for a window of {window}");
 }
 
 #[test]

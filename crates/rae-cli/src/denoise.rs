@@ -174,7 +174,7 @@ pub fn run(o: &Options) -> Result<()> {
     println!("buffers: {:?}{}", seq.slots.iter().map(|s| s.name()).collect::<Vec<_>>(), if seq.has_reference() { " (reference used for error only)" } else { "" });
     println!("model:   {} (uses {used:?})", weights_path.display());
     println!("device:  {}", gpu.describe());
-    println!("tile:    {} at full resolution, {} sources ({})", d.conv_tiles()[0], d.sources_name(), match o.tiles { TileChoice::Auto => "auto", TileChoice::Tuned | TileChoice::TunedAmong(_) => "tuned", TileChoice::TunedMma => "tuned-mma", TileChoice::Fixed(_) => "--tile" });
+    println!("tile:    {} at full resolution, {} sources ({})", d.conv_tiles()[0], d.sources_name(), match o.tiles { TileChoice::Auto => "auto", TileChoice::Tuned | TileChoice::TunedAmong(_) => "tuned", TileChoice::TunedMma | TileChoice::TunedMmaWith(_) => "tuned-mma", TileChoice::Fixed(_) => "--tile" });
     println!("output:  {}", out_dir.display());
 
     let n = (seq.width * seq.height * 3) as usize;

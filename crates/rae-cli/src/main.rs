@@ -125,10 +125,13 @@ enum Command {
         /// products summed in f32, 16 to 64 output channels per workgroup; tensor cores where
         /// wgpu's cooperative matrices have 16x16x16 f16 -> f32, emulated and slow elsewhere;
         /// storage weights and SHADER_F16); `mma16x3` to `mma64x3`: the same with every operand
-        /// split into two f16 halves and three products (f32-class results); `tuned-mma`:
+        /// split into two f16 halves and three products (f32-class results); `mma16x3p` to
+        /// `mma64x3p`: the split tiles reading each chunk's window ahead (not yet timed on a
+        /// GPU, so not among tuned-mma's candidates); `tuned-mma`:
         /// `tuned` with the split tiles (f32) or the plain ones (f16) among the candidates where
         /// the device has matrix units; `tuned:T+T+...`: tuned among these tiles only (fewer
-        /// pipelines to compile; with `--sources auto` it still picks each conv's source kind).
+        /// pipelines to compile; with `--sources auto` it still picks each conv's source kind);
+        /// `tuned-mma+T+...`: tuned-mma with these tiles among its candidates too.
         #[arg(long, value_delimiter = ',', default_value = "auto")]
         tile: Vec<String>,
         /// Where the convs read weights: `uniform` (64 KiB chunks), `storage` (one buffer, a
@@ -175,23 +178,33 @@ fn parse_tile(s: &str) -> Result<TileChoice> {
         "tuned-mma" => return Ok(TileChoice::TunedMma),
         _ => {}
     }
-    // Tuned among the listed tiles: the list lives as long as the program (a few per run).
-    if let Some(list) = s.strip_prefix("tuned:") {
+    // Tuned among the listed tiles, or tuned-mma's candidates and these: the list lives as
+    // long as the program (a few per run).
+    let (among, list) = match (s.strip_prefix("tuned:"), s.strip_prefix("tuned-mma+")) {
+        (Some(list), _) => (true, list),
+        (_, Some(list)) => (false, list),
+        _ => (false, ""),
+    };
+    if !list.is_empty() || among {
         let tiles = list
             .split('+')
             .map(|t| match parse_tile(t)? {
                 TileChoice::Fixed(tile) => Ok(tile),
-                _ => bail!("`{t}` in tile `{s}`: tuned:T+T+... lists fixed tiles"),
+                _ => bail!("`{t}` in tile `{s}`: tuned:T+T+... and tuned-mma+T+... list fixed tiles"),
             })
             .collect::<Result<Vec<Tile>>>()?;
-        return Ok(TileChoice::TunedAmong(Vec::leak(tiles)));
+        let tiles = Vec::leak(tiles);
+        return Ok(if among { TileChoice::TunedAmong(tiles) } else { TileChoice::TunedMmaWith(tiles) });
     }
     if let Some(channels) = s.strip_prefix("mma") {
-        let tile = match channels.strip_suffix("x3") {
-            Some(split) => split.parse().ok().and_then(Tile::mma_split),
-            None => channels.parse().ok().and_then(Tile::mma),
+        let tile = if let Some(split) = channels.strip_suffix("x3p") {
+            split.parse().ok().and_then(Tile::mma_split_prefetch)
+        } else if let Some(split) = channels.strip_suffix("x3") {
+            split.parse().ok().and_then(Tile::mma_split)
+        } else {
+            channels.parse().ok().and_then(Tile::mma)
         };
-        return tile.map(TileChoice::Fixed).with_context(|| format!("tile `{s}`: matrix-unit tiles are mma16, mma32, mma48 or mma64 (output channels per workgroup), or split mma16x3 to mma64x3"));
+        return tile.map(TileChoice::Fixed).with_context(|| format!("tile `{s}`: matrix-unit tiles are mma16, mma32, mma48 or mma64 (output channels per workgroup), split mma16x3 to mma64x3, or split with prefetched windows mma16x3p to mma64x3p"));
     }
     let bad = || format!("tile `{s}` is not [wino|lanes]ROWSxBLOCKS[wCOLS][gGROUPX][kSPLIT], tuned or auto");
     let (winograd, s2) = s.strip_prefix("wino").map_or((false, s), |r| (true, r));
@@ -242,6 +255,7 @@ fn tile_name(t: TileChoice) -> String {
         TileChoice::Tuned => "tuned".into(),
         TileChoice::TunedAmong(tiles) => format!("tuned:{}", tiles.iter().map(|t| t.to_string()).collect::<Vec<_>>().join("+")),
         TileChoice::TunedMma => "tuned-mma".into(),
+        TileChoice::TunedMmaWith(tiles) => format!("tuned-mma+{}", tiles.iter().map(|t| t.to_string()).collect::<Vec<_>>().join("+")),
         TileChoice::Fixed(t) => t.to_string(),
     }
 }
@@ -617,11 +631,16 @@ mod tests {
 
     #[test]
     fn tuned_among_a_list_parses_and_names_itself() {
-        let choice = parse_tile("tuned:16x2+lanes8x2w2+mma32x3").unwrap();
+        let choice = parse_tile("tuned:16x2+lanes8x2w2+mma32x3+mma64x3p").unwrap();
         let TileChoice::TunedAmong(tiles) = choice else { panic!("{choice:?}") };
-        assert_eq!(tiles, [Tile::new(16, 2).unwrap(), Tile::lanes(8, 2, 2).unwrap(), Tile::mma_split(32).unwrap()]);
-        assert_eq!(tile_name(choice), "tuned:16x2+lanes8x2w2+mma32x3");
+        assert_eq!(tiles, [Tile::new(16, 2).unwrap(), Tile::lanes(8, 2, 2).unwrap(), Tile::mma_split(32).unwrap(), Tile::mma_split_prefetch(64).unwrap()]);
+        assert_eq!(tile_name(choice), "tuned:16x2+lanes8x2w2+mma32x3+mma64x3p");
         assert_eq!(parse_tile(&tile_name(choice)).unwrap(), choice);
+        let with = parse_tile("tuned-mma+mma32x3p+mma64x3p").unwrap();
+        let TileChoice::TunedMmaWith(extra) = with else { panic!("{with:?}") };
+        assert_eq!(extra, [Tile::mma_split_prefetch(32).unwrap(), Tile::mma_split_prefetch(64).unwrap()]);
+        assert_eq!(tile_name(with), "tuned-mma+mma32x3p+mma64x3p");
+        assert!(parse_tile("tuned-mma+tuned").is_err());
         let err = parse_tile("tuned:16x2+auto").unwrap_err().to_string();
         assert!(err.contains("`auto` in tile `tuned:16x2+auto`"), "{err}");
         assert!(parse_tile("tuned:16x2+9x9").is_err());

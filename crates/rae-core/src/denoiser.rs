@@ -139,6 +139,10 @@ pub enum TileChoice {
     /// take 0.89x the time of [`TileChoice::Tuned`]'s, docs/PERF.md). The TF32-like plain tiles
     /// with f32 activations are fixed tiles only (`Fixed(Tile::mma(32))`).
     TunedMma,
+    /// [`TileChoice::TunedMma`] with these tiles among the candidates as well, wherever it
+    /// tunes: for timing kernels that are not yet candidates (e.g. [`Tile::mma_split_prefetch`])
+    /// beside those that are.
+    TunedMmaWith(&'static [Tile]),
 }
 
 /// The matrix-unit tiles [`TileChoice::TunedMma`] adds to [`TUNE_TILES`] with f16 activations:
@@ -391,8 +395,11 @@ impl Denoiser {
             TileChoice::Auto if device_type == wgpu::DeviceType::Cpu => fixed(Tile::cpu(device)),
             TileChoice::Tuned if timestamps => picks(tune_among(&mut kernels, &TUNE_TILES)?),
             TileChoice::TunedAmong(candidates) if timestamps && !candidates.is_empty() => picks(tune_among(&mut kernels, candidates)?),
-            TileChoice::Auto | TileChoice::TunedMma if timestamps => {
+            TileChoice::Auto | TileChoice::TunedMma | TileChoice::TunedMmaWith(_) if timestamps => {
                 let mut candidates = TUNE_TILES.to_vec();
+                if let TileChoice::TunedMmaWith(extra) = tiles {
+                    candidates.extend(extra);
+                }
                 if kernels.matrix_units() && memory == WeightMemory::Storage && device.limits().max_compute_workgroup_storage_size >= MMA_WORKGROUP_BYTES {
                     match precision {
                         Precision::F32 => candidates.extend(MMA_SPLIT_TILES),
@@ -401,7 +408,7 @@ impl Denoiser {
                 }
                 picks(tune_among(&mut kernels, &candidates)?)
             }
-            TileChoice::Auto | TileChoice::Tuned | TileChoice::TunedAmong(_) | TileChoice::TunedMma => fixed(Tile::default()),
+            TileChoice::Auto | TileChoice::Tuned | TileChoice::TunedAmong(_) | TileChoice::TunedMma | TileChoice::TunedMmaWith(_) => fixed(Tile::default()),
         };
         let convs = ConvPlan::with_sources(device, &mut kernels, &specs, &tiles, &conv_sources)?;
         debug_assert_eq!(bytes, activation_bytes(&graph, pwidth, pheight, precision));

@@ -192,6 +192,11 @@ pub const MMA_WORKGROUP_BYTES: u32 = 2 * 6 * 34 * 16 * 2 + 4 * 256 * 4;
 #[allow(clippy::assertions_on_constants)]
 const _: () = assert!(6 * 66 * 16 <= 2 * 6 * 34 * 16, "the plain tiles' window fits the split tiles'");
 
+/// Window texels (4 channels) each of the 128 invocations of a split Mma workgroup holds with
+/// [`Method::MmaSplitPrefetch`] (conv3x3_mma.wgsl's PREFETCH_TEXELS): the window of 6 rows x
+/// ([`MMA_SPLIT_PIXELS`] + 2) pixels x 4 texels, shared out and rounded up.
+pub const MMA_PREFETCH_TEXELS: u32 = (6 * (MMA_SPLIT_PIXELS + 2) * 4).div_ceil(128);
+
 /// Pixels a row of a [`Method::Mma`] workgroup covers (conv3x3_mma.wgsl's MT = 4 tiles of 16).
 pub const MMA_PIXELS: u32 = 64;
 
@@ -465,13 +470,16 @@ pub enum Method {
     /// conv3x3_mma.wgsl's split entry points: [`Method::Mma`] with each operand carried as two
     /// f16 halves and three products per pair, f32-class results ([`Tile::mma_split`]).
     MmaSplit,
+    /// [`Method::MmaSplit`] with the next chunk's input window read into registers while the
+    /// current chunk's products run (conv3x3_mma.wgsl's PREFETCH, [`Tile::mma_split_prefetch`]).
+    MmaSplitPrefetch,
 }
 
 impl Method {
     /// Weights per input-output channel pair: 9 taps, or 16 transformed ones for Winograd.
     pub fn taps(self) -> u32 {
         match self {
-            Method::Direct | Method::Lanes | Method::Mma | Method::MmaSplit => 9,
+            Method::Direct | Method::Lanes | Method::Mma | Method::MmaSplit | Method::MmaSplitPrefetch => 9,
             Method::Winograd => 16,
         }
     }
@@ -484,13 +492,19 @@ impl Method {
             Method::Winograd => "winograd",
             Method::Lanes => "lanes",
             Method::Mma => "mma",
-            Method::MmaSplit => "mma_split",
+            Method::MmaSplit | Method::MmaSplitPrefetch => "mma_split",
         }
     }
 
-    /// Whether this is one of conv3x3_mma.wgsl's methods ([`Method::Mma`], [`Method::MmaSplit`]).
+    /// Whether this is one of conv3x3_mma.wgsl's methods ([`Method::Mma`] and the split ones).
     pub fn is_mma(self) -> bool {
-        matches!(self, Method::Mma | Method::MmaSplit)
+        matches!(self, Method::Mma | Method::MmaSplit | Method::MmaSplitPrefetch)
+    }
+
+    /// Whether this is one of conv3x3_mma.wgsl's split methods ([`Method::MmaSplit`],
+    /// [`Method::MmaSplitPrefetch`]).
+    pub fn is_mma_split(self) -> bool {
+        matches!(self, Method::MmaSplit | Method::MmaSplitPrefetch)
     }
 }
 
@@ -788,9 +802,16 @@ impl Kernels {
         ];
         let (label, module, entry) = if v.method.is_mma() {
             // Split tiles split the activations too where they are f32 (f16 ones are exact).
-            let split = v.method == Method::MmaSplit;
+            let split = v.method.is_mma_split();
             let pixels = if split { MMA_SPLIT_PIXELS } else { MMA_PIXELS };
-            constants.extend([("NT", v.ob as f64), ("MT", (pixels / 16) as f64), ("SPLIT", split as u32 as f64), ("SPLIT_A", (split && self.precision == Precision::F32) as u32 as f64)]);
+            let prefetch = v.method == Method::MmaSplitPrefetch;
+            constants.extend([
+                ("NT", v.ob as f64),
+                ("MT", (pixels / 16) as f64),
+                ("SPLIT", split as u32 as f64),
+                ("SPLIT_A", (split && self.precision == Precision::F32) as u32 as f64),
+                ("PREFETCH", prefetch as u32 as f64),
+            ]);
             let entry = match (self.matrix_units, split) {
                 (true, _) => v.method.entry_point(),
                 (false, false) => "mma_emulated",
@@ -936,6 +957,15 @@ impl Tile {
         Some(Tile { method: Method::MmaSplit, ..Tile::mma(channels)? })
     }
 
+    /// [`Tile::mma_split`] with each chunk's input window read into registers during the
+    /// previous chunk's products ([`Method::MmaSplitPrefetch`]): the same results, bit for bit,
+    /// for 7 more vec4 registers an invocation ([`MMA_PREFETCH_TEXELS`]). Written in session 18
+    /// without a GPU to time it, so it is not among [`crate::denoiser::MMA_SPLIT_TILES`] until
+    /// a GPU session has held it to the goldens and timed it (docs/PERF.md).
+    pub fn mma_split_prefetch(channels: u32) -> Option<Self> {
+        Some(Tile { method: Method::MmaSplitPrefetch, ..Tile::mma(channels)? })
+    }
+
     /// Weights per input-output channel pair ([`Method::taps`]).
     pub fn taps(&self) -> u32 {
         self.method.taps()
@@ -962,11 +992,13 @@ impl std::fmt::Display for Tile {
     /// `ROWSxBLOCKS`, with `wCOLS` appended for a 2-column tile (`8x1w2`) and `gGROUPX` for a
     /// workgroup other than 8 x 8 and `kSPLIT` for a split tile (`8x1g32k4`); Winograd tiles are
     /// `wino` and `ROWSxBLOCKS` (`wino4x1g32`); Mma tiles are `mma` and their output channels
-    /// (`mma32`), with `x3` for the split ones' three products (`mma32x3`).
+    /// (`mma32`), with `x3` for the split ones' three products (`mma32x3`) and `x3p` for those
+    /// that prefetch their windows (`mma32x3p`).
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self.method {
             Method::Mma => return write!(f, "mma{}", 4 * self.blocks),
             Method::MmaSplit => return write!(f, "mma{}x3", 4 * self.blocks),
+            Method::MmaSplitPrefetch => return write!(f, "mma{}x3p", 4 * self.blocks),
             Method::Direct => {}
             Method::Winograd => write!(f, "wino")?,
             Method::Lanes => write!(f, "lanes")?,
@@ -1277,7 +1309,7 @@ impl ConvPlan {
                 if !device.features().contains(wgpu::Features::SHADER_F16) {
                     return Err(unsupported(format!("Mma tiles need SHADER_F16, which {} lacks", device.adapter_info().name)));
                 }
-                let split = tile.method == Method::MmaSplit;
+                let split = tile.method.is_mma_split();
                 let shared = device.limits().max_compute_workgroup_storage_size;
                 if shared < MMA_WORKGROUP_BYTES {
                     return Err(unsupported(format!("{tile} uses {MMA_WORKGROUP_BYTES} bytes of workgroup memory; the device allows {shared}")));

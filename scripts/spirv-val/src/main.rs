@@ -58,11 +58,12 @@ fn main() {
                 src = src.replace("rgba32float", "rgba16float");
             }
             for nt in 1..=4 {
-                // Plain (MT 4) and split (MT 2, the activations split in f32), as ConvPlan sets them.
-                for split in [false, true] {
-                    let label = format!("conv3x3_mma ({}, {} sources, NT = {nt}{})", if f16 { "f16" } else { "f32" }, if storage { "storage" } else { "sampled" }, if split { ", SPLIT" } else { "" });
+                // Plain (MT 4), split (MT 2, the activations split in f32) and split with
+                // prefetched windows, as ConvPlan sets them.
+                for (split, prefetch) in [(false, false), (true, false), (true, true)] {
+                    let label = format!("conv3x3_mma ({}, {} sources, NT = {nt}{}{})", if f16 { "f16" } else { "f32" }, if storage { "storage" } else { "sampled" }, if split { ", SPLIT" } else { "" }, if prefetch { ", PREFETCH" } else { "" });
                     let mt = if split { 2.0 } else { 4.0 };
-                    modules.push((label, src.clone(), vec![("NT", nt as f64), ("MT", mt), ("MODE_A", 1.0), ("MODE_B", 3.0), ("SPLIT", split as u32 as f64), ("SPLIT_A", (split && !f16) as u32 as f64)]));
+                    modules.push((label, src.clone(), vec![("NT", nt as f64), ("MT", mt), ("MODE_A", 1.0), ("MODE_B", 3.0), ("SPLIT", split as u32 as f64), ("SPLIT_A", (split && !f16) as u32 as f64), ("PREFETCH", prefetch as u32 as f64)]));
                 }
             }
         }
