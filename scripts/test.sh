@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # All of rae's tests, on a fresh machine: installs what is missing (lavapipe, the Python
-# packages with PyTorch), then runs the Rust tests on lavapipe and the weights-tool tests.
+# packages with PyTorch), then checks the Rust formatting (rustfmt.toml) and runs the Rust tests
+# on lavapipe and the weights-tool tests.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -15,6 +16,12 @@ fi
 
 # On lavapipe unless the caller chose an adapter.
 export WGPU_ADAPTER_NAME="${WGPU_ADAPTER_NAME:-llvmpipe}"
+
+# Formatting first: it takes a second, and an unformatted tree fails before the long build.
+echo "== rustfmt (rustfmt.toml)"
+cargo fmt --version >/dev/null 2>&1 || rustup component add rustfmt
+cargo fmt --all --check
+cargo fmt --manifest-path scripts/spirv-val/Cargo.toml --check
 
 echo "== Rust tests (workspace)"
 cargo test --workspace --locked

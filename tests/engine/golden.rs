@@ -77,7 +77,12 @@ fn mma_tiles_stay_near_pytorch() {
     let weights = Weights::load(fixture(&golden.weights)).unwrap();
     let g = gpu();
     for precision in [Precision::F32, Precision::F16] {
-        let options = Options { precision, tiles: TileChoice::Fixed(Tile::mma(32).unwrap()), weights: Some(WeightMemory::Storage), ..Default::default() };
+        let options = Options {
+            precision,
+            tiles: TileChoice::Fixed(Tile::mma(32).unwrap()),
+            weights: Some(WeightMemory::Storage),
+            ..Default::default()
+        };
         let mut d = Denoiser::with_options(&g.device, &g.queue, &weights, golden.width, golden.height, options).unwrap();
         // A reset frame and one that reads the hidden state (the emulated kernel takes ~5 s a
         // frame on lavapipe).
@@ -86,7 +91,10 @@ fn mma_tiles_stay_near_pytorch() {
             let want = &golden.frames[i]["output"];
             let (ratio, _, max_abs) = Tolerance::GOLDEN.worst(&out, want);
             let scale = want.iter().fold(0.0f32, |m, v| m.max(v.abs()));
-            eprintln!("mma32 {} frame {i}: max abs error {max_abs:.3e} (image max {scale:.3e}), {ratio:.1}x the golden tolerance", precision.name());
+            eprintln!(
+                "mma32 {} frame {i}: max abs error {max_abs:.3e} (image max {scale:.3e}), {ratio:.1}x the golden tolerance",
+                precision.name()
+            );
             assert!(max_abs <= 1e-2 * scale, "{} frame {i}: {max_abs} against image max {scale}", precision.name());
         }
     }

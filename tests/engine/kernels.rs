@@ -56,7 +56,17 @@ fn array_view(t: &wgpu::Texture) -> wgpu::TextureView {
 /// One conv3x3.wgsl dispatch over cat(read(a), read(b)) at `w x h`, its sources read as suits
 /// the device.
 #[allow(clippy::too_many_arguments)]
-fn gpu_conv(a: (&Chw, Read), b: Option<(&Chw, Read)>, weight: &[f32], bias: &[f32], leaky: bool, w: usize, h: usize, tile: Tile, memory: WeightMemory) -> Chw {
+fn gpu_conv(
+    a: (&Chw, Read),
+    b: Option<(&Chw, Read)>,
+    weight: &[f32],
+    bias: &[f32],
+    leaky: bool,
+    w: usize,
+    h: usize,
+    tile: Tile,
+    memory: WeightMemory,
+) -> Chw {
     let sources = SourceAccess::for_device_type(gpu().device.adapter_info().device_type);
     gpu_conv_with(a, b, weight, bias, leaky, w, h, tile, memory, sources)
 }
@@ -65,7 +75,18 @@ fn gpu_conv(a: (&Chw, Read), b: Option<(&Chw, Read)>, weight: &[f32], bias: &[f3
 /// ([`ConvPlan::with_sources`]) on kernels whose default is the other kind, as a tuned
 /// denoiser mixes them.
 #[allow(clippy::too_many_arguments)]
-fn gpu_conv_with(a: (&Chw, Read), b: Option<(&Chw, Read)>, weight: &[f32], bias: &[f32], leaky: bool, w: usize, h: usize, tile: Tile, memory: WeightMemory, sources: SourceAccess) -> Chw {
+fn gpu_conv_with(
+    a: (&Chw, Read),
+    b: Option<(&Chw, Read)>,
+    weight: &[f32],
+    bias: &[f32],
+    leaky: bool,
+    w: usize,
+    h: usize,
+    tile: Tile,
+    memory: WeightMemory,
+    sources: SourceAccess,
+) -> Chw {
     let g = gpu();
     let dev = &g.device;
     let cout = bias.len();
@@ -126,7 +147,17 @@ fn check_conv(a: (Chw, Read), b: Option<(Chw, Read)>, cout: usize, leaky: bool, 
 }
 
 #[allow(clippy::too_many_arguments)]
-fn check_conv_tile(a: (Chw, Read), b: Option<(Chw, Read)>, cout: usize, leaky: bool, w: usize, h: usize, seed: u64, tile: Tile, memory: WeightMemory) {
+fn check_conv_tile(
+    a: (Chw, Read),
+    b: Option<(Chw, Read)>,
+    cout: usize,
+    leaky: bool,
+    w: usize,
+    h: usize,
+    seed: u64,
+    tile: Tile,
+    memory: WeightMemory,
+) {
     let cin = a.0.c + b.as_ref().map_or(0, |b| b.0.c);
     // The kernel sums 9 * cin products in f32, one fused multiply-add after another, against a
     // float64 reference: the rounding of the running sum grows like sqrt(terms) (a 2,250-term
@@ -142,7 +173,12 @@ fn check_conv_tile(a: (Chw, Read), b: Option<(Chw, Read)>, cout: usize, leaky: b
         None => ra,
     };
     let want = cpu::conv3x3(&x, &weight, &bias, leaky.then_some(0.1));
-    crate::assert_close(Tolerance { rel }, &format!("conv {:?}/{:?} {w}x{h} tile {tile} {}", a.1, b.as_ref().map(|b| b.1), memory.name()), &got.data, &want.data);
+    crate::assert_close(
+        Tolerance { rel },
+        &format!("conv {:?}/{:?} {w}x{h} tile {tile} {}", a.1, b.as_ref().map(|b| b.1), memory.name()),
+        &got.data,
+        &want.data,
+    );
 }
 
 fn tensor(c: usize, h: usize, w: usize, seed: u64) -> Chw {
@@ -204,18 +240,53 @@ fn conv_every_tile_shape_matches_cpu() {
     // Each row, block and column count and workgroup shape the kernel compiles, on a level 19
     // rows high and 13 wide (partial last tiles in both directions) with 3 output blocks (a
     // partial last group for 2-block tiles).
-    let shapes = [(1, 1, 1, 8), (1, 2, 1, 8), (2, 2, 1, 8), (4, 1, 1, 8), (4, 2, 1, 8), (8, 2, 1, 8), (16, 1, 1, 8), (1, 2, 2, 8), (4, 1, 2, 8), (8, 2, 2, 8), (16, 1, 2, 8), (8, 1, 1, 32), (4, 2, 2, 16), (2, 1, 2, 64)];
+    let shapes = [
+        (1, 1, 1, 8),
+        (1, 2, 1, 8),
+        (2, 2, 1, 8),
+        (4, 1, 1, 8),
+        (4, 2, 1, 8),
+        (8, 2, 1, 8),
+        (16, 1, 1, 8),
+        (1, 2, 2, 8),
+        (4, 1, 2, 8),
+        (8, 2, 2, 8),
+        (16, 1, 2, 8),
+        (8, 1, 1, 32),
+        (4, 2, 2, 16),
+        (2, 1, 2, 64),
+    ];
     for (i, (rows, blocks, cols, group)) in shapes.into_iter().enumerate() {
         let tile = Tile::with_cols(rows, blocks, cols).and_then(|t| t.with_group(group)).expect("a kernel tile");
         let seed = 70 + 3 * i as u64;
-        check_conv_tile((tensor(6, 38, 26, seed), Read::Pool), Some((tensor(5, 19, 13, seed + 1), Read::Direct)), 11, true, 13, 19, seed + 2, tile, WeightMemory::Uniform);
+        check_conv_tile(
+            (tensor(6, 38, 26, seed), Read::Pool),
+            Some((tensor(5, 19, 13, seed + 1), Read::Direct)),
+            11,
+            true,
+            13,
+            19,
+            seed + 2,
+            tile,
+            WeightMemory::Uniform,
+        );
     }
     // Four blocks per invocation, on a conv of 6 output blocks (a partial second group) and on
     // one of 3 (one group, its fourth block computed and dropped).
     for (i, (rows, cout)) in [(4, 22), (16, 11)].into_iter().enumerate() {
         let tile = Tile::new(rows, 4).expect("a 4-block tile");
         let seed = 120 + 3 * i as u64;
-        check_conv_tile((tensor(6, 38, 26, seed), Read::Pool), Some((tensor(5, 19, 13, seed + 1), Read::Direct)), cout, true, 13, 19, seed + 2, tile, WeightMemory::Uniform);
+        check_conv_tile(
+            (tensor(6, 38, 26, seed), Read::Pool),
+            Some((tensor(5, 19, 13, seed + 1), Read::Direct)),
+            cout,
+            true,
+            13,
+            19,
+            seed + 2,
+            tile,
+            WeightMemory::Uniform,
+        );
     }
     assert_eq!(Tile::new(3, 1), None);
     assert_eq!(Tile::new(16, 3), None);
@@ -246,16 +317,37 @@ fn conv_lanes_tiles_match_cpu() {
         // Refused, with the reason, where the device has no subgroups of 8 lanes.
         let mut k = Kernels::new(&g.device, kernels::Precision::F32, WeightMemory::Uniform);
         let (weight, bias) = (vec![0.0; 4 * 4 * 9], vec![0.0; 4]);
-        let err = ConvPlan::new(&g.device, &mut k, &[one_source_spec("c", 16, 16, 4, &weight, &bias)], &[cases[0].0]).err().expect("refused");
+        let err =
+            ConvPlan::new(&g.device, &mut k, &[one_source_spec("c", 16, 16, 4, &weight, &bias)], &[cases[0].0]).err().expect("refused");
         assert!(err.to_string().contains("subgroups of at least 8 lanes"), "{err}");
         return;
     }
     for (i, (tile, memory)) in cases.into_iter().enumerate() {
         let seed = 700 + 3 * i as u64;
         if i % 2 == 0 {
-            check_conv_tile((tensor(6, 38, 26, seed), Read::Pool), Some((tensor(5, 19, 13, seed + 1), Read::Direct)), 11, true, 13, 19, seed + 2, tile, memory);
+            check_conv_tile(
+                (tensor(6, 38, 26, seed), Read::Pool),
+                Some((tensor(5, 19, 13, seed + 1), Read::Direct)),
+                11,
+                true,
+                13,
+                19,
+                seed + 2,
+                tile,
+                memory,
+            );
         } else {
-            check_conv_tile((tensor(6, 6, 11, seed), Read::Upsample), Some((tensor(5, 12, 22, seed + 1), Read::PoolUpsample)), 11, false, 22, 12, seed + 2, tile, memory);
+            check_conv_tile(
+                (tensor(6, 6, 11, seed), Read::Upsample),
+                Some((tensor(5, 12, 22, seed + 1), Read::PoolUpsample)),
+                11,
+                false,
+                22,
+                12,
+                seed + 2,
+                tile,
+                memory,
+            );
         }
     }
     // The same products summed in the same order as the direct tile: bit-identical.
@@ -283,21 +375,56 @@ fn conv_winograd_tiles_match_cpu() {
     // Every Winograd tile (one or two stacked 2x2 output tiles, one or two output blocks), with
     // both weight memories and every read mode, on levels of odd width and height (partial tiles
     // on both edges); 11 outputs make a partial last group of 2-block tiles.
-    let cases = [(2, 1, WeightMemory::Uniform, 8), (2, 2, WeightMemory::Storage, 32), (4, 1, WeightMemory::Storage, 16), (4, 2, WeightMemory::Uniform, 64)];
+    let cases = [
+        (2, 1, WeightMemory::Uniform, 8),
+        (2, 2, WeightMemory::Storage, 32),
+        (4, 1, WeightMemory::Storage, 16),
+        (4, 2, WeightMemory::Uniform, 64),
+    ];
     for (i, (rows, blocks, memory, group)) in cases.into_iter().enumerate() {
         let tile = Tile::winograd(rows, blocks).and_then(|t| t.with_group(group)).expect("a Winograd tile");
         assert_eq!((tile.cols, tile.taps()), (2, 16));
         let seed = 200 + 3 * i as u64;
         if i % 2 == 0 {
-            check_conv_tile((tensor(6, 38, 26, seed), Read::Pool), Some((tensor(5, 19, 13, seed + 1), Read::Direct)), 11, true, 13, 19, seed + 2, tile, memory);
+            check_conv_tile(
+                (tensor(6, 38, 26, seed), Read::Pool),
+                Some((tensor(5, 19, 13, seed + 1), Read::Direct)),
+                11,
+                true,
+                13,
+                19,
+                seed + 2,
+                tile,
+                memory,
+            );
         } else {
-            check_conv_tile((tensor(6, 6, 11, seed), Read::Upsample), Some((tensor(5, 12, 22, seed + 1), Read::PoolUpsample)), 11, false, 22, 12, seed + 2, tile, memory);
+            check_conv_tile(
+                (tensor(6, 6, 11, seed), Read::Upsample),
+                Some((tensor(5, 12, 22, seed + 1), Read::PoolUpsample)),
+                11,
+                false,
+                22,
+                12,
+                seed + 2,
+                tile,
+                memory,
+            );
         }
     }
     // One row: the level of a deep conv on a small frame.
     check_conv_tile((tensor(9, 1, 11, 230), Read::Direct), None, 8, true, 11, 1, 231, Tile::winograd(4, 2).unwrap(), WeightMemory::Storage);
     // The widest input a Winograd chunk holds (252 channels, 63 blocks, one output block).
-    check_conv_tile((tensor(128, 9, 13, 232), Read::Direct), Some((tensor(124, 9, 13, 233), Read::Direct)), 5, true, 13, 9, 234, Tile::winograd(2, 2).unwrap(), WeightMemory::Uniform);
+    check_conv_tile(
+        (tensor(128, 9, 13, 232), Read::Direct),
+        Some((tensor(124, 9, 13, 233), Read::Direct)),
+        5,
+        true,
+        13,
+        9,
+        234,
+        Tile::winograd(2, 2).unwrap(),
+        WeightMemory::Uniform,
+    );
     assert_eq!(Tile::winograd(8, 1), None);
     assert_eq!(Tile::winograd(2, 3), None);
     assert_eq!(Tile::winograd(4, 1).unwrap().to_string(), "wino4x1");
@@ -305,7 +432,21 @@ fn conv_winograd_tiles_match_cpu() {
 
 /// A LeakyReLU conv reading `ca` channels of one source directly (`bias.len()` outputs).
 fn one_source_spec<'a>(name: &'a str, width: u32, height: u32, ca: usize, weight: &'a [f32], bias: &'a [f32]) -> ConvSpec<'a> {
-    ConvSpec { name, width, height, ca, cb: 0, cout: bias.len(), weight, bias, read_a: Read::Direct, read_b: Read::Direct, leaky: true, slope: 0.1, b_is_hidden: false }
+    ConvSpec {
+        name,
+        width,
+        height,
+        ca,
+        cb: 0,
+        cout: bias.len(),
+        weight,
+        bias,
+        read_a: Read::Direct,
+        read_b: Read::Direct,
+        leaky: true,
+        slope: 0.1,
+        b_is_hidden: false,
+    }
 }
 
 #[test]
@@ -318,9 +459,29 @@ fn conv_split_k_matches_cpu() {
         let tile = Tile::new(rows, 1).and_then(|t| t.with_split(split)).expect("a split tile");
         let seed = 500 + 3 * i as u64;
         if i % 2 == 0 {
-            check_conv_tile((tensor(10, 38, 26, seed), Read::Pool), Some((tensor(5, 19, 13, seed + 1), Read::Direct)), 4, true, 13, 19, seed + 2, tile, memory);
+            check_conv_tile(
+                (tensor(10, 38, 26, seed), Read::Pool),
+                Some((tensor(5, 19, 13, seed + 1), Read::Direct)),
+                4,
+                true,
+                13,
+                19,
+                seed + 2,
+                tile,
+                memory,
+            );
         } else {
-            check_conv_tile((tensor(10, 6, 11, seed), Read::Upsample), Some((tensor(5, 12, 22, seed + 1), Read::PoolUpsample)), 3, false, 22, 12, seed + 2, tile, memory);
+            check_conv_tile(
+                (tensor(10, 6, 11, seed), Read::Upsample),
+                Some((tensor(5, 12, 22, seed + 1), Read::PoolUpsample)),
+                3,
+                false,
+                22,
+                12,
+                seed + 2,
+                tile,
+                memory,
+            );
         }
     }
     assert_eq!(Tile::winograd(2, 1).unwrap().with_split(2), None);
@@ -374,8 +535,30 @@ fn sampled_and_storage_sources_give_the_same_convs() {
     let lanes = Tile::lanes(4, 2, 1).filter(|_| kernels::lanes_supported(&gpu().device));
     for tile in [Some(Tile::new(4, 1).unwrap()), lanes].into_iter().flatten() {
         let run = |sources| {
-            let pooled = gpu_conv_with((&a, Read::Pool), Some((&b, Read::Direct)), &weight, &bias, true, 13, 19, tile, WeightMemory::Uniform, sources);
-            let upsampled = gpu_conv_with((&up, Read::Upsample), Some((&skip, Read::PoolUpsample)), &weight, &bias, false, 22, 12, tile, WeightMemory::Uniform, sources);
+            let pooled = gpu_conv_with(
+                (&a, Read::Pool),
+                Some((&b, Read::Direct)),
+                &weight,
+                &bias,
+                true,
+                13,
+                19,
+                tile,
+                WeightMemory::Uniform,
+                sources,
+            );
+            let upsampled = gpu_conv_with(
+                (&up, Read::Upsample),
+                Some((&skip, Read::PoolUpsample)),
+                &weight,
+                &bias,
+                false,
+                22,
+                12,
+                tile,
+                WeightMemory::Uniform,
+                sources,
+            );
             (pooled.data, upsampled.data)
         };
         assert_eq!(run(SourceAccess::Sampled), run(SourceAccess::Storage), "{tile}");
@@ -392,7 +575,11 @@ fn plans_make_each_pipeline_once() {
     let g = gpu();
     let mut kernels = Kernels::new(&g.device, kernels::Precision::F32, WeightMemory::Uniform);
     let (weight, bias) = (vec![0.0; 8 * 8 * 9], vec![0.0; 8]);
-    let specs = [one_source_spec("a", 16, 16, 8, &weight, &bias), one_source_spec("b", 16, 16, 8, &weight, &bias), one_source_spec("c", 16, 4, 8, &weight, &bias)];
+    let specs = [
+        one_source_spec("a", 16, 16, 8, &weight, &bias),
+        one_source_spec("b", 16, 16, 8, &weight, &bias),
+        one_source_spec("c", 16, 4, 8, &weight, &bias),
+    ];
     let tile = Tile::new(16, 2).unwrap();
     ConvPlan::new(&g.device, &mut kernels, &specs, &[tile]).unwrap();
     assert_eq!(kernels.conv_pipelines(), 2);
@@ -419,7 +606,9 @@ fn winograd_weight_transform_reproduces_the_direct_convolution() {
     let u = kernels::winograd_taps(&g);
     let bt = [[1.0, 0.0, -1.0, 0.0], [0.0, 1.0, 1.0, 0.0], [0.0, -1.0, 1.0, 0.0], [0.0, 1.0, 0.0, -1.0]];
     let at = [[1.0, 1.0, 1.0, 0.0], [0.0, 1.0, -1.0, -1.0]];
-    let v = |i: usize, j: usize| -> f64 { (0..4).flat_map(|r| (0..4).map(move |c| (r, c))).map(|(r, c)| bt[i][r] * d[r * 4 + c] * bt[j][c]).sum() };
+    let v = |i: usize, j: usize| -> f64 {
+        (0..4).flat_map(|r| (0..4).map(move |c| (r, c))).map(|(r, c)| bt[i][r] * d[r * 4 + c] * bt[j][c]).sum()
+    };
     for y in 0..2 {
         for x in 0..2 {
             let wino: f64 = (0..16).map(|p| at[y][p / 4] * u[p] as f64 * v(p / 4, p % 4) * at[x][p % 4]).sum();
@@ -435,10 +624,30 @@ fn conv_with_storage_weights_matches_cpu() {
     // 250-channel conv keeps two blocks per invocation; 23 outputs = 3 groups of 2 blocks. Then
     // tiles of 1, 2 and 4 blocks on 11 outputs (3 blocks: one 4-block group with a spare).
     let storage = WeightMemory::Storage;
-    check_conv_tile((tensor(130, 21, 17, 90), Read::Direct), Some((tensor(120, 21, 17, 91), Read::Direct)), 23, true, 17, 21, 92, Tile::default(), storage);
+    check_conv_tile(
+        (tensor(130, 21, 17, 90), Read::Direct),
+        Some((tensor(120, 21, 17, 91), Read::Direct)),
+        23,
+        true,
+        17,
+        21,
+        92,
+        Tile::default(),
+        storage,
+    );
     for (i, tile) in [Tile::new(4, 2), Tile::new(1, 1), Tile::with_cols(8, 2, 2), Tile::new(8, 4)].into_iter().enumerate() {
         let seed = 93 + 3 * i as u64;
-        check_conv_tile((tensor(6, 6, 11, seed), Read::Upsample), Some((tensor(5, 12, 22, seed + 1), Read::PoolUpsample)), 11, false, 22, 12, seed + 2, tile.unwrap(), storage);
+        check_conv_tile(
+            (tensor(6, 6, 11, seed), Read::Upsample),
+            Some((tensor(5, 12, 22, seed + 1), Read::PoolUpsample)),
+            11,
+            false,
+            22,
+            12,
+            seed + 2,
+            tile.unwrap(),
+            storage,
+        );
     }
 }
 
@@ -461,7 +670,12 @@ fn check_conv_mma(a: (Chw, Read), b: Option<(Chw, Read)>, cout: usize, leaky: bo
     x.data = x.data.iter().map(f16).collect();
     let weight16: Vec<f32> = weight.iter().map(f16).collect();
     let want = cpu::conv3x3(&x, &weight16, &bias, leaky.then_some(0.1));
-    crate::assert_close(Tolerance { rel }, &format!("mma conv {:?}/{:?} {w}x{h} tile {tile}", a.1, b.as_ref().map(|b| b.1)), &got.data, &want.data);
+    crate::assert_close(
+        Tolerance { rel },
+        &format!("mma conv {:?}/{:?} {w}x{h} tile {tile}", a.1, b.as_ref().map(|b| b.1)),
+        &got.data,
+        &want.data,
+    );
     // And the products' rounding is what separates it from the f32 convolution.
     let exact = cpu::conv3x3(&x, &weight, &bias, leaky.then_some(0.1));
     assert!(got.data.iter().zip(&exact.data).any(|(g, e)| g != e), "f16 weights change some output");
@@ -473,14 +687,41 @@ fn conv_mma_tiles_match_cpu() {
     // levels spanning partial 64-pixel and 4-row workgroups. 43 outputs: 3 tiles of 16, the
     // last partial, in groups of 2 (the second half empty) with mma32; a pooled source and a
     // direct one (11 + 6 blocks: 5 chunks of 16 channels, the last partial).
-    check_conv_mma((tensor(41, 18, 140, 300), Read::Pool), Some((tensor(22, 9, 70, 301), Read::Direct)), 43, true, 70, 9, 302, Tile::mma(32).unwrap());
+    check_conv_mma(
+        (tensor(41, 18, 140, 300), Read::Pool),
+        Some((tensor(22, 9, 70, 301), Read::Direct)),
+        43,
+        true,
+        70,
+        9,
+        302,
+        Tile::mma(32).unwrap(),
+    );
     // Upsampled and pool-upsampled sources, a linear conv with 8 outputs (one tile of 16,
     // mma64 shrinks to it), a level 14 x 6.
-    check_conv_mma((tensor(6, 3, 7, 303), Read::Upsample), Some((tensor(5, 6, 14, 304), Read::PoolUpsample)), 8, false, 14, 6, 305, Tile::mma(64).unwrap());
+    check_conv_mma(
+        (tensor(6, 3, 7, 303), Read::Upsample),
+        Some((tensor(5, 6, 14, 304), Read::PoolUpsample)),
+        8,
+        false,
+        14,
+        6,
+        305,
+        Tile::mma(64).unwrap(),
+    );
     // One source, 20 outputs in tiles of 16 (two groups), one row.
     check_conv_mma((tensor(33, 1, 65, 306), Read::Direct), None, 20, true, 65, 1, 307, Tile::mma(16).unwrap());
     // 48 outputs in one group of 3 tiles.
-    check_conv_mma((tensor(12, 5, 19, 308), Read::Direct), Some((tensor(12, 5, 19, 309), Read::Direct)), 48, true, 19, 5, 310, Tile::mma(48).unwrap());
+    check_conv_mma(
+        (tensor(12, 5, 19, 308), Read::Direct),
+        Some((tensor(12, 5, 19, 309), Read::Direct)),
+        48,
+        true,
+        19,
+        5,
+        310,
+        Tile::mma(48).unwrap(),
+    );
     assert_eq!(Tile::mma(32).unwrap().to_string(), "mma32");
     assert_eq!(Tile::mma(24), None);
 }
@@ -490,7 +731,17 @@ fn conv_mma_tiles_match_cpu() {
 /// the f16-rounded operands of the plain tiles must fail the same bound, so the test tells the
 /// two apart.
 #[allow(clippy::too_many_arguments)]
-fn check_conv_mma_split(a: (Chw, Read), b: Option<(Chw, Read)>, cout: usize, leaky: bool, w: usize, h: usize, seed: u64, tile: Tile, scale: f32) {
+fn check_conv_mma_split(
+    a: (Chw, Read),
+    b: Option<(Chw, Read)>,
+    cout: usize,
+    leaky: bool,
+    w: usize,
+    h: usize,
+    seed: u64,
+    tile: Tile,
+    scale: f32,
+) {
     let scaled = |t: Chw| Chw { data: t.data.iter().map(|v| v * scale).collect(), ..t };
     let (a, b) = ((scaled(a.0), a.1), b.map(|b| (scaled(b.0), b.1)));
     let cin = a.0.c + b.as_ref().map_or(0, |b| b.0.c);
@@ -524,9 +775,39 @@ fn conv_mma_split_tiles_match_cpu_in_f32() {
     // level spanning partial workgroups; mma64x3 (four tiles a group, one group short of its
     // last two) on the same; mma16x3 on upsampled sources at a thousandth of the scale, where
     // an unscaled remainder would be an f16 subnormal.
-    check_conv_mma_split((tensor(41, 18, 140, 320), Read::Pool), Some((tensor(22, 9, 70, 321), Read::Direct)), 43, true, 70, 9, 322, Tile::mma_split(32).unwrap(), 1.0);
-    check_conv_mma_split((tensor(41, 18, 140, 326), Read::Pool), Some((tensor(22, 9, 70, 327), Read::Direct)), 43, true, 70, 9, 328, Tile::mma_split(64).unwrap(), 1.0);
-    check_conv_mma_split((tensor(6, 3, 7, 323), Read::Upsample), Some((tensor(5, 6, 14, 324), Read::PoolUpsample)), 20, false, 14, 6, 325, Tile::mma_split(16).unwrap(), 1e-3);
+    check_conv_mma_split(
+        (tensor(41, 18, 140, 320), Read::Pool),
+        Some((tensor(22, 9, 70, 321), Read::Direct)),
+        43,
+        true,
+        70,
+        9,
+        322,
+        Tile::mma_split(32).unwrap(),
+        1.0,
+    );
+    check_conv_mma_split(
+        (tensor(41, 18, 140, 326), Read::Pool),
+        Some((tensor(22, 9, 70, 327), Read::Direct)),
+        43,
+        true,
+        70,
+        9,
+        328,
+        Tile::mma_split(64).unwrap(),
+        1.0,
+    );
+    check_conv_mma_split(
+        (tensor(6, 3, 7, 323), Read::Upsample),
+        Some((tensor(5, 6, 14, 324), Read::PoolUpsample)),
+        20,
+        false,
+        14,
+        6,
+        325,
+        Tile::mma_split(16).unwrap(),
+        1e-3,
+    );
     assert_eq!(Tile::mma_split(32).unwrap().to_string(), "mma32x3");
     assert_eq!(Tile::mma_split(80), None, "at most four 16-channel tiles");
 }
@@ -554,7 +835,9 @@ fn prefetching_split_tiles_give_the_split_tiles_output() {
         let bias = noise(cout, seed + 3);
         // One and four tiles a group (each one more pipeline for lavapipe to compile).
         for channels in [16, 64] {
-            let conv = |tile: Tile| gpu_conv((&a, read_a), b.as_ref().map(|b| (b, read_b)), &weight, &bias, true, w, h, tile, WeightMemory::Storage);
+            let conv = |tile: Tile| {
+                gpu_conv((&a, read_a), b.as_ref().map(|b| (b, read_b)), &weight, &bias, true, w, h, tile, WeightMemory::Storage)
+            };
             let (split, prefetch) = (Tile::mma_split(channels).unwrap(), Tile::mma_split_prefetch(channels).unwrap());
             let (want, got) = (conv(split), conv(prefetch));
             let differ = want.data.iter().zip(&got.data).filter(|(x, y)| x.to_bits() != y.to_bits()).count();
@@ -571,7 +854,8 @@ fn mma_tiles_need_storage_weights() {
     let mut kernels = Kernels::new(&g.device, kernels::Precision::F32, WeightMemory::Uniform);
     let (weight, bias) = (vec![0.0; 4 * 8 * 9], vec![0.0; 4]);
     let spec = one_source_spec("d1.l1.0", 8, 8, 8, &weight, &bias);
-    let err = ConvPlan::new(&g.device, &mut kernels, &[spec], &[Tile::mma(16).unwrap()]).err().expect("uniform weights are refused").to_string();
+    let err =
+        ConvPlan::new(&g.device, &mut kernels, &[spec], &[Tile::mma(16).unwrap()]).err().expect("uniform weights are refused").to_string();
     assert!(err.contains("mma16") && err.contains("storage"), "{err}");
 }
 

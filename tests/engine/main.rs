@@ -14,8 +14,8 @@ mod weights;
 use std::path::PathBuf;
 use std::sync::Mutex;
 
-pub use rae_core::golden::{Golden, Tolerance};
 use rae_core::Gpu;
+pub use rae_core::golden::{Golden, Tolerance};
 
 /// The fixtures folder.
 pub fn fixture(name: &str) -> PathBuf {

@@ -1,6 +1,9 @@
 //! Every WGSL file parses and validates with naga: no GPU needed, a broken shader fails here.
 
-use rae_core::kernels::{MMA_ENABLE, MMA_PREFETCH_TEXELS, MMA_SPLIT_PIXELS, MMA_WORKGROUP_BYTES, PREP_WITHOUT_SUBGROUPS, ROWS_STUB, SHADERS, STORAGE_SOURCES, STORAGE_WEIGHTS, UNIFORM_WEIGHTS, WITHOUT_SUBGROUPS, conv_module_source, mma_source, shader_source};
+use rae_core::kernels::{
+    MMA_ENABLE, MMA_PREFETCH_TEXELS, MMA_SPLIT_PIXELS, MMA_WORKGROUP_BYTES, PREP_WITHOUT_SUBGROUPS, ROWS_STUB, SHADERS, STORAGE_SOURCES,
+    STORAGE_WEIGHTS, UNIFORM_WEIGHTS, WITHOUT_SUBGROUPS, conv_module_source, mma_source, shader_source,
+};
 
 /// `src` (from `file`) with each of `rewrites` made, each of which must find its text.
 fn apply(src: String, file: &str, rewrites: &[(&str, &str)]) -> String {
@@ -29,7 +32,10 @@ fn every_shader_validates_with_naga() {
     let rewritten = [
         ("prep (without subgroups)", prep_without_subgroups),
         ("conv3x3 (two-column lanes)", conv.replace(ROWS_STUB, shader_source("conv3x3_rows"))),
-        ("conv3x3 (storage sources, two-column lanes, f16)", storage_sources.replace(ROWS_STUB, shader_source("conv3x3_rows")).replace("rgba32float", "rgba16float")),
+        (
+            "conv3x3 (storage sources, two-column lanes, f16)",
+            storage_sources.replace(ROWS_STUB, shader_source("conv3x3_rows")).replace("rgba32float", "rgba16float"),
+        ),
         ("conv3x3 (f16, storage weights)", conv.replace("rgba32float", "rgba16float").replace(UNIFORM_WEIGHTS, STORAGE_WEIGHTS)),
         ("conv3x3 (without subgroups)", without_subgroups),
     ];
@@ -43,11 +49,20 @@ fn every_shader_validates_with_naga() {
         ("conv3x3_mma (matrix units, storage sources, f16)", storage_mma(mma_source(true)).replace("rgba32float", "rgba16float")),
         ("conv3x3_mma (emulated, storage sources, f16)", storage_mma(mma_source(false)).replace("rgba32float", "rgba16float")),
     ];
-    let all = SHADERS.iter().filter(|(n, _)| !["conv3x3_rows", "conv3x3_mma_coop", "conv_common"].contains(n)).map(|&(n, _)| (n, conv_module_source(n))).chain(rewritten).chain(mma_rewritten);
+    let all = SHADERS
+        .iter()
+        .filter(|(n, _)| !["conv3x3_rows", "conv3x3_mma_coop", "conv_common"].contains(n))
+        .map(|&(n, _)| (n, conv_module_source(n)))
+        .chain(rewritten)
+        .chain(mma_rewritten);
     for (name, source) in all {
         let source = source.as_str();
         let module = naga::front::wgsl::parse_str(source).unwrap_or_else(|e| panic!("{name}.wgsl: {}", e.emit_to_string(source)));
-        let caps = if name.contains("without subgroups") { naga::valid::Capabilities::all() - naga::valid::Capabilities::SUBGROUP } else { naga::valid::Capabilities::all() };
+        let caps = if name.contains("without subgroups") {
+            naga::valid::Capabilities::all() - naga::valid::Capabilities::SUBGROUP
+        } else {
+            naga::valid::Capabilities::all()
+        };
         naga::valid::Validator::new(naga::valid::ValidationFlags::all(), caps)
             .validate(&module)
             .unwrap_or_else(|e| panic!("{name}.wgsl: {}", e.emit_to_string(source)));
@@ -69,18 +84,28 @@ fn the_matrix_unit_kernel_translates_to_spirv() {
     let module = naga::front::wgsl::parse_str(&source).unwrap_or_else(|e| panic!("{}", e.emit_to_string(&source)));
     assert!(module.entry_points.iter().any(|e| e.name == "mma"), "the cooperative entry point");
     assert!(module.types.iter().any(|(_, t)| matches!(t.inner, naga::TypeInner::CooperativeMatrix { .. })), "cooperative matrix types");
-    let info = naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all()).validate(&module).unwrap_or_else(|e| panic!("{}", e.emit_to_string(&source)));
+    let info = naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all())
+        .validate(&module)
+        .unwrap_or_else(|e| panic!("{}", e.emit_to_string(&source)));
     let plain = (1..=4).map(|nt| ("mma", nt, false, false));
-    let split = (1..=2).flat_map(|nt| [(nt, true, false), (nt, false, false), (nt, true, true)].map(|(nt, split_a, prefetch)| ("mma_split", nt, true, split_a, prefetch)));
+    let split = (1..=2).flat_map(|nt| {
+        [(nt, true, false), (nt, false, false), (nt, true, true)].map(|(nt, split_a, prefetch)| ("mma_split", nt, true, split_a, prefetch))
+    });
     for (entry, nt, split, split_a, prefetch) in plain.map(|(e, nt, s, a)| (e, nt, s, a, false)).chain(split) {
         let case = format!("{entry} NT = {nt} SPLIT_A = {split_a} PREFETCH = {prefetch}");
-        let constants: naga::back::PipelineConstants = [("NT", nt as f64), ("SPLIT", split as u32 as f64), ("SPLIT_A", split_a as u32 as f64), ("PREFETCH", prefetch as u32 as f64)].into_iter().map(|(k, v)| (k.to_string(), v)).collect();
+        let constants: naga::back::PipelineConstants =
+            [("NT", nt as f64), ("SPLIT", split as u32 as f64), ("SPLIT_A", split_a as u32 as f64), ("PREFETCH", prefetch as u32 as f64)]
+                .into_iter()
+                .map(|(k, v)| (k.to_string(), v))
+                .collect();
         let (module, info) = naga::back::pipeline_constants::process_overrides(&module, &info, None, &constants).unwrap();
         let options = naga::back::spv::Options { lang_version: (1, 3), ..Default::default() };
         let pipeline = naga::back::spv::PipelineOptions { shader_stage: naga::ShaderStage::Compute, entry_point: entry.to_string() };
         let words = naga::back::spv::write_vec(&module, &info, &options, Some(&pipeline)).unwrap_or_else(|e| panic!("{case}: {e}"));
         // OpCapability CooperativeMatrixKHR (6022) and OpMemoryModel Logical Vulkan (3).
-        let has = |op: u32, operands: &[u32]| words.windows(1 + operands.len()).any(|w| w[0] == ((1 + operands.len() as u32) << 16 | op) && w[1..] == *operands);
+        let has = |op: u32, operands: &[u32]| {
+            words.windows(1 + operands.len()).any(|w| w[0] == ((1 + operands.len() as u32) << 16 | op) && w[1..] == *operands)
+        };
         assert!(has(17, &[6022]), "{case}: OpCapability CooperativeMatrixKHR");
         assert!(has(14, &[0, 3]), "{case}: OpMemoryModel Logical Vulkan");
     }
@@ -92,8 +117,11 @@ fn the_prefetch_registers_hold_a_split_window() {
     // window shared out over a workgroup's 128 invocations, none left over and none spare.
     let source = mma_source(false);
     let module = naga::front::wgsl::parse_str(&source).unwrap_or_else(|e| panic!("{}", e.emit_to_string(&source)));
-    let (_, constant) = module.constants.iter().find(|(_, c)| c.name.as_deref() == Some("PREFETCH_TEXELS")).expect("conv3x3_mma.wgsl has PREFETCH_TEXELS");
-    let naga::Expression::Literal(naga::Literal::U32(texels)) = module.global_expressions[constant.init] else { panic!("PREFETCH_TEXELS is a u32 literal") };
+    let (_, constant) =
+        module.constants.iter().find(|(_, c)| c.name.as_deref() == Some("PREFETCH_TEXELS")).expect("conv3x3_mma.wgsl has PREFETCH_TEXELS");
+    let naga::Expression::Literal(naga::Literal::U32(texels)) = module.global_expressions[constant.init] else {
+        panic!("PREFETCH_TEXELS is a u32 literal")
+    };
     assert_eq!(texels, MMA_PREFETCH_TEXELS);
     let window = 6 * (MMA_SPLIT_PIXELS + 2) * 4;
     assert!(128 * texels >= window && 128 * (texels - 1) < window, "{texels} texels a lane for a window of {window}");
@@ -107,7 +135,8 @@ fn each_matrix_unit_entry_point_uses_only_its_workgroup_memory() {
     // docs/PERF.md session 15), so every entry point uses the same.
     let source = mma_source(true);
     let module = naga::front::wgsl::parse_str(&source).unwrap_or_else(|e| panic!("{}", e.emit_to_string(&source)));
-    let info = naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all()).validate(&module).unwrap();
+    let info =
+        naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all()).validate(&module).unwrap();
     let workgroup: Vec<_> = module.global_variables.iter().filter(|(_, g)| g.space == naga::AddressSpace::WorkGroup).collect();
     let bytes = |entry: &str| -> (u32, Vec<String>) {
         let at = module.entry_points.iter().position(|e| e.name == entry).unwrap_or_else(|| panic!("no `{entry}`"));

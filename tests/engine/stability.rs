@@ -83,11 +83,27 @@ fn extreme_cases() -> Vec<(&'static str, Frame)> {
     };
     let specials = [f32::NAN, f32::INFINITY, f32::NEG_INFINITY, -5.0, -1e30];
     vec![
-        ("NaN, +Inf, -Inf and negative radiance", with(0, &|i, v| if i % 7 == 0 { *v = specials[i / 7 % specials.len()] })),
-        ("radiance 1e-6 .. 1e8 in one frame (sun, 1e6 firefly)", with(0, &|i, v| {
-            let p = i / 3;
-            *v = if (p % w) < 6 && (p / w) < 6 { 1e8 } else if p == n / 2 + w / 2 { 1e6 } else { 1e-6 };
-        })),
+        (
+            "NaN, +Inf, -Inf and negative radiance",
+            with(0, &|i, v| {
+                if i % 7 == 0 {
+                    *v = specials[i / 7 % specials.len()]
+                }
+            }),
+        ),
+        (
+            "radiance 1e-6 .. 1e8 in one frame (sun, 1e6 firefly)",
+            with(0, &|i, v| {
+                let p = i / 3;
+                *v = if (p % w) < 6 && (p / w) < 6 {
+                    1e8
+                } else if p == n / 2 + w / 2 {
+                    1e6
+                } else {
+                    1e-6
+                };
+            }),
+        ),
         ("all-black frame", with(0, &|_, v| *v = 0.0)),
         ("constant frame", with(0, &|_, v| *v = 0.75)),
         ("albedo 0", with(1, &|_, v| *v = 0.0)),
@@ -169,7 +185,10 @@ fn assert_bounded_hidden(what: &str, rows: &[HiddenRow]) {
     let early: Vec<f32> = (0..rows[0].1.len()).map(|k| rows.iter().filter(|r| r.0 <= 100).map(|r| r.1[k]).fold(0.0, f32::max)).collect();
     for (t, m) in rows {
         for (k, (&v, &e)) in m.iter().zip(&early).enumerate() {
-            assert!(v.is_finite() && v <= 2.0 * e.max(1e-3), "{what}: frame {t}, block {k}: max |hidden| {v} vs {e} in the first 100 frames");
+            assert!(
+                v.is_finite() && v <= 2.0 * e.max(1e-3),
+                "{what}: frame {t}, block {k}: max |hidden| {v} vs {e} in the first 100 frames"
+            );
         }
     }
 }

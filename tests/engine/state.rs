@@ -106,7 +106,8 @@ fn caller_buffers_in_caller_encoder_match_host_path() {
         })
     };
     let f = &golden.frames[0];
-    let (c, a, n, dp, r) = (storage(&f["color"]), storage(&f["albedo"]), storage(&f["normal"]), storage(&f["depth"]), storage(&f["roughness"]));
+    let (c, a, n, dp, r) =
+        (storage(&f["color"]), storage(&f["albedo"]), storage(&f["normal"]), storage(&f["depth"]), storage(&f["roughness"]));
     let bytes = (golden.width * golden.height * 12) as u64;
     let out = g.device.create_buffer(&wgpu::BufferDescriptor {
         label: None,
@@ -177,7 +178,8 @@ fn tuned_tiles_and_storage_weights_give_the_frames_of_the_default_plan() {
     // Three candidates of TUNE_TILES (a tall, a 2-column and a short one): each is compiled on
     // lavapipe, which takes seconds per pipeline.
     const CANDIDATES: [Tile; 3] = [TUNE_TILES[0], TUNE_TILES[10], TUNE_TILES[6]];
-    let tuned = Options { tiles: TileChoice::TunedAmong(&CANDIDATES), weights: Some(WeightMemory::Storage), sources: None, ..Default::default() };
+    let tuned =
+        Options { tiles: TileChoice::TunedAmong(&CANDIDATES), weights: Some(WeightMemory::Storage), sources: None, ..Default::default() };
     let mut a = Denoiser::with_options(&g.device, &g.queue, &weights, golden.width, golden.height, fixed).unwrap();
     let mut b = Denoiser::with_options(&g.device, &g.queue, &weights, golden.width, golden.height, tuned).unwrap();
     assert_eq!(b.weight_memory(), WeightMemory::Storage);

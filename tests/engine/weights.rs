@@ -5,8 +5,8 @@ use std::collections::HashMap;
 
 use rae_core::graph::Graph;
 use rae_core::{Arch, Error, Weights};
-use safetensors::tensor::TensorView;
 use safetensors::Dtype;
+use safetensors::tensor::TensorView;
 
 use crate::fixture;
 
@@ -128,7 +128,8 @@ fn f16_weights_are_widened() {
     let halves: Vec<_> = t
         .iter()
         .map(|(n, _, s, b)| {
-            let h: Vec<u8> = b.chunks_exact(4).flat_map(|c| half::f16::from_f32(f32::from_le_bytes(c.try_into().unwrap())).to_le_bytes()).collect();
+            let h: Vec<u8> =
+                b.chunks_exact(4).flat_map(|c| half::f16::from_f32(f32::from_le_bytes(c.try_into().unwrap())).to_le_bytes()).collect();
             (n.clone(), Dtype::F16, s.clone(), h)
         })
         .collect();

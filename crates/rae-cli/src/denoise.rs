@@ -6,8 +6,8 @@ use std::time::Duration;
 
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
-use rae_core::io::{self, Sequence, Slot};
 use rae_core::gpu::CompileHelper;
+use rae_core::io::{self, Sequence, Slot};
 use rae_core::{Denoiser, Gpu, InputBuffer, Precision, TileChoice, Weights, metrics};
 
 /// What `denoise` was asked to do.
@@ -57,7 +57,8 @@ pub fn parse_range(s: &str) -> Result<(Option<u32>, Option<u32>)> {
 /// The shipped model with the most inputs among those whose buffers the sequence has.
 fn pick_model(models: &Path, present: &BTreeSet<InputBuffer>) -> Result<PathBuf> {
     let mut candidates = Vec::new();
-    let entries = std::fs::read_dir(models).with_context(|| format!("reading the shipped models in {} (or pass --weights FILE)", models.display()))?;
+    let entries = std::fs::read_dir(models)
+        .with_context(|| format!("reading the shipped models in {} (or pass --weights FILE)", models.display()))?;
     for e in entries {
         let p = e?.path();
         if p.extension().is_some_and(|x| x == "safetensors") {
@@ -70,7 +71,11 @@ fn pick_model(models: &Path, present: &BTreeSet<InputBuffer>) -> Result<PathBuf>
     }
     candidates.sort();
     candidates.pop().map(|(_, p)| p).with_context(|| {
-        format!("no shipped model in {} fits the buffers present {:?}; pass --weights FILE", models.display(), present.iter().map(|b| b.name()).collect::<Vec<_>>())
+        format!(
+            "no shipped model in {} fits the buffers present {:?}; pass --weights FILE",
+            models.display(),
+            present.iter().map(|b| b.name()).collect::<Vec<_>>()
+        )
     })
 }
 
@@ -170,11 +175,34 @@ pub fn run(o: &Options) -> Result<()> {
     let options = rae_core::Options { precision: o.precision, tiles: o.tiles, ..Default::default() };
     let mut d = Denoiser::with_options(&gpu.device, &gpu.queue, &weights, seq.width, seq.height, options)?;
     let used: Vec<&str> = weights.arch.required_buffers().iter().map(|b| b.name()).collect();
-    println!("input:   {} ({}, {} frames {}..{}, {}x{})", o.input.display(), seq.layout, seq.numbers.len(), seq.numbers[0], seq.numbers[seq.numbers.len() - 1], seq.width, seq.height);
-    println!("buffers: {:?}{}", seq.slots.iter().map(|s| s.name()).collect::<Vec<_>>(), if seq.has_reference() { " (reference used for error only)" } else { "" });
+    println!(
+        "input:   {} ({}, {} frames {}..{}, {}x{})",
+        o.input.display(),
+        seq.layout,
+        seq.numbers.len(),
+        seq.numbers[0],
+        seq.numbers[seq.numbers.len() - 1],
+        seq.width,
+        seq.height
+    );
+    println!(
+        "buffers: {:?}{}",
+        seq.slots.iter().map(|s| s.name()).collect::<Vec<_>>(),
+        if seq.has_reference() { " (reference used for error only)" } else { "" }
+    );
     println!("model:   {} (uses {used:?})", weights_path.display());
     println!("device:  {}", gpu.describe());
-    println!("tile:    {} at full resolution, {} sources ({})", d.conv_tiles()[0], d.sources_name(), match o.tiles { TileChoice::Auto => "auto", TileChoice::Tuned | TileChoice::TunedAmong(_) => "tuned", TileChoice::TunedMma | TileChoice::TunedMmaWith(_) => "tuned-mma", TileChoice::Fixed(_) => "--tile" });
+    println!(
+        "tile:    {} at full resolution, {} sources ({})",
+        d.conv_tiles()[0],
+        d.sources_name(),
+        match o.tiles {
+            TileChoice::Auto => "auto",
+            TileChoice::Tuned | TileChoice::TunedAmong(_) => "tuned",
+            TileChoice::TunedMma | TileChoice::TunedMmaWith(_) => "tuned-mma",
+            TileChoice::Fixed(_) => "--tile",
+        }
+    );
     println!("output:  {}", out_dir.display());
 
     let n = (seq.width * seq.height * 3) as usize;
@@ -188,14 +216,20 @@ pub fn run(o: &Options) -> Result<()> {
     // On lavapipe a first frame into an empty shader cache compiles on one core: a second device
     // compiles from the other end if the frame is slow to come.
     let said = bar.clone();
-    let note = move || said.suspend(|| eprintln!("the first frame is slow to come: compiling kernels on a second device too (lavapipe compiles at first use, into Mesa's shader cache)"));
+    let note = move || {
+        said.suspend(|| eprintln!("the first frame is slow to come: compiling kernels on a second device too (lavapipe compiles at first use, into Mesa's shader cache)"))
+    };
     let mut helper = if o.no_helper { None } else { CompileHelper::start(&gpu, &weights, seq.width, seq.height, options, note) };
     for &i in &indices {
         let mut frame = seq.load(i)?;
         if let Some((buffer, path, count)) = frame.nonfinite.first()
             && !o.allow_nonfinite
         {
-            bail!("{}: {count} NaN/Inf values in `{buffer}` (frame {}); fix the renderer or pass --allow-nonfinite to have rae replace them (see rae-core's input policy)", path.display(), frame.number);
+            bail!(
+                "{}: {count} NaN/Inf values in `{buffer}` (frame {}); fix the renderer or pass --allow-nonfinite to have rae replace them (see rae-core's input policy)",
+                path.display(),
+                frame.number
+            );
         }
         if o.reset_at.contains(&frame.number) {
             d.reset();
@@ -214,7 +248,13 @@ pub fn run(o: &Options) -> Result<()> {
             io::write_png(&path.with_extension("png"), seq.width, seq.height, &out)?;
         }
         let color = frame.buffers.get(&Slot::from(InputBuffer::Color)).expect("color is required");
-        let mut report = FrameReport { number: frame.number, ms: ms(t.upload + t.gpu + t.download), times: [ms(t.upload), ms(t.gpu), ms(t.download)], noisy: None, rae: None };
+        let mut report = FrameReport {
+            number: frame.number,
+            ms: ms(t.upload + t.gpu + t.download),
+            times: [ms(t.upload), ms(t.gpu), ms(t.download)],
+            noisy: None,
+            rae: None,
+        };
         if let Some(r) = frame.reference() {
             let m = |x: &[f32]| (metrics::relmse(x, r), metrics::psnr(x, r), metrics::ssim(x, r, seq.width, seq.height));
             report.noisy = Some(m(color));
@@ -244,10 +284,19 @@ pub fn run(o: &Options) -> Result<()> {
     }
 
     println!();
-    println!("time per frame (median of {}, frame 0 includes shader compilation): upload {:.2} ms, GPU {:.1} ms, download {:.2} ms", reports.len(), median(up), median(gpu_t), median(down));
+    println!(
+        "time per frame (median of {}, frame 0 includes shader compilation): upload {:.2} ms, GPU {:.1} ms, download {:.2} ms",
+        reports.len(),
+        median(up),
+        median(gpu_t),
+        median(down)
+    );
     if reports.iter().any(|r| r.rae.is_some()) {
         println!();
-        println!("{:>6} {:>11} {:>11} {:>9} {:>9} {:>8} {:>8} {:>9}", "frame", "relMSE in", "relMSE rae", "PSNR in", "PSNR rae", "SSIM in", "SSIM rae", "ms");
+        println!(
+            "{:>6} {:>11} {:>11} {:>9} {:>9} {:>8} {:>8} {:>9}",
+            "frame", "relMSE in", "relMSE rae", "PSNR in", "PSNR rae", "SSIM in", "SSIM rae", "ms"
+        );
         for r in &reports {
             if let (Some(a), Some(b)) = (r.noisy, r.rae) {
                 println!("{:>6} {:>11.4} {:>11.4} {:>9.2} {:>9.2} {:>8.4} {:>8.4} {:>9.1}", r.number, a.0, b.0, a.1, b.1, a.2, b.2, r.ms);
@@ -270,7 +319,11 @@ pub fn run(o: &Options) -> Result<()> {
         );
         if !temporal_rae.is_empty() {
             let avg = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
-            println!("temporal error (mean |d out - d ref| between frames, tonemapped): input {:.5}, rae {:.5}", avg(&temporal_noisy), avg(&temporal_rae));
+            println!(
+                "temporal error (mean |d out - d ref| between frames, tonemapped): input {:.5}, rae {:.5}",
+                avg(&temporal_noisy),
+                avg(&temporal_rae)
+            );
         }
     } else {
         println!("(no reference in the sequence: no error reported)");

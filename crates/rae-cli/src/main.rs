@@ -272,26 +272,61 @@ fn bench(path: &Path, sizes: &[(u32, u32)], frames: usize, layers: bool, sweep: 
     let resident = gpu.device.features().contains(wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS);
     println!("adapter: {}; weights: {}; {frames} timed frames after 2 warm-up", gpu.describe(), path.display());
     // Both precisions run everywhere: f16 is rgba16float storage (core WebGPU), arithmetic f32.
-    println!("total = upload + gpu + download: a frame from host slices to host slices (gpu: submit to done, the host<->device copies included)");
-    println!("resident: GPU timestamps around a frame on GPU buffers (the path of a renderer that records rae into its own encoder), frames submitted back to back; pipelined: wall time per frame of that run; GFLOP/s from resident where the device has encoder timestamps, else from gpu");
-    println!("peak MiB: the buffers and textures the denoiser holds (frames allocate nothing); alloc MiB: the device allocator's live total, wgpu's own included, where the backend reports it");
-    println!("precisions: f32, f16 (f16 = rgba16float activations, f32 arithmetic; SHADER_F16 {})", gpu.device.features().contains(wgpu::Features::SHADER_F16));
-    println!("tile: the conv tile (rows x output blocks per invocation), `tuned` per conv on this device; weights: uniform chunks or one storage buffer; sources: the convs' inputs as sampled or storage textures (`mixed`: tuned per conv); build: seconds to build the denoiser (compiling, tuning)");
-    println!("err: the last timed frame's largest difference from the same frames in f32 with the {} tile, over that frame's largest value", reference_tile(&gpu.device));
-    println!("matrix units (mma tiles on tensor cores): {}", if rae_core::kernels::matrix_units_supported(&gpu.device) { "yes" } else { "no (mma tiles emulated)" });
+    println!(
+        "total = upload + gpu + download: a frame from host slices to host slices (gpu: submit to done, the host<->device copies included)"
+    );
+    println!(
+        "resident: GPU timestamps around a frame on GPU buffers (the path of a renderer that records rae into its own encoder), frames submitted back to back; pipelined: wall time per frame of that run; GFLOP/s from resident where the device has encoder timestamps, else from gpu"
+    );
+    println!(
+        "peak MiB: the buffers and textures the denoiser holds (frames allocate nothing); alloc MiB: the device allocator's live total, wgpu's own included, where the backend reports it"
+    );
+    println!(
+        "precisions: f32, f16 (f16 = rgba16float activations, f32 arithmetic; SHADER_F16 {})",
+        gpu.device.features().contains(wgpu::Features::SHADER_F16)
+    );
+    println!(
+        "tile: the conv tile (rows x output blocks per invocation), `tuned` per conv on this device; weights: uniform chunks or one storage buffer; sources: the convs' inputs as sampled or storage textures (`mixed`: tuned per conv); build: seconds to build the denoiser (compiling, tuning)"
+    );
+    println!(
+        "err: the last timed frame's largest difference from the same frames in f32 with the {} tile, over that frame's largest value",
+        reference_tile(&gpu.device)
+    );
+    println!(
+        "matrix units (mma tiles on tensor cores): {}",
+        if rae_core::kernels::matrix_units_supported(&gpu.device) { "yes" } else { "no (mma tiles emulated)" }
+    );
     println!(
         "{:>10} {:>9} {:>9} {:>7} {:>7} {:>6} {:>10} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>7} {:>9} {:>9} {:>8}",
-        "size", "precision", "tile", "weights", "sources", "build", "total ms", "upload", "gpu", "download", "resident", "pipelined", "GFLOP/s", "of peak", "peak MiB", "alloc MiB", "err"
+        "size",
+        "precision",
+        "tile",
+        "weights",
+        "sources",
+        "build",
+        "total ms",
+        "upload",
+        "gpu",
+        "download",
+        "resident",
+        "pipelined",
+        "GFLOP/s",
+        "of peak",
+        "peak MiB",
+        "alloc MiB",
+        "err"
     );
     for &(w, h) in sizes {
         let s = format!("{w}x{h}");
         let n = (w * h) as usize;
         let (wave, one) = bench_buffers(w, h);
-        let frame = rae_core::FrameInputs { color: &wave, albedo: Some(&wave), normal: Some(&wave), depth: Some(&one), roughness: Some(&one) };
+        let frame =
+            rae_core::FrameInputs { color: &wave, albedo: Some(&wave), normal: Some(&wave), depth: Some(&one), roughness: Some(&one) };
         // The frames every combination's error is taken against: as many, in f32, direct tiles.
         let reference = {
             let options = Options { tiles: TileChoice::Fixed(reference_tile(&gpu.device)), ..Default::default() };
-            let mut d = Denoiser::with_options(&gpu.device, &gpu.queue, &weights, w, h, options).with_context(|| format!("building the reference denoiser at {s}"))?;
+            let mut d = Denoiser::with_options(&gpu.device, &gpu.queue, &weights, w, h, options)
+                .with_context(|| format!("building the reference denoiser at {s}"))?;
             let mut out = vec![0.0; 3 * n];
             for _ in 0..2 + frames.max(1) {
                 d.denoise_into(&frame, &mut out)?;
@@ -305,7 +340,13 @@ fn bench(path: &Path, sizes: &[(u32, u32)], frames: usize, layers: bool, sweep: 
                 Ok(d) => d,
                 // A tile this combination cannot run (e.g. mma with uniform weights): say so and go on.
                 Err(e @ rae_core::Error::UnsupportedTile { .. }) => {
-                    println!("{s:>10} {:>9} {:>9} {:>7} {:>7} unsupported: {e}", precision.name(), tile_name(tiles), options.weights.map_or("auto", |m| m.name()), options.sources.map_or("auto", |m| m.name()));
+                    println!(
+                        "{s:>10} {:>9} {:>9} {:>7} {:>7} unsupported: {e}",
+                        precision.name(),
+                        tile_name(tiles),
+                        options.weights.map_or("auto", |m| m.name()),
+                        options.sources.map_or("auto", |m| m.name())
+                    );
                     continue;
                 }
                 Err(e) => return Err(e).with_context(|| format!("building the {} denoiser at {s}", precision.name())),
@@ -334,7 +375,10 @@ fn bench(path: &Path, sizes: &[(u32, u32)], frames: usize, layers: bool, sweep: 
             // backend keeps an allocator report, the driver-side reservation of the whole
             // device as well.
             let mib = d.gpu_bytes() as f64 / (1 << 20) as f64;
-            let alloc = gpu.device.generate_allocator_report().map_or("-".to_string(), |r| format!("{:.1}", r.total_allocated_bytes as f64 / (1 << 20) as f64));
+            let alloc = gpu
+                .device
+                .generate_allocator_report()
+                .map_or("-".to_string(), |r| format!("{:.1}", r.total_allocated_bytes as f64 / (1 << 20) as f64));
             let share = peak.map_or("-".to_string(), |p| format!("{:.1}%", 100.0 * gflops / p));
             let (res, pipe) = timed.map_or(("-".to_string(), "-".to_string()), |(r, p)| (format!("{r:.2}"), format!("{p:.2}")));
             println!(
@@ -382,7 +426,9 @@ impl Sweep {
     fn combinations(&self) -> impl Iterator<Item = Options> + '_ {
         self.precisions.iter().flat_map(move |&p| {
             self.memories.iter().flat_map(move |&weights| {
-                self.sources.iter().flat_map(move |&sources| self.tiles.iter().map(move |&tiles| Options { precision: p.into(), tiles, weights, sources }))
+                self.sources
+                    .iter()
+                    .flat_map(move |&sources| self.tiles.iter().map(move |&tiles| Options { precision: p.into(), tiles, weights, sources }))
             })
         })
     }
@@ -405,13 +451,23 @@ fn bench_interleaved(path: &Path, sizes: &[(u32, u32)], rounds: usize, sweep: &S
     let weights = Weights::load(path)?;
     let gpu = Gpu::new()?;
     let rounds = rounds.max(1);
-    println!("adapter: {}; weights: {}; interleaved: {rounds} rounds of one frame per combination, after 2 warm-up frames each", gpu.describe(), path.display());
-    println!("ms: a frame from host slices to host slices (the `total` of bench); vs first: median over rounds of the ratio to the first combination in the same round");
-    println!("{:>10} {:>9} {:>12} {:>7} {:>7} {:>10} {:>10} {:>9}", "size", "precision", "tile", "weights", "sources", "median ms", "fastest", "vs first");
+    println!(
+        "adapter: {}; weights: {}; interleaved: {rounds} rounds of one frame per combination, after 2 warm-up frames each",
+        gpu.describe(),
+        path.display()
+    );
+    println!(
+        "ms: a frame from host slices to host slices (the `total` of bench); vs first: median over rounds of the ratio to the first combination in the same round"
+    );
+    println!(
+        "{:>10} {:>9} {:>12} {:>7} {:>7} {:>10} {:>10} {:>9}",
+        "size", "precision", "tile", "weights", "sources", "median ms", "fastest", "vs first"
+    );
     for &(w, h) in sizes {
         let s = format!("{w}x{h}");
         let (wave, one) = bench_buffers(w, h);
-        let frame = rae_core::FrameInputs { color: &wave, albedo: Some(&wave), normal: Some(&wave), depth: Some(&one), roughness: Some(&one) };
+        let frame =
+            rae_core::FrameInputs { color: &wave, albedo: Some(&wave), normal: Some(&wave), depth: Some(&one), roughness: Some(&one) };
         let mut out = vec![0.0; wave.len()];
         // Build (and warm up) every combination before timing any.
         let mut runs = Vec::new();
@@ -456,11 +512,35 @@ fn bench_interleaved(path: &Path, sizes: &[(u32, u32)], rounds: usize, sweep: &S
 fn resident_frames(gpu: &Gpu, d: &mut Denoiser, frame: &rae_core::FrameInputs, frames: usize) -> Result<(f64, f64)> {
     use wgpu::util::DeviceExt;
     let dev = &gpu.device;
-    let storage = |label, data: &[f32]| dev.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some(label), contents: bytemuck::cast_slice(data), usage: wgpu::BufferUsages::STORAGE });
+    let storage = |label, data: &[f32]| {
+        dev.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(label),
+            contents: bytemuck::cast_slice(data),
+            usage: wgpu::BufferUsages::STORAGE,
+        })
+    };
     let buf = |data: Option<&[f32]>, label| data.map(|v| storage(label, v));
-    let (color, albedo, normal, depth, roughness) = (storage("color", frame.color), buf(frame.albedo, "albedo"), buf(frame.normal, "normal"), buf(frame.depth, "depth"), buf(frame.roughness, "roughness"));
-    let output = dev.create_buffer(&wgpu::BufferDescriptor { label: Some("output"), size: (frame.color.len() * 4) as u64, usage: wgpu::BufferUsages::STORAGE, mapped_at_creation: false });
-    let io = d.bind_io(&GpuFrameIo { color: &color, albedo: albedo.as_ref(), normal: normal.as_ref(), depth: depth.as_ref(), roughness: roughness.as_ref(), output: &output })?;
+    let (color, albedo, normal, depth, roughness) = (
+        storage("color", frame.color),
+        buf(frame.albedo, "albedo"),
+        buf(frame.normal, "normal"),
+        buf(frame.depth, "depth"),
+        buf(frame.roughness, "roughness"),
+    );
+    let output = dev.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("output"),
+        size: (frame.color.len() * 4) as u64,
+        usage: wgpu::BufferUsages::STORAGE,
+        mapped_at_creation: false,
+    });
+    let io = d.bind_io(&GpuFrameIo {
+        color: &color,
+        albedo: albedo.as_ref(),
+        normal: normal.as_ref(),
+        depth: depth.as_ref(),
+        roughness: roughness.as_ref(),
+        output: &output,
+    })?;
     let total = frames + 2;
     let count = 2 * total as u32;
     let queries = dev.create_query_set(&wgpu::QuerySetDescriptor { label: Some("frames"), ty: wgpu::QueryType::Timestamp, count });
@@ -503,13 +583,25 @@ fn stage_table(d: &mut Denoiser, frame: &rae_core::FrameInputs, out: &mut [f32],
         let source = k.checked_sub(1).and_then(|i| sources.get(i)).map_or("", |s| s.name());
         // The second-fastest finalist of tuning, and how much slower it was there.
         let next = match k.checked_sub(1).and_then(|i| tuning.get(i)).map(|f| f.as_slice()) {
-            Some([first, second, ..]) if first.ns > 0.0 => format!("{} {} +{:.1}%", second.tile, second.sources.name(), 100.0 * (second.ns / first.ns - 1.0)),
+            Some([first, second, ..]) if first.ns > 0.0 => {
+                format!("{} {} +{:.1}%", second.tile, second.sources.name(), 100.0 * (second.ns / first.ns - 1.0))
+            }
             _ => String::new(),
         };
         rows.push((name.clone(), ms, shape, flop, tile, source, next));
     }
     let total: f64 = rows.iter().map(|r| r.1).sum();
-    println!("    {:<16} {:<16} {:>10} {:>7} {:>9} {:>7} {:>9}  {}", "stage", "level cin->cout", "tile", "sources", "GPU ms", "share", "GFLOP/s", if tuning.is_empty() { "" } else { "tuning's runner-up" });
+    println!(
+        "    {:<16} {:<16} {:>10} {:>7} {:>9} {:>7} {:>9}  {}",
+        "stage",
+        "level cin->cout",
+        "tile",
+        "sources",
+        "GPU ms",
+        "share",
+        "GFLOP/s",
+        if tuning.is_empty() { "" } else { "tuning's runner-up" }
+    );
     for (name, ms, shape, flop, tile, source, next) in &rows {
         let rate = if *flop > 0.0 { format!("{:.2}", flop / (ms * 1e-3) / 1e9) } else { String::new() };
         println!("    {name:<16} {shape:<16} {tile:>10} {source:>7} {ms:>9.2} {:>6.1}% {rate:>9}  {next}", 100.0 * ms / total);
@@ -559,7 +651,10 @@ fn devices() -> Result<()> {
         let i = a.get_info();
         let f16 = a.features().contains(wgpu::Features::SHADER_F16);
         let ts = a.features().contains(wgpu::Features::TIMESTAMP_QUERY);
-        println!("{} | {:?} | {:?} | driver {} {} | f16 {f16} | timestamps {ts}", i.name, i.backend, i.device_type, i.driver, i.driver_info);
+        println!(
+            "{} | {:?} | {:?} | driver {} {} | f16 {f16} | timestamps {ts}",
+            i.name, i.backend, i.device_type, i.driver, i.driver_info
+        );
         // Matrix units the adapter exposes to shaders (wgpu's experimental cooperative matrices).
         for m in a.cooperative_matrix_properties() {
             println!("    cooperative matrix {}x{}x{} {:?} -> {:?}", m.m_size, m.n_size, m.k_size, m.ab_type, m.cr_type);
@@ -582,7 +677,8 @@ fn verify(files: &[PathBuf], tiles: TileChoice) -> Result<()> {
         let wpath = path.with_file_name(&golden.weights);
         let weights = Weights::load(&wpath).with_context(|| format!("weights of {}", path.display()))?;
         let options = Options { tiles, ..Default::default() };
-        let mut d = Denoiser::with_options(&gpu.device, &gpu.queue, &weights, golden.width, golden.height, options).with_context(|| format!("denoiser for {}", path.display()))?;
+        let mut d = Denoiser::with_options(&gpu.device, &gpu.queue, &weights, golden.width, golden.height, options)
+            .with_context(|| format!("denoiser for {}", path.display()))?;
         let name = path.file_name().unwrap_or_default().to_string_lossy();
         for i in 0..golden.frames.len() {
             let t = Instant::now();
@@ -605,10 +701,38 @@ fn main() -> Result<()> {
     // SAFETY: first thing in main, before any thread (clap's, wgpu's, rayon's) exists.
     unsafe { rae_core::gpu::prefer_wide_cpu_vectors() };
     match Cli::parse().command {
-        Command::Denoise { input, output, weights, models, frames, reset_at, png, half, allow_nonfinite, precision, csv, tile, no_compile_helper } => {
+        Command::Denoise {
+            input,
+            output,
+            weights,
+            models,
+            frames,
+            reset_at,
+            png,
+            half,
+            allow_nonfinite,
+            precision,
+            csv,
+            tile,
+            no_compile_helper,
+        } => {
             let frames = frames.as_deref().map(denoise::parse_range).transpose()?;
             let tiles = parse_tile(&tile)?;
-            denoise::run(&denoise::Options { input, output, weights, models, frames, reset_at, png, half, allow_nonfinite, precision: precision.into(), csv, tiles, no_helper: no_compile_helper })
+            denoise::run(&denoise::Options {
+                input,
+                output,
+                weights,
+                models,
+                frames,
+                reset_at,
+                png,
+                half,
+                allow_nonfinite,
+                precision: precision.into(),
+                csv,
+                tiles,
+                no_helper: no_compile_helper,
+            })
         }
         Command::Info { file, size } => info(&file, &size),
         Command::Devices => devices(),
@@ -620,7 +744,11 @@ fn main() -> Result<()> {
                 sources: sources.iter().map(|s| parse_sources(s)).collect::<Result<_>>()?,
                 tiles: tile.iter().map(|t| parse_tile(t)).collect::<Result<_>>()?,
             };
-            if interleave { bench_interleaved(&weights, &sizes, frames, &sweep) } else { bench(&weights, &sizes, frames, layers, &sweep, peak_gflops) }
+            if interleave {
+                bench_interleaved(&weights, &sizes, frames, &sweep)
+            } else {
+                bench(&weights, &sizes, frames, layers, &sweep, peak_gflops)
+            }
         }
     }
 }
@@ -633,7 +761,10 @@ mod tests {
     fn tuned_among_a_list_parses_and_names_itself() {
         let choice = parse_tile("tuned:16x2+lanes8x2w2+mma32x3+mma64x3p").unwrap();
         let TileChoice::TunedAmong(tiles) = choice else { panic!("{choice:?}") };
-        assert_eq!(tiles, [Tile::new(16, 2).unwrap(), Tile::lanes(8, 2, 2).unwrap(), Tile::mma_split(32).unwrap(), Tile::mma_split_prefetch(64).unwrap()]);
+        assert_eq!(
+            tiles,
+            [Tile::new(16, 2).unwrap(), Tile::lanes(8, 2, 2).unwrap(), Tile::mma_split(32).unwrap(), Tile::mma_split_prefetch(64).unwrap()]
+        );
         assert_eq!(tile_name(choice), "tuned:16x2+lanes8x2w2+mma32x3+mma64x3p");
         assert_eq!(parse_tile(&tile_name(choice)).unwrap(), choice);
         let with = parse_tile("tuned-mma+mma32x3p+mma64x3p").unwrap();

@@ -106,7 +106,8 @@ fn denoise(input: &Path, extra: &[&str]) -> (bool, String, String) {
 }
 
 fn listing(dir: &Path) -> Vec<String> {
-    let mut v: Vec<String> = std::fs::read_dir(dir).map(|r| r.map(|e| e.unwrap().file_name().to_string_lossy().into()).collect()).unwrap_or_default();
+    let mut v: Vec<String> =
+        std::fs::read_dir(dir).map(|r| r.map(|e| e.unwrap().file_name().to_string_lossy().into()).collect()).unwrap_or_default();
     v.sort();
     v
 }
@@ -127,7 +128,10 @@ fn per_buffer_sequence_is_denoised_with_error_report() {
     assert!(ok, "{out}{err}");
     assert!(out.contains("per-buffer files") && out.contains("relMSE") && out.contains("temporal error"), "{out}");
     let written = listing(&tmp.path().join("seq-denoised"));
-    assert_eq!(written, ["denoised_0000.exr", "denoised_0000.png", "denoised_0001.exr", "denoised_0001.png", "denoised_0002.exr", "denoised_0002.png"]);
+    assert_eq!(
+        written,
+        ["denoised_0000.exr", "denoised_0000.png", "denoised_0001.exr", "denoised_0001.png", "denoised_0002.exr", "denoised_0002.png"]
+    );
     assert_eq!(listing(&seq), before, "inputs untouched");
     assert!(pixels(&tmp.path().join("seq-denoised/denoised_0001.exr")).iter().flatten().all(|v| v.is_finite() && *v >= 0.0));
     // A second run goes to a new folder beside the input; --csv writes one row per frame whose
@@ -171,7 +175,15 @@ fn a_cold_first_frame_gets_a_compile_helper_and_the_same_frames() {
     per_buffer_sequence(&seq, 2);
     let cache = tmp.path().join("cache");
     let run = |out: &str, extra: &[&str]| {
-        let o = rae().env("MESA_SHADER_CACHE_DIR", &cache).arg("denoise").arg(&seq).args(["--weights", &fixture("weights_full.safetensors"), "-o"]).arg(tmp.path().join(out)).args(extra).output().unwrap();
+        let o = rae()
+            .env("MESA_SHADER_CACHE_DIR", &cache)
+            .arg("denoise")
+            .arg(&seq)
+            .args(["--weights", &fixture("weights_full.safetensors"), "-o"])
+            .arg(tmp.path().join(out))
+            .args(extra)
+            .output()
+            .unwrap();
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         String::from_utf8_lossy(&o.stderr).into_owned()
     };
@@ -225,7 +237,12 @@ fn blender_multilayer_exr_is_read_and_a_missing_buffer_is_named() {
     let (ok, _, err) = denoise(&seq, &[]);
     assert!(!ok && err.contains("`roughness`"), "{err}");
     // The paper-variant fixture uses color, albedo and normal.
-    let out = rae().arg("denoise").arg(&seq).args(["--weights", &fixture("weights_paper_tiny.safetensors"), "--no-compile-helper"]).output().unwrap();
+    let out = rae()
+        .arg("denoise")
+        .arg(&seq)
+        .args(["--weights", &fixture("weights_paper_tiny.safetensors"), "--no-compile-helper"])
+        .output()
+        .unwrap();
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(out.status.success(), "{text}{}", String::from_utf8_lossy(&out.stderr));
     assert!(text.contains("multi-layer EXR"), "{text}");
@@ -310,7 +327,12 @@ fn unknown_layer_names_are_an_error() {
     let n = W * H;
     let ch: Vec<_> = ["R", "G", "B"]
         .iter()
-        .flat_map(|c| [AnyChannel::new(format!("Combined.{c}").as_str(), FlatSamples::F32(vec![0.5; n])), AnyChannel::new(format!("Sparkle.{c}").as_str(), FlatSamples::F32(vec![0.5; n]))])
+        .flat_map(|c| {
+            [
+                AnyChannel::new(format!("Combined.{c}").as_str(), FlatSamples::F32(vec![0.5; n])),
+                AnyChannel::new(format!("Sparkle.{c}").as_str(), FlatSamples::F32(vec![0.5; n])),
+            ]
+        })
         .collect();
     let layer = Layer::new((W, H), LayerAttributes::default(), Encoding::FAST_LOSSLESS, AnyChannels::sort(ch.into_iter().collect()));
     Image::from_layer(layer).write().to_file(seq.join("frame_0000.exr")).unwrap();
@@ -360,7 +382,12 @@ fn weights_that_do_not_fit_are_an_error() {
     let out = rae().arg("denoise").arg(&seq).args(["--weights", bad.to_str().unwrap()]).output().unwrap();
     assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("bad.safetensors"));
     // The color-only fixture fits.
-    let out = rae().arg("denoise").arg(&seq).args(["--weights", &fixture("weights_color_tiny.safetensors"), "--no-compile-helper"]).output().unwrap();
+    let out = rae()
+        .arg("denoise")
+        .arg(&seq)
+        .args(["--weights", &fixture("weights_color_tiny.safetensors"), "--no-compile-helper"])
+        .output()
+        .unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
 }
 
@@ -397,7 +424,17 @@ fn the_shipped_model_that_fits_is_chosen() {
 
 #[test]
 fn bench_refuses_a_tile_the_kernel_does_not_have() {
-    for (tile, shown) in [("3x1", "3x1"), ("8x1w3", "8x1w3"), ("8x1g128", "8x1g128"), ("big", "big"), ("lanes16x4w2", "lanes16x4w2"), ("mma24", "mma24"), ("mma", "mma"), ("mma80x3", "mma80x3"), ("mma32x2", "mma32x2")] {
+    for (tile, shown) in [
+        ("3x1", "3x1"),
+        ("8x1w3", "8x1w3"),
+        ("8x1g128", "8x1g128"),
+        ("big", "big"),
+        ("lanes16x4w2", "lanes16x4w2"),
+        ("mma24", "mma24"),
+        ("mma", "mma"),
+        ("mma80x3", "mma80x3"),
+        ("mma32x2", "mma32x2"),
+    ] {
         let out = rae().args(["bench", &fixture("weights_full.safetensors"), "--sizes", "32x32", "--tile", tile]).output().unwrap();
         assert!(!out.status.success(), "--tile {tile} must fail");
         let err = String::from_utf8(out.stderr).unwrap();
@@ -427,14 +464,28 @@ fn bench_times_sampled_and_storage_sources() {
     // The sources column says what each denoiser was built with; `auto` is storage textures on
     // lavapipe (sampled on GPUs). A small tile: each source kind is its own compile.
     let out = rae()
-        .args(["bench", &fixture("weights_full.safetensors"), "--sizes", "32x32", "--frames", "1", "--precision", "f32", "--tile", "2x1", "--sources", "sampled,storage,auto"])
+        .args([
+            "bench",
+            &fixture("weights_full.safetensors"),
+            "--sizes",
+            "32x32",
+            "--frames",
+            "1",
+            "--precision",
+            "f32",
+            "--tile",
+            "2x1",
+            "--sources",
+            "sampled,storage,auto",
+        ])
         .output()
         .unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let text = String::from_utf8(out.stdout).unwrap();
     let header: Vec<&str> = text.lines().find(|l| l.trim_start().starts_with("size ")).expect("a header").split_whitespace().collect();
     let col = header.iter().position(|&h| h == "sources").expect("a sources column");
-    let rows: Vec<Vec<&str>> = text.lines().map(|l| l.split_whitespace().collect::<Vec<_>>()).filter(|f| f.first() == Some(&"32x32")).collect();
+    let rows: Vec<Vec<&str>> =
+        text.lines().map(|l| l.split_whitespace().collect::<Vec<_>>()).filter(|f| f.first() == Some(&"32x32")).collect();
     assert_eq!(rows.iter().map(|f| f[col]).collect::<Vec<_>>(), ["sampled", "storage", "storage"], "{text}");
     let bad = rae().args(["bench", &fixture("weights_full.safetensors"), "--sizes", "32x32", "--sources", "buffer"]).output().unwrap();
     assert!(!bad.status.success());
@@ -448,14 +499,28 @@ fn bench_reports_each_combinations_error_and_skips_what_it_cannot_run() {
     // by far less; with uniform weights they cannot run, which is a row saying so, not a
     // failed run.
     let out = rae()
-        .args(["bench", &fixture("weights_full.safetensors"), "--sizes", "32x32", "--frames", "1", "--precision", "f32", "--tile", "auto,mma16,mma16x3", "--weights-memory", "storage,uniform"])
+        .args([
+            "bench",
+            &fixture("weights_full.safetensors"),
+            "--sizes",
+            "32x32",
+            "--frames",
+            "1",
+            "--precision",
+            "f32",
+            "--tile",
+            "auto,mma16,mma16x3",
+            "--weights-memory",
+            "storage,uniform",
+        ])
         .output()
         .unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let text = String::from_utf8(out.stdout).unwrap();
     let header = text.lines().find(|l| l.trim_start().starts_with("size ")).expect("a header");
     assert!(header.ends_with(" err"), "err is the last column: {header}");
-    let rows: Vec<Vec<&str>> = text.lines().map(|l| l.split_whitespace().collect::<Vec<_>>()).filter(|f| f.first() == Some(&"32x32")).collect();
+    let rows: Vec<Vec<&str>> =
+        text.lines().map(|l| l.split_whitespace().collect::<Vec<_>>()).filter(|f| f.first() == Some(&"32x32")).collect();
     assert_eq!(rows.len(), 6, "{text}");
     let value = |row: &[&str]| -> f64 { row.last().unwrap().parse().unwrap_or_else(|_| panic!("err of {row:?}")) };
     assert_eq!((rows[0][2], rows[0][3], value(&rows[0])), ("auto", "storage", 0.0), "{text}");
@@ -474,12 +539,25 @@ fn bench_interleave_prints_a_row_per_combination_against_the_first() {
     // Three combinations timed round-robin, the first its own reference (the CPU tile under
     // two names: lavapipe compiles each distinct pipeline for seconds).
     let out = rae()
-        .args(["bench", &fixture("weights_full.safetensors"), "--sizes", "32x32", "--frames", "2", "--precision", "f32", "--tile", "16x4,auto,16x4", "--interleave"])
+        .args([
+            "bench",
+            &fixture("weights_full.safetensors"),
+            "--sizes",
+            "32x32",
+            "--frames",
+            "2",
+            "--precision",
+            "f32",
+            "--tile",
+            "16x4,auto,16x4",
+            "--interleave",
+        ])
         .output()
         .unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let text = String::from_utf8(out.stdout).unwrap();
-    let rows: Vec<Vec<&str>> = text.lines().map(|l| l.split_whitespace().collect::<Vec<_>>()).filter(|f| f.first() == Some(&"32x32")).collect();
+    let rows: Vec<Vec<&str>> =
+        text.lines().map(|l| l.split_whitespace().collect::<Vec<_>>()).filter(|f| f.first() == Some(&"32x32")).collect();
     assert_eq!(rows.iter().map(|f| f[2]).collect::<Vec<_>>(), ["16x4", "auto", "16x4"], "{text}");
     assert_eq!(rows[0][7], "1.000", "{text}");
     for f in &rows {

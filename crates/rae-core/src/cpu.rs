@@ -35,7 +35,11 @@ pub fn max_pool2(x: &Chw) -> Chw {
     for c in 0..x.c {
         for y in 0..o.h {
             for xx in 0..o.w {
-                let m = x.at(c, 2 * y, 2 * xx).max(x.at(c, 2 * y, 2 * xx + 1)).max(x.at(c, 2 * y + 1, 2 * xx)).max(x.at(c, 2 * y + 1, 2 * xx + 1));
+                let m = x.at(c, 2 * y, 2 * xx).max(x.at(c, 2 * y, 2 * xx + 1)).max(x.at(c, 2 * y + 1, 2 * xx)).max(x.at(
+                    c,
+                    2 * y + 1,
+                    2 * xx + 1,
+                ));
                 o.data[(c * o.h + y) * o.w + xx] = m;
             }
         }

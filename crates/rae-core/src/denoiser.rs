@@ -36,7 +36,10 @@ use std::time::Instant;
 use crate::error::{Error, Result};
 use crate::frame::{FrameInputs, FrameTimings};
 use crate::graph::{Graph, Read, Value};
-use crate::kernels::{ConvPlan, ConvSpec, Kernels, MMA_WORKGROUP_BYTES, Method, OutputParams, PrepLayout, PrepParams, Precision, SourceAccess, Tile, WORKGROUP, WeightMemory, blocks};
+use crate::kernels::{
+    ConvPlan, ConvSpec, Kernels, MMA_WORKGROUP_BYTES, Method, OutputParams, Precision, PrepLayout, PrepParams, SourceAccess, Tile,
+    WORKGROUP, WeightMemory, blocks,
+};
 use crate::model::{Arch, InputBuffer, Transfer};
 use crate::weights::Weights;
 
@@ -257,7 +260,14 @@ pub struct Denoiser {
     reset_pending: bool,
 }
 
-fn texture(device: &wgpu::Device, label: &str, w: u32, h: u32, layers: u32, format: wgpu::TextureFormat) -> (wgpu::Texture, wgpu::TextureView) {
+fn texture(
+    device: &wgpu::Device,
+    label: &str,
+    w: u32,
+    h: u32,
+    layers: u32,
+    format: wgpu::TextureFormat,
+) -> (wgpu::Texture, wgpu::TextureView) {
     let t = device.create_texture(&wgpu::TextureDescriptor {
         label: Some(label),
         size: wgpu::Extent3d { width: w, height: h, depth_or_array_layers: layers },
@@ -268,10 +278,7 @@ fn texture(device: &wgpu::Device, label: &str, w: u32, h: u32, layers: u32, form
         usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC,
         view_formats: &[],
     });
-    let v = t.create_view(&wgpu::TextureViewDescriptor {
-        dimension: Some(wgpu::TextureViewDimension::D2Array),
-        ..Default::default()
-    });
+    let v = t.create_view(&wgpu::TextureViewDescriptor { dimension: Some(wgpu::TextureViewDimension::D2Array), ..Default::default() });
     (t, v)
 }
 
@@ -283,12 +290,26 @@ impl Denoiser {
     }
 
     /// [`Self::new`] with activations and hidden state stored in `precision`.
-    pub fn with_precision(device: &wgpu::Device, queue: &wgpu::Queue, weights: &Weights, width: u32, height: u32, precision: Precision) -> Result<Self> {
+    pub fn with_precision(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        weights: &Weights,
+        width: u32,
+        height: u32,
+        precision: Precision,
+    ) -> Result<Self> {
         Self::with_options(device, queue, weights, width, height, Options { precision, ..Default::default() })
     }
 
     /// [`Self::new`] with every choice spelled out: storage precision and the conv tile.
-    pub fn with_options(device: &wgpu::Device, queue: &wgpu::Queue, weights: &Weights, width: u32, height: u32, options: Options) -> Result<Self> {
+    pub fn with_options(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        weights: &Weights,
+        width: u32,
+        height: u32,
+        options: Options,
+    ) -> Result<Self> {
         let Options { precision, tiles, weights: memory, sources } = options;
         let device_type = device.adapter_info().device_type;
         // Mma tiles read storage weights: a fixed one picks them where the caller left it open.
@@ -383,7 +404,8 @@ impl Denoiser {
         // Tuning times both source kinds unless the caller fixed one.
         let both = [default_sources, if default_sources == SourceAccess::Sampled { SourceAccess::Storage } else { SourceAccess::Sampled }];
         let accesses = if sources.is_some() { &both[..1] } else { &both[..] };
-        let tune_among = |kernels: &mut Kernels, candidates: &[Tile]| tune(device, queue, kernels, &specs, &node_views, candidates, accesses);
+        let tune_among =
+            |kernels: &mut Kernels, candidates: &[Tile]| tune(device, queue, kernels, &specs, &node_views, candidates, accesses);
         // One tile and kind for every conv, or each conv's fastest tuning finalist.
         let fixed = |t: Tile| (vec![t], vec![default_sources], Vec::new());
         let picks = |finalists: Vec<Vec<Finalist>>| {
@@ -400,7 +422,10 @@ impl Denoiser {
                 if let TileChoice::TunedMmaWith(extra) = tiles {
                     candidates.extend(extra);
                 }
-                if kernels.matrix_units() && memory == WeightMemory::Storage && device.limits().max_compute_workgroup_storage_size >= MMA_WORKGROUP_BYTES {
+                if kernels.matrix_units()
+                    && memory == WeightMemory::Storage
+                    && device.limits().max_compute_workgroup_storage_size >= MMA_WORKGROUP_BYTES
+                {
                     match precision {
                         Precision::F32 => candidates.extend(MMA_SPLIT_TILES),
                         Precision::F16 => candidates.extend(MMA_TILES),
@@ -408,7 +433,9 @@ impl Denoiser {
                 }
                 picks(tune_among(&mut kernels, &candidates)?)
             }
-            TileChoice::Auto | TileChoice::Tuned | TileChoice::TunedAmong(_) | TileChoice::TunedMma | TileChoice::TunedMmaWith(_) => fixed(Tile::default()),
+            TileChoice::Auto | TileChoice::Tuned | TileChoice::TunedAmong(_) | TileChoice::TunedMma | TileChoice::TunedMmaWith(_) => {
+                fixed(Tile::default())
+            }
         };
         let convs = ConvPlan::with_sources(device, &mut kernels, &specs, &tiles, &conv_sources)?;
         debug_assert_eq!(bytes, activation_bytes(&graph, pwidth, pheight, precision));
@@ -436,7 +463,10 @@ impl Denoiser {
                         label: Some("pool"),
                         layout: &kernels.pool_layout,
                         entries: &[
-                            wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(view(Value::HiddenNew(p.hidden), parity)) },
+                            wgpu::BindGroupEntry {
+                                binding: 0,
+                                resource: wgpu::BindingResource::TextureView(view(Value::HiddenNew(p.hidden), parity)),
+                            },
                             wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&pooled_views[i]) },
                         ],
                     })
@@ -455,14 +485,25 @@ impl Denoiser {
             Transfer::None => 0,
             Transfer::Log1p => 1,
         };
-        let prep_layout = PrepLayout { offsets, layers: blocks(graph.in_channels), demodulate: arch.demodulate, log1p: matches!(arch.transfer, Transfer::Log1p), albedo_eps: arch.albedo_eps };
+        let prep_layout = PrepLayout {
+            offsets,
+            layers: blocks(graph.in_channels),
+            demodulate: arch.demodulate,
+            log1p: matches!(arch.transfer, Transfer::Log1p),
+            albedo_eps: arch.albedo_eps,
+        };
         let prep_pipeline = kernels.prep_pipeline(device, &prep_layout);
         let prep = PrepParams { width, height, pwidth, pheight };
         let out = OutputParams { width, height, demodulate: arch.demodulate as u32, transfer, albedo_eps: arch.albedo_eps, _pad: [0; 3] };
         let prep_params = create_init(device, "prep params", bytemuck::bytes_of(&prep), wgpu::BufferUsages::UNIFORM);
         let output_params = create_init(device, "output params", bytemuck::bytes_of(&out), wgpu::BufferUsages::UNIFORM);
         let dummy = create_init(device, "absent buffer", &[0u8; 16], wgpu::BufferUsages::STORAGE);
-        let stats = create_init(device, "frame stats", &[0u8; 16], wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC);
+        let stats = create_init(
+            device,
+            "frame stats",
+            &[0u8; 16],
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
+        );
 
         Ok(Self {
             id: NEXT_ID.fetch_add(1, Ordering::Relaxed),
@@ -544,10 +585,8 @@ impl Denoiser {
             Ok(())
         };
         for &b in &needed {
-            let buf = io.get(b).ok_or_else(|| Error::MissingInput {
-                buffer: b.name(),
-                needed: needed.iter().map(|b| b.name()).collect(),
-            })?;
+            let buf =
+                io.get(b).ok_or_else(|| Error::MissingInput { buffer: b.name(), needed: needed.iter().map(|b| b.name()).collect() })?;
             check(b.name(), buf, b.channels() as u64)?;
         }
         check("output", io.output, 3)?;
@@ -564,12 +603,10 @@ impl Denoiser {
                 wgpu::BindGroupEntry { binding: 5, resource: pick(InputBuffer::Roughness).as_entire_binding() },
                 wgpu::BindGroupEntry {
                     binding: 6,
-                    resource: wgpu::BindingResource::TextureView(&self.input_texture.create_view(
-                        &wgpu::TextureViewDescriptor {
-                            dimension: Some(wgpu::TextureViewDimension::D2Array),
-                            ..Default::default()
-                        },
-                    )),
+                    resource: wgpu::BindingResource::TextureView(&self.input_texture.create_view(&wgpu::TextureViewDescriptor {
+                        dimension: Some(wgpu::TextureViewDimension::D2Array),
+                        ..Default::default()
+                    })),
                 },
                 wgpu::BindGroupEntry { binding: 7, resource: self.stats.as_entire_binding() },
             ],
@@ -604,8 +641,7 @@ impl Denoiser {
         let (reset, parity) = (self.reset_pending, self.parity);
         encoder.clear_buffer(&self.stats, 0, None);
         {
-            let mut pass =
-                encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("rae frame"), timestamp_writes: None });
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("rae frame"), timestamp_writes: None });
             let stamp = |pass: &mut wgpu::ComputePass, i: u32| {
                 if let Some(q) = queries {
                     pass.write_timestamp(q, i);
@@ -688,7 +724,14 @@ impl Denoiser {
         frame.validate(&needed, self.width, self.height)?;
         let n = self.width as usize * self.height as usize * 3;
         if out.len() != n {
-            return Err(Error::InputSize { buffer: "output", found: out.len(), expected: n, width: self.width, height: self.height, channels: 3 });
+            return Err(Error::InputSize {
+                buffer: "output",
+                found: out.len(),
+                expected: n,
+                width: self.width,
+                height: self.height,
+                channels: 3,
+            });
         }
         if self.host.is_none() {
             self.host = Some(self.make_host_io()?);
@@ -754,8 +797,16 @@ impl Denoiser {
         }
         if self.profiler.is_none() {
             let count = self.graph.nodes.len() as u32 + 3;
-            let queries = self.device.create_query_set(&wgpu::QuerySetDescriptor { label: Some("stages"), ty: wgpu::QueryType::Timestamp, count });
-            let buffer = |usage| self.device.create_buffer(&wgpu::BufferDescriptor { label: Some("timestamps"), size: count as u64 * 8, usage, mapped_at_creation: false });
+            let queries =
+                self.device.create_query_set(&wgpu::QuerySetDescriptor { label: Some("stages"), ty: wgpu::QueryType::Timestamp, count });
+            let buffer = |usage| {
+                self.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("timestamps"),
+                    size: count as u64 * 8,
+                    usage,
+                    mapped_at_creation: false,
+                })
+            };
             let resolved = buffer(wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC);
             let readback = buffer(wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST);
             self.profiler = Some(Profiler { queries, resolved, readback, count });
@@ -779,7 +830,8 @@ impl Denoiser {
         let ticks: Vec<u64> = bytemuck::pod_collect_to_vec(&ticks);
         let period = self.queue.get_timestamp_period() as f64;
         let pooled = |i: usize| self.graph.pools.iter().any(|p| p.after == i);
-        let conv_names = self.graph.nodes.iter().enumerate().map(|(i, n)| if pooled(i) { format!("{}+pool", n.name) } else { n.name.clone() });
+        let conv_names =
+            self.graph.nodes.iter().enumerate().map(|(i, n)| if pooled(i) { format!("{}+pool", n.name) } else { n.name.clone() });
         let names = std::iter::once("prep".to_string()).chain(conv_names).chain(std::iter::once("output".to_string()));
         Ok(names.zip(ticks.windows(2)).map(|(n, w)| (n, w[1].saturating_sub(w[0]) as f64 * period * 1e-6)).collect())
     }
@@ -827,16 +879,23 @@ impl Denoiser {
         let all = read_texture(&self.device, &self.queue, &self.input_texture)?;
         let (w, h) = (self.pwidth as usize, self.pheight as usize);
         let c = self.graph.in_channels;
-        Ok((0..c * h * w).map(|i| {
-            let (ch, p) = (i / (h * w), i % (h * w));
-            all[((ch / 4) * h * w + p) * 4 + ch % 4]
-        }).collect())
+        Ok((0..c * h * w)
+            .map(|i| {
+                let (ch, p) = (i / (h * w), i % (h * w));
+                all[((ch / 4) * h * w + p) * 4 + ch % 4]
+            })
+            .collect())
     }
 
     /// The largest prepared (demodulated, transfer-space) color value of the last frame, as
     /// prep recorded it for the output's bound: for checking the prep kernel's reduction.
     pub fn read_color_max(&self) -> Result<f32> {
-        let readback = self.device.create_buffer(&wgpu::BufferDescriptor { label: Some("stats readback"), size: 16, usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST, mapped_at_creation: false });
+        let readback = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("stats readback"),
+            size: 16,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
         let mut encoder = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("read stats") });
         encoder.copy_buffer_to_buffer(&self.stats, 0, &readback, 0, 16);
         self.queue.submit(Some(encoder.finish()));
@@ -992,7 +1051,15 @@ const TUNE_SHORTLIST: usize = 2;
 /// times in one pass, with a timestamp after each conv; a conv's time is the median of its
 /// rounds. The activations hold whatever they hold (zeros on a fresh denoiser): the kernel's
 /// time does not depend on values (no data-dependent branches).
-fn tune(device: &wgpu::Device, queue: &wgpu::Queue, kernels: &mut Kernels, specs: &[ConvSpec], views: &[[wgpu::TextureView; 3]], candidates: &[Tile], accesses: &[SourceAccess]) -> Result<Vec<Vec<Finalist>>> {
+fn tune(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    kernels: &mut Kernels,
+    specs: &[ConvSpec],
+    views: &[[wgpu::TextureView; 3]],
+    candidates: &[Tile],
+    accesses: &[SourceAccess],
+) -> Result<Vec<Vec<Finalist>>> {
     let n = specs.len();
     if candidates.len() == 1 && accesses.len() == 1 {
         return Ok(vec![vec![Finalist { tile: candidates[0], sources: accesses[0], ns: f64::NAN }]; n]);
@@ -1025,7 +1092,8 @@ fn tune(device: &wgpu::Device, queue: &wgpu::Queue, kernels: &mut Kernels, specs
     // Round 2: the finalists with every access, side by side, forwards then backwards.
     let entries: Vec<(Tile, SourceAccess)> = accesses.iter().flat_map(|&a| finalists.iter().map(move |&t| (t, a))).collect();
     let plans: Vec<(ConvPlan, Vec<wgpu::BindGroup>)> = entries.iter().map(|&(t, a)| build(kernels, t, a)).collect::<Result<_>>()?;
-    let mut finals: Vec<Vec<Finalist>> = vec![entries.iter().map(|&(tile, sources)| Finalist { tile, sources, ns: f64::INFINITY }).collect(); n];
+    let mut finals: Vec<Vec<Finalist>> =
+        vec![entries.iter().map(|&(tile, sources)| Finalist { tile, sources, ns: f64::INFINITY }).collect(); n];
     let order: Vec<usize> = (0..plans.len()).chain((0..plans.len()).rev()).collect();
     for k in order {
         let (plan, groups) = &plans[k];
@@ -1041,7 +1109,13 @@ fn tune(device: &wgpu::Device, queue: &wgpu::Queue, kernels: &mut Kernels, specs
 
 /// One timing of a candidate plan for [`tune`]: the median time of each conv over
 /// [`TUNE_ROUNDS`] rounds after an untimed one, in nanoseconds.
-fn time_plan(device: &wgpu::Device, queue: &wgpu::Queue, queries: &wgpu::QuerySet, plan: &ConvPlan, groups: &[wgpu::BindGroup]) -> Result<Vec<f64>> {
+fn time_plan(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    queries: &wgpu::QuerySet,
+    plan: &ConvPlan,
+    groups: &[wgpu::BindGroup],
+) -> Result<Vec<f64>> {
     let n = groups.len();
     let rounds = TUNE_ROUNDS + 1;
     let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("tile tuning") });
@@ -1062,7 +1136,8 @@ fn time_plan(device: &wgpu::Device, queue: &wgpu::Queue, queries: &wgpu::QuerySe
     Ok((0..n)
         .map(|i| {
             // Round 0 is the untimed one.
-            let mut t: Vec<f64> = (1..rounds).map(|r| ticks[r * (n + 1) + i + 1].saturating_sub(ticks[r * (n + 1) + i]) as f64 * period).collect();
+            let mut t: Vec<f64> =
+                (1..rounds).map(|r| ticks[r * (n + 1) + i + 1].saturating_sub(ticks[r * (n + 1) + i]) as f64 * period).collect();
             t.sort_by(f64::total_cmp);
             t[t.len() / 2]
         })
@@ -1075,7 +1150,8 @@ fn time_plan(device: &wgpu::Device, queue: &wgpu::Queue, queries: &wgpu::QuerySe
 /// persistent ones) and waits for the GPU.
 pub fn read_timestamps(device: &wgpu::Device, queue: &wgpu::Queue, queries: &wgpu::QuerySet, count: u32) -> Result<Vec<u64>> {
     let size = count as u64 * 8;
-    let buffer = |usage| device.create_buffer(&wgpu::BufferDescriptor { label: Some("timestamps"), size, usage, mapped_at_creation: false });
+    let buffer =
+        |usage| device.create_buffer(&wgpu::BufferDescriptor { label: Some("timestamps"), size, usage, mapped_at_creation: false });
     let resolved = buffer(wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC);
     let readback = buffer(wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST);
     let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("timestamps") });

@@ -66,20 +66,11 @@ impl<'a> FrameInputs<'a> {
     /// Check that every buffer in `needed` is present with `width * height * channels` values.
     pub fn validate(&self, needed: &[InputBuffer], width: u32, height: u32) -> Result<()> {
         for &b in needed {
-            let data = self.get(b).ok_or_else(|| Error::MissingInput {
-                buffer: b.name(),
-                needed: needed.iter().map(|b| b.name()).collect(),
-            })?;
+            let data =
+                self.get(b).ok_or_else(|| Error::MissingInput { buffer: b.name(), needed: needed.iter().map(|b| b.name()).collect() })?;
             let expected = width as usize * height as usize * b.channels();
             if data.len() != expected {
-                return Err(Error::InputSize {
-                    buffer: b.name(),
-                    found: data.len(),
-                    expected,
-                    width,
-                    height,
-                    channels: b.channels(),
-                });
+                return Err(Error::InputSize { buffer: b.name(), found: data.len(), expected, width, height, channels: b.channels() });
             }
         }
         Ok(())

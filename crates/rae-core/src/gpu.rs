@@ -73,7 +73,9 @@ pub fn has_matrix_units(adapter: &wgpu::Adapter) -> bool {
         && info.subgroup_min_size == 32
         && info.subgroup_max_size == 32
         && adapter.cooperative_matrix_properties().iter().any(|m| {
-            (m.m_size, m.n_size, m.k_size) == (16, 16, 16) && m.ab_type == wgpu::CooperativeScalarType::F16 && m.cr_type == wgpu::CooperativeScalarType::F32
+            (m.m_size, m.n_size, m.k_size) == (16, 16, 16)
+                && m.ab_type == wgpu::CooperativeScalarType::F16
+                && m.cr_type == wgpu::CooperativeScalarType::F32
         })
 }
 
@@ -106,10 +108,7 @@ impl Gpu {
         let all = adapters();
         let seen = all.iter().map(|a| format!("{} ({:?})", a.get_info().name, a.get_info().backend)).collect::<Vec<_>>();
         let name = wanted.as_ref().map(|w| w.to_lowercase()).unwrap_or_default();
-        let chosen = all
-            .into_iter()
-            .filter(|a| a.get_info().name.to_lowercase().contains(&name))
-            .min_by_key(|a| rank(&a.get_info()));
+        let chosen = all.into_iter().filter(|a| a.get_info().name.to_lowercase().contains(&name)).min_by_key(|a| rank(&a.get_info()));
         let adapter = chosen.ok_or_else(|| Error::NoAdapter {
             wanted: wanted.map(|w| format!(" matching WGPU_ADAPTER_NAME={w}")).unwrap_or_default(),
             seen: seen.join(", "),
@@ -138,7 +137,11 @@ impl Gpu {
             // SAFETY: the one experimental feature asked for is cooperative matrices, and only
             // conv3x3_mma_coop.wgsl uses them (wgpu warns its experimental features may have
             // bugs; the golden tests hold that kernel's output to PyTorch's on such devices).
-            experimental_features: if matrix_units { unsafe { wgpu::ExperimentalFeatures::enabled() } } else { wgpu::ExperimentalFeatures::disabled() },
+            experimental_features: if matrix_units {
+                unsafe { wgpu::ExperimentalFeatures::enabled() }
+            } else {
+                wgpu::ExperimentalFeatures::disabled()
+            },
             ..Default::default()
         }))?;
         Ok(Self { adapter, device, queue })
@@ -186,7 +189,14 @@ impl CompileHelper {
     /// `height` on `gpu`, calling `on_start` (on the helper's thread) if the helper starts;
     /// `None` unless `gpu` is a CPU driver (GPU drivers compile when a pipeline is made, on the
     /// threads that make it).
-    pub fn start(gpu: &Gpu, weights: &crate::Weights, width: u32, height: u32, options: crate::Options, on_start: impl FnOnce() + Send + 'static) -> Option<Self> {
+    pub fn start(
+        gpu: &Gpu,
+        weights: &crate::Weights,
+        width: u32,
+        height: u32,
+        options: crate::Options,
+        on_start: impl FnOnce() + Send + 'static,
+    ) -> Option<Self> {
         let info = gpu.adapter.get_info();
         if info.device_type != wgpu::DeviceType::Cpu {
             return None;
@@ -201,12 +211,14 @@ impl CompileHelper {
                 return;
             }
             // A second device on the same adapter (a fresh instance finds it by name), or none.
-            let Some(adapter) = adapters().into_iter().find(|a| a.get_info().name == info.name && a.get_info().backend == info.backend) else {
+            let Some(adapter) = adapters().into_iter().find(|a| a.get_info().name == info.name && a.get_info().backend == info.backend)
+            else {
                 return;
             };
             on_start();
             // Failures only cost the first frame its speed-up: the frame compiles everything.
-            let _ = Gpu::from_adapter(adapter).and_then(|g| crate::Denoiser::with_options(&g.device, &g.queue, &weights, width, height, options)?.compile_backwards());
+            let _ = Gpu::from_adapter(adapter)
+                .and_then(|g| crate::Denoiser::with_options(&g.device, &g.queue, &weights, width, height, options)?.compile_backwards());
         });
         Some(Self { done: Some(done), watcher })
     }

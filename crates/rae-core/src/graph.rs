@@ -180,10 +180,7 @@ impl Graph {
 
     /// Multiply-adds per full-resolution pixel.
     pub fn macs_per_pixel(&self) -> f64 {
-        self.nodes
-            .iter()
-            .map(|n| (9 * n.cin() * n.cout) as f64 / (1u64 << (2 * n.level)) as f64)
-            .sum()
+        self.nodes.iter().map(|n| (9 * n.cin() * n.cout) as f64 / (1u64 << (2 * n.level)) as f64).sum()
     }
 
     /// Map temporaries onto as few physical buffers as their lifetimes allow.

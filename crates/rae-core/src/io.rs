@@ -170,8 +170,7 @@ type ChannelGroups = Vec<(String, Vec<String>)>;
 type GroupPixels = BTreeMap<String, Vec<(String, Vec<f32>)>>;
 
 fn exr_size_and_groups(path: &Path) -> Result<((u32, u32), ChannelGroups)> {
-    let meta = exr::meta::MetaData::read_from_file(path, false)
-        .map_err(|e| input_err(path, format!("not a readable EXR file: {e}")))?;
+    let meta = exr::meta::MetaData::read_from_file(path, false).map_err(|e| input_err(path, format!("not a readable EXR file: {e}")))?;
     let mut groups: BTreeMap<String, Vec<String>> = BTreeMap::new();
     let mut size = None;
     for h in meta.headers.iter() {
@@ -221,7 +220,10 @@ impl Sequence {
         }
         files.sort();
         if files.is_empty() {
-            return Err(input_err(dir, "no frames: expected color_0001.exr (and albedo_, normal_, depth_, roughness_, reference_), one multi-layer .exr per frame, or mosaic .png frames"));
+            return Err(input_err(
+                dir,
+                "no frames: expected color_0001.exr (and albedo_, normal_, depth_, roughness_, reference_), one multi-layer .exr per frame, or mosaic .png frames",
+            ));
         }
         // Per-buffer files are named after a buffer.
         let mut per_buffer: BTreeMap<u32, BTreeMap<Slot, PathBuf>> = BTreeMap::new();
@@ -272,9 +274,9 @@ impl Sequence {
         for (n, ff) in &numbered {
             let (here, size, at) = match ff {
                 FrameFiles::PerBuffer(m) => {
-                    let color = m.get(&InputBuffer::Color.into()).ok_or_else(|| {
-                        input_err(dir, format!("frame {n} has no color buffer (color_{n:04}.exr); color is required"))
-                    })?;
+                    let color = m
+                        .get(&InputBuffer::Color.into())
+                        .ok_or_else(|| input_err(dir, format!("frame {n} has no color buffer (color_{n:04}.exr); color is required")))?;
                     let size = image_size(color)?;
                     for (slot, p) in m {
                         let s = image_size(p)?;
@@ -301,9 +303,12 @@ impl Sequence {
                         }
                     }
                     if !unknown.is_empty() {
-                        return Err(input_err(p, format!(
-                            "unknown layer names {unknown:?}; known: color (or Combined, Image, Noisy Image), albedo (Denoising Albedo), normal (Denoising Normal), depth (Denoising Depth), roughness, reference"
-                        )));
+                        return Err(input_err(
+                            p,
+                            format!(
+                                "unknown layer names {unknown:?}; known: color (or Combined, Image, Noisy Image), albedo (Denoising Albedo), normal (Denoising Normal), depth (Denoising Depth), roughness, reference"
+                            ),
+                        ));
                     }
                     if !here.contains(&InputBuffer::Color.into()) {
                         return Err(input_err(p, "no color layer (color, Combined or Image)"));
@@ -401,12 +406,29 @@ fn srgb_to_linear(c: f32) -> f32 {
 fn pick_channels(path: &Path, slot: Slot, chans: &[(String, Vec<f32>)], n: usize) -> Result<Vec<f32>> {
     let find = |name: &str| chans.iter().find(|(c, _)| c.eq_ignore_ascii_case(name)).map(|(_, d)| d);
     let picked: Vec<&Vec<f32>> = if slot.channels() == 3 {
-        ["R", "G", "B"].iter().map(|c| find(c)).collect::<Option<Vec<_>>>()
+        ["R", "G", "B"]
+            .iter()
+            .map(|c| find(c))
+            .collect::<Option<Vec<_>>>()
             .or_else(|| ["X", "Y", "Z"].iter().map(|c| find(c)).collect::<Option<Vec<_>>>())
-            .ok_or_else(|| input_err(path, format!("`{}` needs R, G, B (or X, Y, Z) channels; found {:?}", slot.name(), chans.iter().map(|c| &c.0).collect::<Vec<_>>())))?
+            .ok_or_else(|| {
+                input_err(
+                    path,
+                    format!(
+                        "`{}` needs R, G, B (or X, Y, Z) channels; found {:?}",
+                        slot.name(),
+                        chans.iter().map(|c| &c.0).collect::<Vec<_>>()
+                    ),
+                )
+            })?
     } else {
-        vec![["Y", "Z", "R", "V"].iter().find_map(|c| find(c)).or(chans.first().map(|(_, d)| d))
-            .ok_or_else(|| input_err(path, format!("`{}` has no channel", slot.name())))?]
+        vec![
+            ["Y", "Z", "R", "V"]
+                .iter()
+                .find_map(|c| find(c))
+                .or(chans.first().map(|(_, d)| d))
+                .ok_or_else(|| input_err(path, format!("`{}` has no channel", slot.name())))?,
+        ]
     };
     let mut out = vec![0f32; n * picked.len()];
     for (k, data) in picked.iter().enumerate() {

@@ -344,11 +344,7 @@ fn uniform_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
         visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Uniform,
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
+        ty: wgpu::BindingType::Buffer { ty: wgpu::BufferBindingType::Uniform, has_dynamic_offset: false, min_binding_size: None },
         count: None,
     }
 }
@@ -395,7 +391,11 @@ fn source_entry(binding: u32, sources: SourceAccess, format: wgpu::TextureFormat
         SourceAccess::Storage => wgpu::BindGroupLayoutEntry {
             binding,
             visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::StorageTexture { access: wgpu::StorageTextureAccess::ReadOnly, format, view_dimension: wgpu::TextureViewDimension::D2Array },
+            ty: wgpu::BindingType::StorageTexture {
+                access: wgpu::StorageTextureAccess::ReadOnly,
+                format,
+                view_dimension: wgpu::TextureViewDimension::D2Array,
+            },
             count: None,
         },
     }
@@ -607,8 +607,10 @@ impl Kernels {
                 storage_entry(7, false),
             ],
         );
-        let output_layout =
-            layout("output", &[uniform_entry(0), texture_entry(1), storage_entry(2, true), storage_entry(3, false), storage_entry(4, true)]);
+        let output_layout = layout(
+            "output",
+            &[uniform_entry(0), texture_entry(1), storage_entry(2, true), storage_entry(3, false), storage_entry(4, true)],
+        );
         let pipeline_layout = |bgl: &wgpu::BindGroupLayout| {
             device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
                 label: None,
@@ -631,10 +633,7 @@ impl Kernels {
                 layout: Some(layout),
                 module,
                 entry_point: Some("main"),
-                compilation_options: wgpu::PipelineCompilationOptions {
-                    constants,
-                    zero_initialize_workgroup_memory: false,
-                },
+                compilation_options: wgpu::PipelineCompilationOptions { constants, zero_initialize_workgroup_memory: false },
                 cache: None,
             })
         };
@@ -780,7 +779,9 @@ impl Kernels {
                 let workers: Vec<_> = (0..threads)
                     .map(|t| {
                         let missing = &missing;
-                        scope.spawn(move || missing.iter().skip(t).step_by(threads).map(|&v| (v, this.create_conv(device, v))).collect::<Vec<_>>())
+                        scope.spawn(move || {
+                            missing.iter().skip(t).step_by(threads).map(|&v| (v, this.create_conv(device, v))).collect::<Vec<_>>()
+                        })
                     })
                     .collect();
                 workers.into_iter().flat_map(|w| w.join().expect("a pipeline-creating thread panicked")).collect()
@@ -910,19 +911,31 @@ impl Tile {
     /// A tile, if the kernel has one of this shape.
     pub fn with_cols(rows: u32, blocks: u32, cols: u32) -> Option<Self> {
         // Four blocks take the accumulators a second column would use.
-        ([1, 2, 4, 8, 16].contains(&rows) && ((1..=2).contains(&blocks) || (blocks == 4 && cols == 1)) && (1..=2).contains(&cols)).then_some(Tile { rows, blocks, cols, group_x: WORKGROUP, method: Method::Direct, split: 1 })
+        ([1, 2, 4, 8, 16].contains(&rows) && ((1..=2).contains(&blocks) || (blocks == 4 && cols == 1)) && (1..=2).contains(&cols))
+            .then_some(Tile { rows, blocks, cols, group_x: WORKGROUP, method: Method::Direct, split: 1 })
     }
 
     /// A Winograd F(2x2, 3x3) tile of `rows` (2: one 2x2 output tile, 4: two stacked) x
     /// `blocks` (1 or 2), if the kernel has it.
     pub fn winograd(rows: u32, blocks: u32) -> Option<Self> {
-        ([2, 4].contains(&rows) && (1..=2).contains(&blocks)).then_some(Tile { rows, blocks, cols: 2, group_x: WORKGROUP, method: Method::Winograd, split: 1 })
+        ([2, 4].contains(&rows) && (1..=2).contains(&blocks)).then_some(Tile {
+            rows,
+            blocks,
+            cols: 2,
+            group_x: WORKGROUP,
+            method: Method::Winograd,
+            split: 1,
+        })
     }
 
     /// This direct tile with its weights loaded across the subgroup ([`Method::Lanes`]), if it
     /// is direct.
     pub fn with_lanes(self) -> Option<Self> {
-        Tile::lanes(self.rows, self.blocks, self.cols).filter(|_| self.method == Method::Direct).map(|t| Tile { group_x: self.group_x, split: self.split, ..t })
+        Tile::lanes(self.rows, self.blocks, self.cols).filter(|_| self.method == Method::Direct).map(|t| Tile {
+            group_x: self.group_x,
+            split: self.split,
+            ..t
+        })
     }
 
     /// A tile with its weights loaded across the subgroup ([`Method::Lanes`]): `rows` x `blocks`
@@ -930,7 +943,14 @@ impl Tile {
     /// [`LANES_W2_MAX_ROWS`] rows), if the kernel has it.
     pub fn lanes(rows: u32, blocks: u32, cols: u32) -> Option<Self> {
         let rows_ok = [1, 2, 4, 8, 16].contains(&rows) && (cols == 1 || rows <= LANES_W2_MAX_ROWS);
-        (rows_ok && [1, 2, 4].contains(&blocks) && (1..=2).contains(&cols)).then_some(Tile { rows, blocks, cols, group_x: WORKGROUP, method: Method::Lanes, split: 1 })
+        (rows_ok && [1, 2, 4].contains(&blocks) && (1..=2).contains(&cols)).then_some(Tile {
+            rows,
+            blocks,
+            cols,
+            group_x: WORKGROUP,
+            method: Method::Lanes,
+            split: 1,
+        })
     }
 
     /// A matrix-unit tile ([`Method::Mma`]): workgroups of 4 rows x 64 pixels x `channels`
@@ -941,7 +961,14 @@ impl Tile {
     /// ([`WeightMemory::Storage`]) and SHADER_F16; runs in matrix units where the device has
     /// them ([`matrix_units_supported`]), else emulated (correct, slow: for tests).
     pub fn mma(channels: u32) -> Option<Self> {
-        [16, 32, 48, 64].contains(&channels).then_some(Tile { rows: 4, blocks: channels / 4, cols: 1, group_x: WORKGROUP, method: Method::Mma, split: 1 })
+        [16, 32, 48, 64].contains(&channels).then_some(Tile {
+            rows: 4,
+            blocks: channels / 4,
+            cols: 1,
+            group_x: WORKGROUP,
+            method: Method::Mma,
+            split: 1,
+        })
     }
 
     /// A split matrix-unit tile ([`Method::MmaSplit`]): workgroups of 4 rows x 32 pixels
@@ -1268,7 +1295,13 @@ impl ConvPlan {
 
     /// [`ConvPlan::new`] with conv `i` reading its sources as `sources[i]` says (one entry: all
     /// alike), as tuning picks them where both kinds run ([`crate::Denoiser`]).
-    pub fn with_sources(device: &wgpu::Device, kernels: &mut Kernels, specs: &[ConvSpec], tiles: &[Tile], sources: &[SourceAccess]) -> crate::Result<Self> {
+    pub fn with_sources(
+        device: &wgpu::Device,
+        kernels: &mut Kernels,
+        specs: &[ConvSpec],
+        tiles: &[Tile],
+        sources: &[SourceAccess],
+    ) -> crate::Result<Self> {
         use wgpu::util::DeviceExt;
         assert!(tiles.len() == 1 || tiles.len() == specs.len(), "one tile, or one per conv");
         assert!(sources.len() == 1 || sources.len() == specs.len(), "one source access, or one per conv");
@@ -1277,7 +1310,15 @@ impl ConvPlan {
             let info = device.adapter_info();
             return Err(crate::Error::UnsupportedTile {
                 tile: t.to_string(),
-                reason: format!("weights across lanes need subgroups of at least 8 lanes; {} has {}", info.name, if device.features().contains(wgpu::Features::SUBGROUP) { format!("{} to {}", info.subgroup_min_size, info.subgroup_max_size) } else { "none".to_string() }),
+                reason: format!(
+                    "weights across lanes need subgroups of at least 8 lanes; {} has {}",
+                    info.name,
+                    if device.features().contains(wgpu::Features::SUBGROUP) {
+                        format!("{} to {}", info.subgroup_min_size, info.subgroup_max_size)
+                    } else {
+                        "none".to_string()
+                    }
+                ),
             });
         }
         let memory = kernels.memory;
@@ -1312,7 +1353,9 @@ impl ConvPlan {
                 let split = tile.method.is_mma_split();
                 let shared = device.limits().max_compute_workgroup_storage_size;
                 if shared < MMA_WORKGROUP_BYTES {
-                    return Err(unsupported(format!("{tile} uses {MMA_WORKGROUP_BYTES} bytes of workgroup memory; the device allows {shared}")));
+                    return Err(unsupported(format!(
+                        "{tile} uses {MMA_WORKGROUP_BYTES} bytes of workgroup memory; the device allows {shared}"
+                    )));
                 }
                 // Tiles of 16 output channels, at most as many per group as the conv has.
                 let tiles16 = s.cout.div_ceil(16) as u32;
@@ -1330,7 +1373,20 @@ impl ConvPlan {
                     debug_assert_eq!(packed.len() as u32, stride);
                     weights.extend_from_slice(bytemuck::cast_slice(&packed));
                 }
-                let variant = ConvVariant { read_a: s.read_a, read_b: s.read_b, source_b: s.cb > 0, leaky: s.leaky, ob: nt, rows: 1, cols: 1, group_x: WORKGROUP, method: tile.method, split: 1, reduce: false, sources: access(i) };
+                let variant = ConvVariant {
+                    read_a: s.read_a,
+                    read_b: s.read_b,
+                    source_b: s.cb > 0,
+                    leaky: s.leaky,
+                    ob: nt,
+                    rows: 1,
+                    cols: 1,
+                    group_x: WORKGROUP,
+                    method: tile.method,
+                    split: 1,
+                    reduce: false,
+                    sources: access(i),
+                };
                 // Workgroups of 4 rows (conv3x3_mma.wgsl's ROWS) x 64 or 32 pixels (16 MT).
                 let pixels = if split { MMA_SPLIT_PIXELS } else { MMA_PIXELS };
                 pending.push((variant, (s.width.div_ceil(pixels), s.height.div_ceil(4)), 1, vec![group], None));
@@ -1363,9 +1419,23 @@ impl ConvPlan {
             // Split (direct tiles only) no further than one input block per part, nor beyond the
             // partial-sum budget.
             let part_bytes = cout4 as u64 * s.width as u64 * s.height as u64 * 16;
-            let split = if tile.method != Method::Winograd { tile.split.min(cin4).min((partial_budget / part_bytes) as u32).max(1) } else { 1 };
+            let split =
+                if tile.method != Method::Winograd { tile.split.min(cin4).min((partial_budget / part_bytes) as u32).max(1) } else { 1 };
             let used_tile = Tile { rows, blocks: ob, cols, group_x: tile.group_x, method: tile.method, split };
-            let variant = ConvVariant { read_a: s.read_a, read_b: s.read_b, source_b: s.cb > 0, leaky: s.leaky, ob, rows, cols, group_x: tile.group_x, method: tile.method, split, reduce: false, sources: access(i) };
+            let variant = ConvVariant {
+                read_a: s.read_a,
+                read_b: s.read_b,
+                source_b: s.cb > 0,
+                leaky: s.leaky,
+                ob,
+                rows,
+                cols,
+                group_x: tile.group_x,
+                method: tile.method,
+                split,
+                reduce: false,
+                sources: access(i),
+            };
             // Split-K's partial sums: one buffer for the largest split conv, which every split
             // conv overwrites in turn (the reduce of one runs before the next conv starts).
             if split > 1 {
@@ -1394,9 +1464,26 @@ impl ConvPlan {
                 groups.push(group);
             }
             // The reduce pipeline depends on the activation and the part count only.
-            let reduce_variant = ConvVariant { read_a: Read::Direct, read_b: Read::Direct, source_b: true, ob: 1, rows: 1, cols: 1, group_x: WORKGROUP, method: Method::Direct, reduce: true, ..variant };
+            let reduce_variant = ConvVariant {
+                read_a: Read::Direct,
+                read_b: Read::Direct,
+                source_b: true,
+                ob: 1,
+                rows: 1,
+                cols: 1,
+                group_x: WORKGROUP,
+                method: Method::Direct,
+                reduce: true,
+                ..variant
+            };
             let reduce = (split > 1).then_some((reduce_variant, [s.width.div_ceil(8), s.height.div_ceil(8), cout4]));
-            pending.push((variant, (s.width.div_ceil(cols).div_ceil(tile.group_x), s.height.div_ceil(rows).div_ceil(tile.group_y())), split, groups, reduce));
+            pending.push((
+                variant,
+                (s.width.div_ceil(cols).div_ceil(tile.group_x), s.height.div_ceil(rows).div_ceil(tile.group_y())),
+                split,
+                groups,
+                reduce,
+            ));
             used.push(used_tile);
         }
         // Every pipeline the plan needs, made side by side, then the convs' dispatches.
@@ -1421,7 +1508,9 @@ impl ConvPlan {
         let last = convs.iter().flat_map(|c| &c.groups).map(|g| g.weights as u64).max().unwrap_or(0);
         weights.resize((last + weight_binding) as usize, 0);
         params.resize(params.len().next_multiple_of(16), 0);
-        let init = |label, contents: &[u8], usage| device.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some(label), contents, usage });
+        let init = |label, contents: &[u8], usage| {
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some(label), contents, usage })
+        };
         let weight_usage = match memory {
             WeightMemory::Uniform => wgpu::BufferUsages::UNIFORM,
             WeightMemory::Storage => wgpu::BufferUsages::STORAGE,
@@ -1429,7 +1518,12 @@ impl ConvPlan {
         Ok(Self {
             params: init("conv params", &params, wgpu::BufferUsages::UNIFORM),
             weights: init("conv weights", &weights, weight_usage),
-            partial: device.create_buffer(&wgpu::BufferDescriptor { label: Some("conv partial sums"), size: partial.max(16), usage: wgpu::BufferUsages::STORAGE, mapped_at_creation: false }),
+            partial: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("conv partial sums"),
+                size: partial.max(16),
+                usage: wgpu::BufferUsages::STORAGE,
+                mapped_at_creation: false,
+            }),
             weight_binding,
             sources: convs.iter().map(|c| c.sources).collect(),
             convs,
@@ -1459,10 +1553,17 @@ impl ConvPlan {
 
     /// A bind group of conv `i` over the given textures (offsets are supplied per dispatch), in
     /// the layout of its source access.
-    pub fn bind_group(&self, device: &wgpu::Device, kernels: &Kernels, i: usize, a: &wgpu::TextureView, b: &wgpu::TextureView, dst: &wgpu::TextureView) -> wgpu::BindGroup {
-        let buffer = |buffer, size| {
-            wgpu::BindingResource::Buffer(wgpu::BufferBinding { buffer, offset: 0, size: wgpu::BufferSize::new(size) })
-        };
+    pub fn bind_group(
+        &self,
+        device: &wgpu::Device,
+        kernels: &Kernels,
+        i: usize,
+        a: &wgpu::TextureView,
+        b: &wgpu::TextureView,
+        dst: &wgpu::TextureView,
+    ) -> wgpu::BindGroup {
+        let buffer =
+            |buffer, size| wgpu::BindingResource::Buffer(wgpu::BufferBinding { buffer, offset: 0, size: wgpu::BufferSize::new(size) });
         device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("conv3x3"),
             layout: kernels.conv_layout(self.convs[i].sources),

@@ -13,15 +13,15 @@ pub mod golden;
 pub mod gpu;
 pub mod graph;
 pub mod io;
-pub mod metrics;
 pub mod kernels;
+pub mod metrics;
 pub mod model;
 pub mod weights;
 
 pub use denoiser::{Denoiser, Finalist, GpuFrameIo, IoBinding, Options, TileChoice};
-pub use kernels::{Method, Precision, SourceAccess, Tile, WeightMemory};
 pub use error::{Error, Result};
 pub use frame::{FrameInputs, FrameTimings};
 pub use gpu::Gpu;
+pub use kernels::{Method, Precision, SourceAccess, Tile, WeightMemory};
 pub use model::{Arch, InputBuffer};
 pub use weights::Weights;

@@ -60,10 +60,7 @@ pub fn ssim(x: &[f32], r: &[f32], width: u32, height: u32) -> f64 {
 /// its reference, on tonemapped values (so a firefly does not dominate).
 pub fn temporal_error(x_prev: &[f32], x: &[f32], r_prev: &[f32], r: &[f32]) -> f64 {
     let n = x.len();
-    (0..n)
-        .map(|i| ((tonemap(x[i]) - tonemap(x_prev[i])) - (tonemap(r[i]) - tonemap(r_prev[i]))).abs() as f64)
-        .sum::<f64>()
-        / n as f64
+    (0..n).map(|i| ((tonemap(x[i]) - tonemap(x_prev[i])) - (tonemap(r[i]) - tonemap(r_prev[i]))).abs() as f64).sum::<f64>() / n as f64
 }
 
 #[cfg(test)]

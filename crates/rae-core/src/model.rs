@@ -130,8 +130,7 @@ impl Arch {
 
     /// Parse and validate the JSON stored under [`ARCH_KEY`]; `origin` names the file in errors.
     pub fn from_json(json: &str, origin: &str) -> Result<Self> {
-        let arch: Arch = serde_json::from_str(json)
-            .map_err(|e| Error::Arch { origin: origin.into(), reason: e.to_string() })?;
+        let arch: Arch = serde_json::from_str(json).map_err(|e| Error::Arch { origin: origin.into(), reason: e.to_string() })?;
         arch.validate(origin)?;
         Ok(arch)
     }
@@ -221,9 +220,7 @@ impl Arch {
     pub fn tensor_shapes(&self) -> Vec<(String, Vec<usize>)> {
         self.convs()
             .into_iter()
-            .flat_map(|(name, cin, cout)| {
-                [(format!("{name}.weight"), vec![cout, cin, 3, 3]), (format!("{name}.bias"), vec![cout])]
-            })
+            .flat_map(|(name, cin, cout)| [(format!("{name}.weight"), vec![cout, cin, 3, 3]), (format!("{name}.bias"), vec![cout])])
             .collect()
     }
 

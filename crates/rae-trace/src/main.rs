@@ -30,7 +30,8 @@ impl SceneChoice {
     fn build(&self) -> Result<(Scene, String)> {
         match (&self.scene, self.random) {
             (Some(name), _) => {
-                let scene = scenes::by_name(name).with_context(|| format!("unknown scene `{name}` (known: {})", scenes::NAMES.join(", ")))?;
+                let scene =
+                    scenes::by_name(name).with_context(|| format!("unknown scene `{name}` (known: {})", scenes::NAMES.join(", ")))?;
                 Ok((scene, name.clone()))
             }
             (None, Some(seed)) => Ok((scenes::random(seed), format!("random {seed}"))),
@@ -91,9 +92,7 @@ enum Command {
 
 fn progress(frames: u32) -> ProgressBar {
     let bar = ProgressBar::new(frames as u64);
-    bar.set_style(
-        ProgressStyle::with_template("{bar:40} {pos}/{len} frames  {per_sec}  ETA {eta}  {msg}").expect("valid template"),
-    );
+    bar.set_style(ProgressStyle::with_template("{bar:40} {pos}/{len} frames  {per_sec}  ETA {eta}  {msg}").expect("valid template"));
     bar
 }
 
@@ -155,7 +154,11 @@ fn live(choice: &SceneChoice, weights: &Path, frames: u32, size: (u32, u32), out
         // On a CPU driver a first frame into an empty shader cache compiles on one core; a
         // second device compiles from the other end if it is slow to come.
         if f == 0 {
-            let note = || eprintln!("the first frame is slow to come: compiling kernels on a second device too (lavapipe compiles at first use, into Mesa's shader cache)");
+            let note = || {
+                eprintln!(
+                    "the first frame is slow to come: compiling kernels on a second device too (lavapipe compiles at first use, into Mesa's shader cache)"
+                )
+            };
             helper = rae_core::gpu::CompileHelper::start(&gpu, &weights, w, h, rae_core::Options::default(), note);
         }
         let denoised = denoiser.denoise(&frame)?;

@@ -166,7 +166,9 @@ impl Material {
     /// Roughness written to the auxiliary buffer (diffuse and emitters: 1).
     pub fn roughness(&self) -> f32 {
         match self {
-            Material::Conductor { roughness, .. } | Material::Dielectric { roughness, .. } | Material::Plastic { roughness, .. } => *roughness,
+            Material::Conductor { roughness, .. } | Material::Dielectric { roughness, .. } | Material::Plastic { roughness, .. } => {
+                *roughness
+            }
             Material::Diffuse { .. } | Material::Emitter { .. } => 1.0,
         }
     }

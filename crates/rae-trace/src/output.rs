@@ -39,14 +39,23 @@ pub fn write_rgb(path: &Path, width: usize, height: usize, data: &[f32], precisi
     atomic(path, |tmp| {
         let size = (width, height);
         let enc = Encoding::SMALL_LOSSLESS;
-        finish(path, match precision {
-            Precision::F32 => Image::from_encoded_channels(size, enc, SpecificChannels::rgb(|p| (data[at(p)], data[at(p) + 1], data[at(p) + 2]))).write().to_file(tmp),
-            Precision::F16 => Image::from_encoded_channels(size, enc, SpecificChannels::rgb(|p| {
-                (f16::from_f32(data[at(p)]), f16::from_f32(data[at(p) + 1]), f16::from_f32(data[at(p) + 2]))
-            }))
-            .write()
-            .to_file(tmp),
-        })
+        finish(
+            path,
+            match precision {
+                Precision::F32 => {
+                    Image::from_encoded_channels(size, enc, SpecificChannels::rgb(|p| (data[at(p)], data[at(p) + 1], data[at(p) + 2])))
+                        .write()
+                        .to_file(tmp)
+                }
+                Precision::F16 => Image::from_encoded_channels(
+                    size,
+                    enc,
+                    SpecificChannels::rgb(|p| (f16::from_f32(data[at(p)]), f16::from_f32(data[at(p) + 1]), f16::from_f32(data[at(p) + 2]))),
+                )
+                .write()
+                .to_file(tmp),
+            },
+        )
     })
 }
 
@@ -55,10 +64,23 @@ pub fn write_gray(path: &Path, width: usize, height: usize, data: &[f32], precis
     let at = move |p: Vec2<usize>| p.y() * width + p.x();
     atomic(path, |tmp| {
         let (size, enc) = ((width, height), Encoding::SMALL_LOSSLESS);
-        finish(path, match precision {
-            Precision::F32 => Image::from_encoded_channels(size, enc, SpecificChannels::build().with_channel("Y").with_pixel_fn(|p| (data[at(p)],))).write().to_file(tmp),
-            Precision::F16 => Image::from_encoded_channels(size, enc, SpecificChannels::build().with_channel("Y").with_pixel_fn(|p| (f16::from_f32(data[at(p)]),))).write().to_file(tmp),
-        })
+        finish(
+            path,
+            match precision {
+                Precision::F32 => {
+                    Image::from_encoded_channels(size, enc, SpecificChannels::build().with_channel("Y").with_pixel_fn(|p| (data[at(p)],)))
+                        .write()
+                        .to_file(tmp)
+                }
+                Precision::F16 => Image::from_encoded_channels(
+                    size,
+                    enc,
+                    SpecificChannels::build().with_channel("Y").with_pixel_fn(|p| (f16::from_f32(data[at(p)]),)),
+                )
+                .write()
+                .to_file(tmp),
+            },
+        )
     })
 }
 
@@ -67,19 +89,23 @@ pub fn write_rg(path: &Path, width: usize, height: usize, data: &[f32], precisio
     let at = move |p: Vec2<usize>| 2 * (p.y() * width + p.x());
     atomic(path, |tmp| {
         let (size, enc) = ((width, height), Encoding::SMALL_LOSSLESS);
-        finish(path, match precision {
-            Precision::F32 => {
-                let ch = SpecificChannels::build().with_channel("R").with_channel("G").with_pixel_fn(|p| (data[at(p)], data[at(p) + 1]));
-                Image::from_encoded_channels(size, enc, ch).write().to_file(tmp)
-            }
-            Precision::F16 => {
-                let ch = SpecificChannels::build()
-                    .with_channel("R")
-                    .with_channel("G")
-                    .with_pixel_fn(|p| (f16::from_f32(data[at(p)]), f16::from_f32(data[at(p) + 1])));
-                Image::from_encoded_channels(size, enc, ch).write().to_file(tmp)
-            }
-        })
+        finish(
+            path,
+            match precision {
+                Precision::F32 => {
+                    let ch =
+                        SpecificChannels::build().with_channel("R").with_channel("G").with_pixel_fn(|p| (data[at(p)], data[at(p) + 1]));
+                    Image::from_encoded_channels(size, enc, ch).write().to_file(tmp)
+                }
+                Precision::F16 => {
+                    let ch = SpecificChannels::build()
+                        .with_channel("R")
+                        .with_channel("G")
+                        .with_pixel_fn(|p| (f16::from_f32(data[at(p)]), f16::from_f32(data[at(p) + 1])));
+                    Image::from_encoded_channels(size, enc, ch).write().to_file(tmp)
+                }
+            },
+        )
     })
 }
 

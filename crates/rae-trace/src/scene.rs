@@ -33,7 +33,11 @@ impl Environment {
         match *self {
             Environment::Black => Vec3A::ZERO,
             Environment::Sky { zenith, horizon, ground } => {
-                if dir.y >= 0.0 { horizon.lerp(zenith, dir.y.sqrt()) } else { ground }
+                if dir.y >= 0.0 {
+                    horizon.lerp(zenith, dir.y.sqrt())
+                } else {
+                    ground
+                }
             }
         }
     }
@@ -165,10 +169,13 @@ impl Scene {
         let total: f32 = power.iter().sum();
         let light_pmf: Vec<f32> = power.iter().map(|p| p / total).collect();
         let mut acc = 0.0;
-        let light_cdf = light_pmf.iter().map(|p| {
-            acc += p;
-            acc
-        }).collect();
+        let light_cdf = light_pmf
+            .iter()
+            .map(|p| {
+                acc += p;
+                acc
+            })
+            .collect();
         Scene { prims, materials, environment, camera, bvh, lights, light_cdf, light_pmf }
     }
 

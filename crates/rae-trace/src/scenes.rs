@@ -111,9 +111,7 @@ pub fn firefly() -> Scene {
     let mut b = Builder::new();
     let white = b.material(diffuse(v(0.7, 0.7, 0.7)));
     let blue = b.material(diffuse(v(0.2, 0.3, 0.7)));
-    let floor = b.material(Material::Diffuse {
-        albedo: Texture::Noise { a: v(0.3, 0.25, 0.2), b: v(0.7, 0.6, 0.5), scale: 6.0, seed: 3 },
-    });
+    let floor = b.material(Material::Diffuse { albedo: Texture::Noise { a: v(0.3, 0.25, 0.2), b: v(0.7, 0.6, 0.5), scale: 6.0, seed: 3 } });
     let light = b.material(Material::Emitter { radiance: v(40000.0, 36000.0, 30000.0) });
     let glass = b.material(Material::Dielectric { ior: 1.5, roughness: 0.0 });
     let metal = b.material(Material::Conductor { f0: v(0.9, 0.9, 0.9), roughness: 0.05 });
@@ -164,10 +162,16 @@ pub fn random(seed: u64) -> Scene {
     b.prims.extend(quad(v(-8.0, 0.0, -4.0), v(16.0, 0.0, 0.0), v(0.0, 6.0, 0.0), 3.0, wall));
     for _ in 0..r.random_range(4..13) {
         let m = match r.random_range(0..5) {
-            0 | 1 => { let t = texture(&mut r); Material::Diffuse { albedo: t } }
+            0 | 1 => {
+                let t = texture(&mut r);
+                Material::Diffuse { albedo: t }
+            }
             2 => Material::Conductor { f0: color(&mut r) + v(0.1, 0.1, 0.1), roughness: r.random_range(0.0..0.7) },
             3 => Material::Dielectric { ior: r.random_range(1.3..1.8), roughness: r.random_range(0.0..0.3) },
-            _ => { let t = texture(&mut r); Material::Plastic { albedo: t, roughness: r.random_range(0.05..0.8) } }
+            _ => {
+                let t = texture(&mut r);
+                Material::Plastic { albedo: t, roughness: r.random_range(0.05..0.8) }
+            }
         };
         let m = b.material(m);
         let (x, z) = (r.random_range(-3.0..3.0), r.random_range(-3.0..2.5));

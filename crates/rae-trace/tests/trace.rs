@@ -33,7 +33,8 @@ fn error_against_the_reference_falls_like_one_over_spp() {
     // A diffuse room lit by an area light and the sky: every estimator term is bounded.
     let scene = scenes::by_name("glossy").unwrap();
     let reference = render_frame(&scene, 0, 1, &settings(32, 24, 1, 2048, 1)).reference;
-    let err: Vec<f64> = [4u32, 16, 64].iter().map(|&spp| mse(&render_frame(&scene, 0, 1, &settings(32, 24, spp, 0, 2)).color, &reference)).collect();
+    let err: Vec<f64> =
+        [4u32, 16, 64].iter().map(|&spp| mse(&render_frame(&scene, 0, 1, &settings(32, 24, spp, 0, 2)).color, &reference)).collect();
     eprintln!("MSE against a 2048 spp reference at 4, 16, 64 spp: {err:?}");
     for k in 0..2 {
         let ratio = err[k] / err[k + 1];
@@ -48,7 +49,12 @@ fn floor_scene(cameras: Vec<Camera>) -> Scene {
     let mut materials = vec![Material::Diffuse { albedo: tex.clone() }];
     materials.push(Material::Emitter { radiance: Vec3A::ONE });
     let prims = quad(v(-50.0, 0.0, 50.0), v(100.0, 0.0, 0.0), v(0.0, 0.0, -100.0), 25.0, 0).to_vec();
-    Scene::new(prims, materials, Environment::Sky { zenith: Vec3A::ONE, horizon: Vec3A::ONE, ground: Vec3A::ZERO }, CameraPath { keys: cameras })
+    Scene::new(
+        prims,
+        materials,
+        Environment::Sky { zenith: Vec3A::ONE, horizon: Vec3A::ONE, ground: Vec3A::ZERO },
+        CameraPath { keys: cameras },
+    )
 }
 
 #[test]

@@ -25,8 +25,10 @@ fn strip_array_strides(w: Vec<u32>) -> Vec<u32> {
     };
     // Sized arrays (OpTypeArray) that no struct (OpTypeStruct) holds: those of workgroup and
     // function variables; arrays inside a buffer's block keep their strides.
-    let in_struct: std::collections::HashSet<u32> = ops(&w).into_iter().filter(|r| w[r.start] & 0xffff == 30).flat_map(|r| w[r.start + 2..r.end].to_vec()).collect();
-    let sized: std::collections::HashSet<u32> = ops(&w).into_iter().filter(|r| w[r.start] & 0xffff == 28).map(|r| w[r.start + 1]).filter(|id| !in_struct.contains(id)).collect();
+    let in_struct: std::collections::HashSet<u32> =
+        ops(&w).into_iter().filter(|r| w[r.start] & 0xffff == 30).flat_map(|r| w[r.start + 2..r.end].to_vec()).collect();
+    let sized: std::collections::HashSet<u32> =
+        ops(&w).into_iter().filter(|r| w[r.start] & 0xffff == 28).map(|r| w[r.start + 1]).filter(|id| !in_struct.contains(id)).collect();
     let mut out = w[..5].to_vec();
     for r in ops(&w) {
         let op = w[r.start] & 0xffff;
@@ -61,9 +63,27 @@ fn main() {
                 // Plain (MT 4), split (MT 2, the activations split in f32) and split with
                 // prefetched windows, as ConvPlan sets them.
                 for (split, prefetch) in [(false, false), (true, false), (true, true)] {
-                    let label = format!("conv3x3_mma ({}, {} sources, NT = {nt}{}{})", if f16 { "f16" } else { "f32" }, if storage { "storage" } else { "sampled" }, if split { ", SPLIT" } else { "" }, if prefetch { ", PREFETCH" } else { "" });
+                    let label = format!(
+                        "conv3x3_mma ({}, {} sources, NT = {nt}{}{})",
+                        if f16 { "f16" } else { "f32" },
+                        if storage { "storage" } else { "sampled" },
+                        if split { ", SPLIT" } else { "" },
+                        if prefetch { ", PREFETCH" } else { "" }
+                    );
                     let mt = if split { 2.0 } else { 4.0 };
-                    modules.push((label, src.clone(), vec![("NT", nt as f64), ("MT", mt), ("MODE_A", 1.0), ("MODE_B", 3.0), ("SPLIT", split as u32 as f64), ("SPLIT_A", (split && !f16) as u32 as f64), ("PREFETCH", prefetch as u32 as f64)]));
+                    modules.push((
+                        label,
+                        src.clone(),
+                        vec![
+                            ("NT", nt as f64),
+                            ("MT", mt),
+                            ("MODE_A", 1.0),
+                            ("MODE_B", 3.0),
+                            ("SPLIT", split as u32 as f64),
+                            ("SPLIT_A", (split && !f16) as u32 as f64),
+                            ("PREFETCH", prefetch as u32 as f64),
+                        ],
+                    ));
                 }
             }
         }
@@ -72,13 +92,18 @@ fn main() {
     let mut checked = 0;
     for (label, src, constants) in modules {
         let module = naga::front::wgsl::parse_str(&src).unwrap_or_else(|e| panic!("{label}: {}", e.emit_to_string(&src)));
-        let info = naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all()).validate(&module).unwrap_or_else(|e| panic!("{label}: {}", e.emit_to_string(&src)));
+        let info = naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all())
+            .validate(&module)
+            .unwrap_or_else(|e| panic!("{label}: {}", e.emit_to_string(&src)));
         let constants: naga::back::PipelineConstants = constants.into_iter().map(|(k, v)| (k.to_string(), v)).collect();
         let (module, info) = naga::back::pipeline_constants::process_overrides(&module, &info, None, &constants).unwrap();
         for entry in &module.entry_points {
             let options = naga::back::spv::Options { lang_version: (1, 3), ..Default::default() };
             let pipeline = naga::back::spv::PipelineOptions { shader_stage: entry.stage, entry_point: entry.name.clone() };
-            let words = strip_array_strides(naga::back::spv::write_vec(&module, &info, &options, Some(&pipeline)).unwrap_or_else(|e| panic!("{label} {}: {e}", entry.name)));
+            let words = strip_array_strides(
+                naga::back::spv::write_vec(&module, &info, &options, Some(&pipeline))
+                    .unwrap_or_else(|e| panic!("{label} {}: {e}", entry.name)),
+            );
             match validator.validate(&words, None) {
                 Ok(()) => println!("valid    {label} `{}` ({} words)", entry.name, words.len()),
                 Err(e) => {
