@@ -412,30 +412,17 @@ impl Denoiser {
             let (tiles, sources) = finalists.iter().map(|f| (f[0].tile, f[0].sources)).unzip();
             (tiles, sources, finalists)
         };
+        // Matrix-unit tiles join tuning where they run in hardware, with their weights in a
+        // storage buffer and room for their workgroup memory.
+        let mma = kernels.matrix_units()
+            && memory == WeightMemory::Storage
+            && device.limits().max_compute_workgroup_storage_size >= MMA_WORKGROUP_BYTES;
+        let candidates = tuning_candidates(tiles, precision, mma);
         let (tiles, conv_sources, tuning): (Vec<Tile>, Vec<SourceAccess>, Vec<Vec<Finalist>>) = match tiles {
             TileChoice::Fixed(t) => fixed(t),
             TileChoice::Auto if device_type == wgpu::DeviceType::Cpu => fixed(Tile::cpu(device)),
-            TileChoice::Tuned if timestamps => picks(tune_among(&mut kernels, &TUNE_TILES)?),
-            TileChoice::TunedAmong(candidates) if timestamps && !candidates.is_empty() => picks(tune_among(&mut kernels, candidates)?),
-            TileChoice::Auto | TileChoice::TunedMma | TileChoice::TunedMmaWith(_) if timestamps => {
-                let mut candidates = TUNE_TILES.to_vec();
-                if let TileChoice::TunedMmaWith(extra) = tiles {
-                    candidates.extend(extra);
-                }
-                if kernels.matrix_units()
-                    && memory == WeightMemory::Storage
-                    && device.limits().max_compute_workgroup_storage_size >= MMA_WORKGROUP_BYTES
-                {
-                    match precision {
-                        Precision::F32 => candidates.extend(MMA_SPLIT_TILES),
-                        Precision::F16 => candidates.extend(MMA_TILES),
-                    }
-                }
-                picks(tune_among(&mut kernels, &candidates)?)
-            }
-            TileChoice::Auto | TileChoice::Tuned | TileChoice::TunedAmong(_) | TileChoice::TunedMma | TileChoice::TunedMmaWith(_) => {
-                fixed(Tile::default())
-            }
+            _ if timestamps && !candidates.is_empty() => picks(tune_among(&mut kernels, &candidates)?),
+            _ => fixed(Tile::default()),
         };
         let convs = ConvPlan::with_sources(device, &mut kernels, &specs, &tiles, &conv_sources)?;
         debug_assert_eq!(bytes, activation_bytes(&graph, pwidth, pheight, precision));
@@ -1035,6 +1022,30 @@ const TUNE_ROUNDS: usize = 5;
 /// Tiles per conv that the first round of [`tune`] passes to the second.
 const TUNE_SHORTLIST: usize = 2;
 
+/// The tiles a [`Denoiser`] times for `choice` on a device with timestamps inside passes
+/// (empty where `choice` fixes the tile): [`TUNE_TILES`], a [`TileChoice::TunedAmong`] list, or
+/// for [`TileChoice::Auto`] and the tuned-mma choices [`TUNE_TILES`], a
+/// [`TileChoice::TunedMmaWith`] list, and where `mma` (matrix units, storage weights, room for
+/// their workgroup memory) the precision's matrix-unit tiles.
+fn tuning_candidates(choice: TileChoice, precision: Precision, mma: bool) -> Vec<Tile> {
+    let mut candidates = match choice {
+        TileChoice::Fixed(_) => return Vec::new(),
+        TileChoice::Tuned => return TUNE_TILES.to_vec(),
+        TileChoice::TunedAmong(list) => return list.to_vec(),
+        TileChoice::Auto | TileChoice::TunedMma | TileChoice::TunedMmaWith(_) => TUNE_TILES.to_vec(),
+    };
+    if let TileChoice::TunedMmaWith(extra) = choice {
+        candidates.extend(extra);
+    }
+    if mma {
+        candidates.extend(match precision {
+            Precision::F32 => MMA_SPLIT_TILES,
+            Precision::F16 => MMA_TILES,
+        });
+    }
+    candidates
+}
+
 /// The fastest tile and source access for each conv on this device, among `candidates` and
 /// `accesses`, in two rounds:
 /// 1. Every candidate with `accesses[0]`, one plan at a time; each conv's
@@ -1226,4 +1237,29 @@ pub fn read_texture(device: &wgpu::Device, queue: &wgpu::Queue, texture: &wgpu::
         }
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tuning_times_the_choices_candidates() {
+        let x3p: &'static [Tile] = Vec::leak(vec![Tile::mma_split_prefetch(32).unwrap()]);
+        let join = |parts: &[&[Tile]]| parts.concat();
+        // Plain tuning and a list ignore the matrix units; a fixed tile tunes nothing.
+        assert_eq!(tuning_candidates(TileChoice::Tuned, Precision::F32, true), TUNE_TILES);
+        assert_eq!(tuning_candidates(TileChoice::TunedAmong(x3p), Precision::F16, true), x3p);
+        assert!(tuning_candidates(TileChoice::Fixed(Tile::default()), Precision::F32, true).is_empty());
+        // Auto and tuned-mma add the precision's matrix-unit tiles where they run.
+        for choice in [TileChoice::Auto, TileChoice::TunedMma] {
+            assert_eq!(tuning_candidates(choice, Precision::F32, true), join(&[&TUNE_TILES, &MMA_SPLIT_TILES]));
+            assert_eq!(tuning_candidates(choice, Precision::F16, true), join(&[&TUNE_TILES, &MMA_TILES]));
+            assert_eq!(tuning_candidates(choice, Precision::F32, false), TUNE_TILES);
+        }
+        // tuned-mma+T+...: the listed tiles as well, whether or not the matrix units run.
+        let with = TileChoice::TunedMmaWith(x3p);
+        assert_eq!(tuning_candidates(with, Precision::F32, true), join(&[&TUNE_TILES, x3p, &MMA_SPLIT_TILES]));
+        assert_eq!(tuning_candidates(with, Precision::F32, false), join(&[&TUNE_TILES, x3p]));
+    }
 }
