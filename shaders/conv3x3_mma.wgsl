@@ -62,11 +62,19 @@ const WIN_H: u32 = 6u;
 const TILE: u32 = 256u;
 // Scale of a split operand's remainder (2^11: one f16 mantissa).
 const LO_SCALE: f32 = 2048.0;
-// Window texels an invocation holds with PREFETCH: the split tiles' 6 x 34 x 4 = 816 texels
-// over 128 invocations, rounded up (kernels::MMA_PREFETCH_TEXELS checks it).
-const PREFETCH_TEXELS: u32 = 7u;
-// One invocation's share of a chunk's window, as read from the sources (not yet clamped).
-alias Prefetch = array<vec4<f32>, PREFETCH_TEXELS>;
+// One invocation's share of a chunk's window with PREFETCH, as read from the sources (not yet
+// clamped): texel li + 128 k in member tk, the split tiles' 6 x 34 x 4 = 816 texels over 128
+// invocations, rounded up (kernels::MMA_PREFETCH_TEXELS checks the count). Named members, not
+// an array, so that no driver has to prove an index constant to keep them in registers.
+struct Prefetch {
+    t0: vec4<f32>,
+    t1: vec4<f32>,
+    t2: vec4<f32>,
+    t3: vec4<f32>,
+    t4: vec4<f32>,
+    t5: vec4<f32>,
+    t6: vec4<f32>,
+}
 
 // Weights of group z (16 * NT output channels from 4 * params.ob0 + z * 16 * NT), f16 from
 // w = z * group_stride: for chunk c (input blocks 4c .. 4c + 3) and tap t = ky * 3 + kx, NT
@@ -190,26 +198,45 @@ fn put_texel_split(i: u32, source: vec4<f32>) {
     }
 }
 
-// PREFETCH: invocation li's texels of chunk c's window (li + 128 k for k < PREFETCH_TEXELS,
-// those under win_texels()) into `regs`, read but not yet used. The loop has a constant count,
-// so a driver can unroll it and keep `regs` in registers.
-fn fetch_chunk(regs: ptr<function, Prefetch>, li: u32, c: u32, x0: u32, y0: u32) {
-    for (var k = 0u; k < PREFETCH_TEXELS; k++) {
-        let i = li + 128u * k;
-        if i < win_texels() {
-            (*regs)[k] = window_source(i, c, x0, y0);
-        }
+// PREFETCH: texel li + 128 k of chunk c's window as the sources hold it (zero past the window).
+fn fetch_texel(li: u32, k: u32, c: u32, x0: u32, y0: u32) -> vec4<f32> {
+    let i = li + 128u * k;
+    if i < win_texels() {
+        return window_source(i, c, x0, y0);
+    }
+    return vec4<f32>(0.0);
+}
+
+// PREFETCH: invocation li's texels of chunk c's window, read but not yet used.
+fn fetch_chunk(li: u32, c: u32, x0: u32, y0: u32) -> Prefetch {
+    return Prefetch(
+        fetch_texel(li, 0u, c, x0, y0),
+        fetch_texel(li, 1u, c, x0, y0),
+        fetch_texel(li, 2u, c, x0, y0),
+        fetch_texel(li, 3u, c, x0, y0),
+        fetch_texel(li, 4u, c, x0, y0),
+        fetch_texel(li, 5u, c, x0, y0),
+        fetch_texel(li, 6u, c, x0, y0),
+    );
+}
+
+// PREFETCH: texel li + 128 k, read by `fetch_texel`, into `win` as `stage_chunk_split` puts it.
+fn put_prefetched(li: u32, k: u32, v: vec4<f32>) {
+    let i = li + 128u * k;
+    if i < win_texels() {
+        put_texel_split(i, v);
     }
 }
 
-// PREFETCH: what `fetch_chunk` read into `regs`, into `win` as `stage_chunk_split` puts it.
-fn put_chunk_split(regs: ptr<function, Prefetch>, li: u32) {
-    for (var k = 0u; k < PREFETCH_TEXELS; k++) {
-        let i = li + 128u * k;
-        if i < win_texels() {
-            put_texel_split(i, (*regs)[k]);
-        }
-    }
+// PREFETCH: what `fetch_chunk` read, into `win`.
+fn put_chunk_split(p: Prefetch, li: u32) {
+    put_prefetched(li, 0u, p.t0);
+    put_prefetched(li, 1u, p.t1);
+    put_prefetched(li, 2u, p.t2);
+    put_prefetched(li, 3u, p.t3);
+    put_prefetched(li, 4u, p.t4);
+    put_prefetched(li, 5u, p.t5);
+    put_prefetched(li, 6u, p.t6);
 }
 
 // Chunk c's window into `win` for a split entry point: from `regs`, where `fetch_chunk` read it
@@ -217,9 +244,9 @@ fn put_chunk_split(regs: ptr<function, Prefetch>, li: u32) {
 fn stage_split(regs: ptr<function, Prefetch>, li: u32, c: u32, x0: u32, y0: u32) {
     if PREFETCH {
         if c == 0u {
-            fetch_chunk(regs, li, 0u, x0, y0);
+            *regs = fetch_chunk(li, 0u, x0, y0);
         }
-        put_chunk_split(regs, li);
+        put_chunk_split(*regs, li);
     } else {
         stage_chunk_split(li, c, x0, y0);
     }
@@ -229,7 +256,7 @@ fn stage_split(regs: ptr<function, Prefetch>, li: u32, c: u32, x0: u32, y0: u32)
 // is in `win` and before its products.
 fn prefetch_next(regs: ptr<function, Prefetch>, li: u32, c: u32, x0: u32, y0: u32) {
     if PREFETCH && c + 1u < chunks() {
-        fetch_chunk(regs, li, c + 1u, x0, y0);
+        *regs = fetch_chunk(li, c + 1u, x0, y0);
     }
 }
 

@@ -113,15 +113,18 @@ fn the_matrix_unit_kernel_translates_to_spirv() {
 
 #[test]
 fn the_prefetch_registers_hold_a_split_window() {
-    // conv3x3_mma.wgsl's PREFETCH_TEXELS is kernels::MMA_PREFETCH_TEXELS: the split tiles'
-    // window shared out over a workgroup's 128 invocations, none left over and none spare.
+    // conv3x3_mma.wgsl's `Prefetch` has kernels::MMA_PREFETCH_TEXELS members, each one texel
+    // (vec4<f32>): the split tiles' window shared out over a workgroup's 128 invocations, none
+    // left over and none spare.
     let source = mma_source(false);
     let module = naga::front::wgsl::parse_str(&source).unwrap_or_else(|e| panic!("{}", e.emit_to_string(&source)));
-    let (_, constant) =
-        module.constants.iter().find(|(_, c)| c.name.as_deref() == Some("PREFETCH_TEXELS")).expect("conv3x3_mma.wgsl has PREFETCH_TEXELS");
-    let naga::Expression::Literal(naga::Literal::U32(texels)) = module.global_expressions[constant.init] else {
-        panic!("PREFETCH_TEXELS is a u32 literal")
-    };
+    let (_, ty) = module.types.iter().find(|(_, t)| t.name.as_deref() == Some("Prefetch")).expect("conv3x3_mma.wgsl has `Prefetch`");
+    let naga::TypeInner::Struct { members, .. } = &ty.inner else { panic!("`Prefetch` is a struct") };
+    for m in members {
+        let texel = matches!(module.types[m.ty].inner, naga::TypeInner::Vector { size: naga::VectorSize::Quad, scalar: naga::Scalar::F32 });
+        assert!(texel, "member {:?} is a vec4<f32>", m.name);
+    }
+    let texels = members.len() as u32;
     assert_eq!(texels, MMA_PREFETCH_TEXELS);
     let window = 6 * (MMA_SPLIT_PIXELS + 2) * 4;
     assert!(128 * texels >= window && 128 * (texels - 1) < window, "{texels} texels a lane for a window of {window}");

@@ -193,7 +193,7 @@ pub const MMA_WORKGROUP_BYTES: u32 = 2 * 6 * 34 * 16 * 2 + 4 * 256 * 4;
 const _: () = assert!(6 * 66 * 16 <= 2 * 6 * 34 * 16, "the plain tiles' window fits the split tiles'");
 
 /// Window texels (4 channels) each of the 128 invocations of a split Mma workgroup holds with
-/// [`Method::MmaSplitPrefetch`] (conv3x3_mma.wgsl's PREFETCH_TEXELS): the window of 6 rows x
+/// [`Method::MmaSplitPrefetch`] (the members of conv3x3_mma.wgsl's `Prefetch`): the window of 6 rows x
 /// ([`MMA_SPLIT_PIXELS`] + 2) pixels x 4 texels, shared out and rounded up.
 pub const MMA_PREFETCH_TEXELS: u32 = (6 * (MMA_SPLIT_PIXELS + 2) * 4).div_ceil(128);
 
