@@ -542,7 +542,8 @@ fn resident_frames(gpu: &Gpu, d: &mut Denoiser, frame: &rae_core::FrameInputs, f
         output: &output,
     })?;
     let total = frames + 2;
-    let count = 2 * total as u32;
+    // Per frame: the opening timestamp, its spare, the closing one.
+    let count = 3 * total as u32;
     let queries = dev.create_query_set(&wgpu::QuerySetDescriptor { label: Some("frames"), ty: wgpu::QueryType::Timestamp, count });
     let mut start = Instant::now();
     for i in 0..total as u32 {
@@ -551,16 +552,16 @@ fn resident_frames(gpu: &Gpu, d: &mut Denoiser, frame: &rae_core::FrameInputs, f
             start = Instant::now();
         }
         let mut enc = dev.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("resident frame") });
-        enc.write_timestamp(&queries, 2 * i);
+        rae_core::denoiser::write_opening_timestamp(&mut enc, &queries, 3 * i, 3 * i + 1);
         d.record(&mut enc, &io)?;
-        enc.write_timestamp(&queries, 2 * i + 1);
+        enc.write_timestamp(&queries, 3 * i + 2);
         gpu.queue.submit(Some(enc.finish()));
     }
     dev.poll(wgpu::PollType::wait_indefinitely()).context("waiting for timed frames")?;
     let pipelined = start.elapsed().as_secs_f64() * 1e3 / frames as f64;
     let ticks = rae_core::denoiser::read_timestamps(dev, &gpu.queue, &queries, count).context("reading timestamps")?;
     let period = gpu.queue.get_timestamp_period() as f64 * 1e-6;
-    let mut ms: Vec<f64> = ticks.chunks(2).skip(2).map(|p| p[1].saturating_sub(p[0]) as f64 * period).collect();
+    let mut ms: Vec<f64> = ticks.chunks(3).skip(2).map(|p| p[2].saturating_sub(p[0]) as f64 * period).collect();
     Ok((median(&mut ms), pipelined))
 }
 

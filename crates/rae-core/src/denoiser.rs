@@ -634,7 +634,9 @@ impl Denoiser {
                     pass.write_timestamp(q, i);
                 }
             };
-            stamp(&mut pass, 0);
+            if let Some(q) = queries {
+                write_opening_timestamp(&mut pass, q, 0, self.graph.nodes.len() as u32 + 3);
+            }
             pass.set_pipeline(&self.prep);
             pass.set_bind_group(0, &io.prep, &[]);
             pass.dispatch_workgroups(self.pwidth.div_ceil(WORKGROUP), self.pheight.div_ceil(WORKGROUP), 1);
@@ -783,7 +785,8 @@ impl Denoiser {
             self.host = Some(self.make_host_io()?);
         }
         if self.profiler.is_none() {
-            let count = self.graph.nodes.len() as u32 + 3;
+            // A timestamp before the frame and after each stage, and the opening one's spare.
+            let count = self.graph.nodes.len() as u32 + 4;
             let queries =
                 self.device.create_query_set(&wgpu::QuerySetDescriptor { label: Some("stages"), ty: wgpu::QueryType::Timestamp, count });
             let buffer = |usage| {
@@ -820,6 +823,7 @@ impl Denoiser {
         let conv_names =
             self.graph.nodes.iter().enumerate().map(|(i, n)| if pooled(i) { format!("{}+pool", n.name) } else { n.name.clone() });
         let names = std::iter::once("prep".to_string()).chain(conv_names).chain(std::iter::once("output".to_string()));
+        // The last query is the spare of the opening timestamp (`names` ends before it).
         Ok(names.zip(ticks.windows(2)).map(|(n, w)| (n, w[1].saturating_sub(w[0]) as f64 * period * 1e-6)).collect())
     }
 
@@ -1075,7 +1079,8 @@ fn tune(
     if candidates.len() == 1 && accesses.len() == 1 {
         return Ok(vec![vec![Finalist { tile: candidates[0], sources: accesses[0], ns: f64::NAN }]; n]);
     }
-    let count = ((n + 1) * (TUNE_ROUNDS + 1)) as u32;
+    // Per round: the opening timestamp, its spare, one after each conv.
+    let count = ((n + 2) * (TUNE_ROUNDS + 1)) as u32;
     let queries = device.create_query_set(&wgpu::QuerySetDescriptor { label: Some("tile tuning"), ty: wgpu::QueryType::Timestamp, count });
     let build = |kernels: &mut Kernels, tile: Tile, access: SourceAccess| -> Result<(ConvPlan, Vec<wgpu::BindGroup>)> {
         let plan = ConvPlan::with_sources(device, kernels, specs, &[tile], &[access])?;
@@ -1133,8 +1138,8 @@ fn time_plan(
     {
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("tile tuning"), timestamp_writes: None });
         for r in 0..rounds {
-            let base = (r * (n + 1)) as u32;
-            pass.write_timestamp(queries, base);
+            let base = (r * (n + 2)) as u32;
+            write_opening_timestamp(&mut pass, queries, base, base + n as u32 + 1);
             for (i, group) in groups.iter().enumerate() {
                 plan.record(&mut pass, i, false, group);
                 pass.write_timestamp(queries, base + 1 + i as u32);
@@ -1142,17 +1147,54 @@ fn time_plan(
         }
     }
     queue.submit(Some(encoder.finish()));
-    let ticks = read_timestamps(device, queue, queries, (rounds * (n + 1)) as u32)?;
+    let ticks = read_timestamps(device, queue, queries, (rounds * (n + 2)) as u32)?;
     let period = queue.get_timestamp_period() as f64;
     Ok((0..n)
         .map(|i| {
             // Round 0 is the untimed one.
             let mut t: Vec<f64> =
-                (1..rounds).map(|r| ticks[r * (n + 1) + i + 1].saturating_sub(ticks[r * (n + 1) + i]) as f64 * period).collect();
+                (1..rounds).map(|r| ticks[r * (n + 2) + i + 1].saturating_sub(ticks[r * (n + 2) + i]) as f64 * period).collect();
             t.sort_by(f64::total_cmp);
             t[t.len() / 2]
         })
         .collect())
+}
+
+/// Where a timestamp can be written: a command encoder or a compute pass.
+pub trait TimestampWriter {
+    /// Write timestamp `index` of `queries` here.
+    fn write_timestamp_to(&mut self, queries: &wgpu::QuerySet, index: u32);
+}
+
+impl TimestampWriter for wgpu::CommandEncoder {
+    fn write_timestamp_to(&mut self, queries: &wgpu::QuerySet, index: u32) {
+        self.write_timestamp(queries, index);
+    }
+}
+
+impl TimestampWriter for wgpu::ComputePass<'_> {
+    fn write_timestamp_to(&mut self, queries: &wgpu::QuerySet, index: u32) {
+        self.write_timestamp(queries, index);
+    }
+}
+
+/// Write timestamp `index`, which opens a timed span, so that it is taken before the work
+/// recorded after it runs: a second timestamp into the unused query `spare` follows it.
+///
+/// Lavapipe (Mesa 22.3's llvmpipe) does not read the clock when the command runs. It bins the
+/// query into its rasterizer's current scene and reads the clock when that scene is next
+/// flushed. A timestamp write flushes before binning its own query (wgpu writes at
+/// BOTTOM_OF_PIPE), and so does a pipeline barrier; a compute dispatch does not. So an opening
+/// timestamp followed by dispatches that need no barrier between them (a frame's prep: its
+/// barriers are wgpu's, in the command buffer before the frame's) was read only at the first
+/// barrier, after them. A 256x256 frame lost prep's 3-4 ms from its span, and a stage table lost
+/// prep (docs/PERF.md, session 19). The spare's write flushes the scene holding `index` at
+/// once. The timestamps that close a span need no spare: the next dispatch's barrier or the end
+/// of the command buffer flushes them. Drivers that write timestamps as the GPU passes them lose
+/// one query.
+pub fn write_opening_timestamp(writer: &mut impl TimestampWriter, queries: &wgpu::QuerySet, index: u32, spare: u32) {
+    writer.write_timestamp_to(queries, index);
+    writer.write_timestamp_to(queries, spare);
 }
 
 /// Resolve the first `count` timestamps of `queries` (written by work already submitted) and
