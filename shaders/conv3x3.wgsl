@@ -46,6 +46,11 @@ override SPLIT: u32 = 1u;
 // load lane-uniform only when its offset is a constant or push constant, so `tap` costs one
 // lane-by-lane gather per vec4; here a gather fetches 8 vec4s and each broadcast is a shuffle.
 override LANES: bool = false;
+// The conv's output is also written max-pooled 2x2 into `pooled` (two-column lanes tiles with an
+// even number of rows, unsplit: each invocation holds whole 2x2 windows; kernels::ConvPlan
+// decides). It replaces pool.wgsl's pass after an encoder block's last conv, whose four loads a
+// pooled texel and dispatch cost more on lavapipe than one more store here.
+override POOL_OUT: bool = false;
 
 // Weights of group z, from w = z * group_stride: taps at w + ((in block * 9 + tap) * 4 + in lane)
 // * OB + j, a vec4 over the 4 output channels of block ob0 + z * OB + j; then the bias of block j
@@ -54,6 +59,8 @@ override LANES: bool = false;
 // Partial sums when SPLIT > 1: part p of output block l at ((p * cout4 + l) * height + y) * width
 // + x (kernels::ConvPlan sizes one buffer for its largest split conv; convs run one at a time).
 @group(0) @binding(5) var<storage, read_write> partial: array<vec4<f32>>;
+// POOL_OUT: the output max-pooled 2x2, at half the resolution (a 1x1 stand-in otherwise).
+@group(0) @binding(6) var pooled: texture_storage_2d_array<rgba32float, write>;
 // The part of the input blocks this invocation sums (SPLIT > 1).
 var<private> part: u32;
 // This invocation's lane in its subgroup (LANES).
@@ -271,6 +278,24 @@ fn store(acc: Tile, x: u32, y0: u32, layer: u32) {
     if ROWS > 15u && y0 + 15u < h { put(x, y0 + 15u, layer, acc.r15); }
 }
 
+// POOL_OUT: one block's two columns `a` and `b` of rows y0 .. y0 + ROWS at columns x, x + 1,
+// max-pooled into `pooled` at (x / 2, y0 / 2 + k). The max is taken before the activation and the
+// clamp: both are non-decreasing, so it is pool.wgsl's max of the stored values (and rounding
+// to f16 at the store is too). x and y0 are even and levels have even sizes (a multiple of 32
+// at full resolution), so a window is whole once its top row is inside.
+fn store_pooled(a: Tile, b: Tile, x: u32, y0: u32, layer: u32) {
+    let h = params.height;
+    let p = vec2<u32>(x / 2u, y0 / 2u);
+    textureStore(pooled, p, layer, activate(max(max(a.r0, a.r1), max(b.r0, b.r1))));
+    if ROWS > 2u && y0 + 2u < h { textureStore(pooled, p + vec2<u32>(0u, 1u), layer, activate(max(max(a.r2, a.r3), max(b.r2, b.r3)))); }
+    if ROWS > 4u && y0 + 4u < h { textureStore(pooled, p + vec2<u32>(0u, 2u), layer, activate(max(max(a.r4, a.r5), max(b.r4, b.r5)))); }
+    if ROWS > 6u && y0 + 6u < h { textureStore(pooled, p + vec2<u32>(0u, 3u), layer, activate(max(max(a.r6, a.r7), max(b.r6, b.r7)))); }
+    if ROWS > 8u && y0 + 8u < h { textureStore(pooled, p + vec2<u32>(0u, 4u), layer, activate(max(max(a.r8, a.r9), max(b.r8, b.r9)))); }
+    if ROWS > 10u && y0 + 10u < h { textureStore(pooled, p + vec2<u32>(0u, 5u), layer, activate(max(max(a.r10, a.r11), max(b.r10, b.r11)))); }
+    if ROWS > 12u && y0 + 12u < h { textureStore(pooled, p + vec2<u32>(0u, 6u), layer, activate(max(max(a.r12, a.r13), max(b.r12, b.r13)))); }
+    if ROWS > 14u && y0 + 14u < h { textureStore(pooled, p + vec2<u32>(0u, 7u), layer, activate(max(max(a.r14, a.r15), max(b.r14, b.r15)))); }
+}
+
 // Workgroup shape (64 invocations: 8 x 8, 16 x 4, 32 x 2 or 64 x 1; kernels::Tile::group_x):
 // on the H100 the wider shapes win for most convs (tuned per conv on GPUs).
 override WG_X: u32 = 8u;
@@ -393,6 +418,16 @@ fn conv(gid: vec3<u32>) {
             if OB > 2u {
                 if ob0 + 2u < params.cout4 { store(acc6, x + 1u, y0, ob0 + 2u); }
                 if ob0 + 3u < params.cout4 { store(acc7, x + 1u, y0, ob0 + 3u); }
+            }
+            if POOL_OUT {
+                store_pooled(acc0, acc4, x, y0, ob0);
+                if second {
+                    store_pooled(acc1, acc5, x, y0, ob0 + 1u);
+                }
+                if OB > 2u {
+                    if ob0 + 2u < params.cout4 { store_pooled(acc2, acc6, x, y0, ob0 + 2u); }
+                    if ob0 + 3u < params.cout4 { store_pooled(acc3, acc7, x, y0, ob0 + 3u); }
+                }
             }
         } else {
             store(acc2, x + 1u, y0, ob0);

@@ -87,6 +87,25 @@ fn gpu_conv_with(
     memory: WeightMemory,
     sources: SourceAccess,
 ) -> Chw {
+    gpu_conv_pooled(a, b, weight, bias, leaky, w, h, tile, memory, sources, false).0
+}
+
+/// [`gpu_conv_with`] for a conv whose output is read max-pooled ([`ConvSpec::pooled`]), with
+/// the pooled value the conv wrote where its tile pools ([`ConvPlan::pools`]).
+#[allow(clippy::too_many_arguments)]
+fn gpu_conv_pooled(
+    a: (&Chw, Read),
+    b: Option<(&Chw, Read)>,
+    weight: &[f32],
+    bias: &[f32],
+    leaky: bool,
+    w: usize,
+    h: usize,
+    tile: Tile,
+    memory: WeightMemory,
+    sources: SourceAccess,
+    pooled: bool,
+) -> (Chw, Option<Chw>) {
     let g = gpu();
     let dev = &g.device;
     let cout = bias.len();
@@ -107,22 +126,28 @@ fn gpu_conv_with(
         leaky,
         slope: 0.1,
         b_is_hidden: false,
+        pooled,
     };
     let plan = ConvPlan::with_sources(dev, &mut kernels, &[spec], &[tile], &[sources]).unwrap();
     assert_eq!(plan.sources(), [sources]);
     let ta = upload(a.0);
     let tb = upload(b.map_or(&Chw::zeros(1, 1, 1), |b| b.0));
-    let out = dev.create_texture(&wgpu::TextureDescriptor {
-        label: None,
-        size: wgpu::Extent3d { width: w as u32, height: h as u32, depth_or_array_layers: blocks(cout) },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: kernels::ACTIVATION_FORMAT,
-        usage: wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC,
-        view_formats: &[],
-    });
-    let group = plan.bind_group(dev, &kernels, 0, &array_view(&ta), &array_view(&tb), &array_view(&out));
+    let output = |w: usize, h: usize| {
+        dev.create_texture(&wgpu::TextureDescriptor {
+            label: None,
+            size: wgpu::Extent3d { width: w as u32, height: h as u32, depth_or_array_layers: blocks(cout) },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: kernels::ACTIVATION_FORMAT,
+            usage: wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC,
+            view_formats: &[],
+        })
+    };
+    let out = output(w, h);
+    let pool_out = plan.pools(0).then(|| output(w / 2, h / 2));
+    let pool_view = pool_out.as_ref().map(array_view);
+    let group = plan.bind_group(dev, &kernels, 0, &array_view(&ta), &array_view(&tb), &array_view(&out), pool_view.as_ref());
     let mut enc = dev.create_command_encoder(&Default::default());
     {
         let mut pass = enc.begin_compute_pass(&Default::default());
@@ -130,14 +155,17 @@ fn gpu_conv_with(
         plan.record(&mut pass, 0, false, &group);
     }
     g.queue.submit(Some(enc.finish()));
-    let raw = read_texture(dev, &g.queue, &out).unwrap();
-    let mut o = Chw::zeros(cout, h, w);
-    for c in 0..cout {
-        for p in 0..h * w {
-            o.data[c * h * w + p] = raw[((c / 4) * h * w + p) * 4 + c % 4];
+    let read = |t: &wgpu::Texture, w: usize, h: usize| {
+        let raw = read_texture(dev, &g.queue, t).unwrap();
+        let mut o = Chw::zeros(cout, h, w);
+        for c in 0..cout {
+            for p in 0..h * w {
+                o.data[c * h * w + p] = raw[((c / 4) * h * w + p) * 4 + c % 4];
+            }
         }
-    }
-    o
+        o
+    };
+    (read(&out, w, h), pool_out.map(|t| read(&t, w / 2, h / 2)))
 }
 
 /// A conv with the CPU drivers' tile ([`Tile::cpu`]: weights across lanes on lavapipe), the
@@ -190,6 +218,53 @@ fn conv_direct_single_source_matches_cpu() {
     // 45 rows: three 16-row tiles, the last partial.
     const { assert!(45 > 2 * kernels::CONV_ROWS) };
     check_conv((tensor(5, 45, 37, 1), Read::Direct), None, 9, true, 37, 45, 10);
+}
+
+/// A conv whose output is read pooled writes the pooled value itself with the CPU tile
+/// (two columns, 8 rows: each invocation holds whole 2x2 windows), bit for bit the 2x2 max of
+/// what it stores, as pool.wgsl's pass took it. 46 rows: the last tile holds 6 of its 8 (rows
+/// past the edge pool nothing); 9 outputs: the last block's group has one block of two; the
+/// LeakyReLU's negative side and a pooled source read in the same conv.
+#[test]
+fn conv_pools_its_output_where_its_tile_allows() {
+    let g = gpu();
+    if !kernels::lanes_supported(&g.device) {
+        return;
+    }
+    let (a, b) = (tensor(5, 92, 76, 30), tensor(3, 46, 38, 31));
+    let (weight, bias) = (noise(9 * 8 * 9, 32), noise(9, 33));
+    let sources = SourceAccess::for_device_type(g.device.adapter_info().device_type);
+    let run = |tile| {
+        gpu_conv_pooled(
+            (&a, Read::Pool),
+            Some((&b, Read::Direct)),
+            &weight,
+            &bias,
+            true,
+            38,
+            46,
+            tile,
+            WeightMemory::Uniform,
+            sources,
+            true,
+        )
+    };
+    let (out, pooled) = run(Tile::lanes(8, 2, 2).unwrap());
+    let pooled = pooled.expect("a two-column lanes tile of 8 rows pools its output");
+    let want = cpu::read(&out, Read::Pool, 23, 19);
+    let wrong: Vec<usize> = (0..want.data.len()).filter(|&i| pooled.data[i].to_bits() != want.data[i].to_bits()).collect();
+    assert!(
+        wrong.is_empty(),
+        "{} of {} pooled values differ from the 2x2 max of the output, first at {:?}",
+        wrong.len(),
+        want.data.len(),
+        wrong.first()
+    );
+    assert!(out.data.iter().any(|&v| v < 0.0), "the LeakyReLU's negative side is exercised");
+    // One column: the pool pass stays; the conv's own output is the same.
+    let (one_column, none) = run(Tile::lanes(8, 2, 1).unwrap());
+    assert!(none.is_none(), "a one-column tile leaves pooling to the pass");
+    assert_eq!(one_column.data, out.data);
 }
 
 #[test]
@@ -446,6 +521,7 @@ fn one_source_spec<'a>(name: &'a str, width: u32, height: u32, ca: usize, weight
         leaky: true,
         slope: 0.1,
         b_is_hidden: false,
+        pooled: false,
     }
 }
 

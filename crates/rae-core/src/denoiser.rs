@@ -374,11 +374,14 @@ impl Denoiser {
                 (w, b)
             })
             .collect();
+        // The pooled value node i's output is max-pooled into, if any.
+        let pooled_by = |i: usize| graph.pools.iter().position(|p| p.after == i).map(|k| &pooled_views[k]);
         let specs: Vec<ConvSpec> = graph
             .nodes
             .iter()
             .zip(&tensors)
-            .map(|(n, (w, b))| ConvSpec {
+            .enumerate()
+            .map(|(i, (n, (w, b)))| ConvSpec {
                 name: &n.name,
                 width: pwidth >> n.level,
                 height: pheight >> n.level,
@@ -392,13 +395,20 @@ impl Denoiser {
                 leaky: n.leaky,
                 slope: arch.negative_slope,
                 b_is_hidden: n.b.is_some_and(|b| matches!(b.value, Value::HiddenPrev(_))),
+                pooled: pooled_by(i).is_some(),
             })
             .collect();
-        // Sources and destination of every conv at parity 0 (for tuning).
-        let node_views: Vec<[wgpu::TextureView; 3]> = graph
+        // Sources, destination and pooled value of every conv at parity 0 (for tuning).
+        let node_views: Vec<NodeViews> = graph
             .nodes
             .iter()
-            .map(|n| [view(n.a.value, 0).clone(), n.b.map_or(&dummy_view, |b| view(b.value, 0)).clone(), view(n.out, 0).clone()])
+            .enumerate()
+            .map(|(i, n)| NodeViews {
+                a: view(n.a.value, 0).clone(),
+                b: n.b.map_or(&dummy_view, |b| view(b.value, 0)).clone(),
+                out: view(n.out, 0).clone(),
+                pooled: pooled_by(i).cloned(),
+            })
             .collect();
         let timestamps = device.features().contains(wgpu::Features::TIMESTAMP_QUERY_INSIDE_PASSES);
         // Tuning times both source kinds unless the caller fixed one.
@@ -435,7 +445,7 @@ impl Denoiser {
                 .enumerate()
                 .map(|(i, node)| {
                     let src_b = node.b.map_or(&dummy_view, |b| view(b.value, parity));
-                    convs.bind_group(device, &kernels, i, view(node.a.value, parity), src_b, view(node.out, parity))
+                    convs.bind_group(device, &kernels, i, view(node.a.value, parity), src_b, view(node.out, parity), pooled_by(i))
                 })
                 .collect()
         });
@@ -646,7 +656,9 @@ impl Denoiser {
                 self.convs.record(&mut pass, i, reset, group);
                 // The pool of a block's new state runs right after the conv that writes it (its
                 // time is counted with that conv's stage).
-                if let Some((p, g)) = pools.next_if(|(p, _)| p.after == i) {
+                if let Some((p, g)) = pools.next_if(|(p, _)| p.after == i)
+                    && !self.convs.pools(i)
+                {
                     let (w, h) = (self.pwidth >> p.level, self.pheight >> p.level);
                     pass.set_pipeline(&self.kernels.pool);
                     pass.set_bind_group(0, g, &[]);
@@ -683,7 +695,9 @@ impl Denoiser {
             pass.dispatch_workgroups(1, 1, 1);
             let pools: Vec<_> = self.graph.pools.iter().zip(&self.pool_groups[parity]).collect();
             for (i, group) in self.conv_groups[parity].iter().enumerate().rev() {
-                if let Some((_, g)) = pools.iter().find(|(p, _)| p.after == i) {
+                if let Some((_, g)) = pools.iter().find(|(p, _)| p.after == i)
+                    && !self.convs.pools(i)
+                {
                     pass.set_pipeline(&self.kernels.pool);
                     pass.set_bind_group(0, *g, &[]);
                     pass.dispatch_workgroups(1, 1, 1);
@@ -1050,6 +1064,15 @@ fn tuning_candidates(choice: TileChoice, precision: Precision, mma: bool) -> Vec
     candidates
 }
 
+/// The textures one conv is bound to while tuning: its sources, its destination, and the
+/// value its output is max-pooled into, if any.
+struct NodeViews {
+    a: wgpu::TextureView,
+    b: wgpu::TextureView,
+    out: wgpu::TextureView,
+    pooled: Option<wgpu::TextureView>,
+}
+
 /// The fastest tile and source access for each conv on this device, among `candidates` and
 /// `accesses`, in two rounds:
 /// 1. Every candidate with `accesses[0]`, one plan at a time; each conv's
@@ -1071,7 +1094,7 @@ fn tune(
     queue: &wgpu::Queue,
     kernels: &mut Kernels,
     specs: &[ConvSpec],
-    views: &[[wgpu::TextureView; 3]],
+    views: &[NodeViews],
     candidates: &[Tile],
     accesses: &[SourceAccess],
 ) -> Result<Vec<Vec<Finalist>>> {
@@ -1084,7 +1107,8 @@ fn tune(
     let queries = device.create_query_set(&wgpu::QuerySetDescriptor { label: Some("tile tuning"), ty: wgpu::QueryType::Timestamp, count });
     let build = |kernels: &mut Kernels, tile: Tile, access: SourceAccess| -> Result<(ConvPlan, Vec<wgpu::BindGroup>)> {
         let plan = ConvPlan::with_sources(device, kernels, specs, &[tile], &[access])?;
-        let groups = views.iter().enumerate().map(|(i, [a, b, o])| plan.bind_group(device, kernels, i, a, b, o)).collect();
+        let groups =
+            views.iter().enumerate().map(|(i, v)| plan.bind_group(device, kernels, i, &v.a, &v.b, &v.out, v.pooled.as_ref())).collect();
         Ok((plan, groups))
     };
     // Round 1: each conv's times of every candidate, then its shortlist.

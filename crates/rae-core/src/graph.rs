@@ -76,7 +76,8 @@ impl ConvNode {
 }
 
 /// A 2x2 max-pool of encoder block `hidden`'s new state into [`Value::Pooled`]`(hidden)`, run
-/// right after node `after` (the conv that writes that state).
+/// right after node `after` (the conv that writes that state), or written by that conv itself
+/// where its tile holds whole 2x2 windows ([`crate::kernels::ConvPlan::pools`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Pool {
     /// Encoder block (index into [`Graph::hidden`]).

@@ -441,6 +441,9 @@ pub struct ConvVariant {
     pub reduce: bool,
     /// How the conv reads its sources (the module and bind-group layout it is made with).
     pub sources: SourceAccess,
+    /// The conv also writes its output max-pooled 2x2 (conv3x3.wgsl's POOL_OUT;
+    /// [`ConvPlan::pools`]).
+    pub pool: bool,
 }
 
 impl ConvVariant {
@@ -591,6 +594,7 @@ impl Kernels {
                     },
                     storage_texture_entry(4, precision.format()),
                     storage_entry(5, false),
+                    storage_texture_entry(6, precision.format()),
                 ],
             )
         };
@@ -828,6 +832,7 @@ impl Kernels {
                 ("WG_Y", (64 / v.group_x) as f64),
                 ("SPLIT", v.split as f64),
                 ("LANES", if v.method == Method::Lanes { 1.0 } else { 0.0 }),
+                ("POOL_OUT", v.pool as u32 as f64),
             ]);
             let module = if v.runs_rows() { modules.rows.as_ref() } else { modules.main.as_ref() }.expect("made by prepare");
             ("conv3x3", module, if v.reduce { "reduce" } else { v.method.entry_point() })
@@ -1216,6 +1221,9 @@ pub struct ConvSpec<'a> {
     pub slope: f32,
     /// Source b is a recurrent hidden state: a reset frame reads none of its channels.
     pub b_is_hidden: bool,
+    /// The output is read max-pooled 2x2 (an encoder block's last conv, [`crate::graph::Pool`]):
+    /// the conv writes the pooled value itself where its tile allows ([`ConvPlan::pools`]).
+    pub pooled: bool,
 }
 
 /// One dispatch: `count` consecutive output-block groups (workgroup z), their parameter and
@@ -1259,6 +1267,8 @@ struct Planned {
     pipeline: wgpu::ComputePipeline,
     /// How the conv reads its sources (its bind groups' layout).
     sources: SourceAccess,
+    /// It writes its output max-pooled too ([`ConvPlan::pools`]).
+    pool: bool,
     workgroups: (u32, u32),
     /// Parts per group (workgroup z runs over groups x parts).
     split: u32,
@@ -1275,6 +1285,8 @@ pub struct ConvPlan {
     weights: wgpu::Buffer,
     /// Split-K's partial sums (16 bytes when no conv is split).
     partial: wgpu::Buffer,
+    /// What binding 6 (the pooled output) holds for convs that do not pool: 1 x 1 x 1.
+    no_pooled: wgpu::TextureView,
     /// Bytes of the weight binding (one chunk, or the largest conv for storage weights).
     weight_binding: u64,
     convs: Vec<Planned>,
@@ -1386,6 +1398,7 @@ impl ConvPlan {
                     split: 1,
                     reduce: false,
                     sources: access(i),
+                    pool: false,
                 };
                 // Workgroups of 4 rows (conv3x3_mma.wgsl's ROWS) x 64 or 32 pixels (16 MT).
                 let pixels = if split { MMA_SPLIT_PIXELS } else { MMA_PIXELS };
@@ -1422,6 +1435,8 @@ impl ConvPlan {
             let split =
                 if tile.method != Method::Winograd { tile.split.min(cin4).min((partial_budget / part_bytes) as u32).max(1) } else { 1 };
             let used_tile = Tile { rows, blocks: ob, cols, group_x: tile.group_x, method: tile.method, split };
+            // The conv pools its own output where each invocation holds whole 2x2 windows.
+            let pool = s.pooled && tile.method == Method::Lanes && cols == 2 && rows % 2 == 0 && split == 1;
             let variant = ConvVariant {
                 read_a: s.read_a,
                 read_b: s.read_b,
@@ -1435,6 +1450,7 @@ impl ConvPlan {
                 split,
                 reduce: false,
                 sources: access(i),
+                pool,
             };
             // Split-K's partial sums: one buffer for the largest split conv, which every split
             // conv overwrites in turn (the reduce of one runs before the next conv starts).
@@ -1474,6 +1490,7 @@ impl ConvPlan {
                 group_x: WORKGROUP,
                 method: Method::Direct,
                 reduce: true,
+                pool: false,
                 ..variant
             };
             let reduce = (split > 1).then_some((reduce_variant, [s.width.div_ceil(8), s.height.div_ceil(8), cout4]));
@@ -1494,6 +1511,7 @@ impl ConvPlan {
             .map(|(variant, workgroups, split, groups, reduce)| Planned {
                 pipeline: kernels.conv(device, variant),
                 sources: variant.sources,
+                pool: variant.pool,
                 workgroups,
                 split,
                 groups,
@@ -1524,6 +1542,18 @@ impl ConvPlan {
                 usage: wgpu::BufferUsages::STORAGE,
                 mapped_at_creation: false,
             }),
+            no_pooled: device
+                .create_texture(&wgpu::TextureDescriptor {
+                    label: Some("no pooled output"),
+                    size: wgpu::Extent3d { width: 1, height: 1, depth_or_array_layers: 1 },
+                    mip_level_count: 1,
+                    sample_count: 1,
+                    dimension: wgpu::TextureDimension::D2,
+                    format: kernels.precision.format(),
+                    usage: wgpu::TextureUsages::STORAGE_BINDING,
+                    view_formats: &[],
+                })
+                .create_view(&wgpu::TextureViewDescriptor { dimension: Some(wgpu::TextureViewDimension::D2Array), ..Default::default() }),
             weight_binding,
             sources: convs.iter().map(|c| c.sources).collect(),
             convs,
@@ -1546,13 +1576,23 @@ impl ConvPlan {
         self.params.size() + self.weights.size() + self.partial.size()
     }
 
+    /// Whether conv `i` writes its output max-pooled 2x2 too (conv3x3.wgsl's POOL_OUT), so that
+    /// the pool pass after it is not run: a conv whose [`ConvSpec::pooled`] is set, with a
+    /// two-column lanes tile of an even number of rows, unsplit (the CPU tile). Its bind group
+    /// takes the pooled value ([`ConvPlan::bind_group`]).
+    pub fn pools(&self, i: usize) -> bool {
+        self.convs[i].pool
+    }
+
     /// Dispatches per frame.
     pub fn dispatches(&self) -> usize {
         self.convs.iter().map(|c| c.groups.len()).sum()
     }
 
     /// A bind group of conv `i` over the given textures (offsets are supplied per dispatch), in
-    /// the layout of its source access.
+    /// the layout of its source access. `pooled` is the value its output max-pools into, where
+    /// it has one; a conv that [pools](ConvPlan::pools) needs it.
+    #[allow(clippy::too_many_arguments)]
     pub fn bind_group(
         &self,
         device: &wgpu::Device,
@@ -1561,7 +1601,13 @@ impl ConvPlan {
         a: &wgpu::TextureView,
         b: &wgpu::TextureView,
         dst: &wgpu::TextureView,
+        pooled: Option<&wgpu::TextureView>,
     ) -> wgpu::BindGroup {
+        let pooled = if self.pools(i) {
+            pooled.unwrap_or_else(|| panic!("conv {i} pools its output: its bind group needs the pooled value"))
+        } else {
+            &self.no_pooled
+        };
         let buffer =
             |buffer, size| wgpu::BindingResource::Buffer(wgpu::BufferBinding { buffer, offset: 0, size: wgpu::BufferSize::new(size) });
         device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -1574,6 +1620,7 @@ impl ConvPlan {
                 wgpu::BindGroupEntry { binding: 3, resource: buffer(&self.weights, self.weight_binding) },
                 wgpu::BindGroupEntry { binding: 4, resource: wgpu::BindingResource::TextureView(dst) },
                 wgpu::BindGroupEntry { binding: 5, resource: self.partial.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 6, resource: wgpu::BindingResource::TextureView(pooled) },
             ],
         })
     }
