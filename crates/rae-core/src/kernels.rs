@@ -1436,7 +1436,7 @@ impl ConvPlan {
                 if tile.method != Method::Winograd { tile.split.min(cin4).min((partial_budget / part_bytes) as u32).max(1) } else { 1 };
             let used_tile = Tile { rows, blocks: ob, cols, group_x: tile.group_x, method: tile.method, split };
             // The conv pools its own output where each invocation holds whole 2x2 windows.
-            let pool = s.pooled && tile.method == Method::Lanes && cols == 2 && rows % 2 == 0 && split == 1;
+            let pool = s.pooled && tile.method == Method::Lanes && cols == 2 && rows.is_multiple_of(2) && split == 1;
             let variant = ConvVariant {
                 read_a: s.read_a,
                 read_b: s.read_b,
