@@ -198,13 +198,39 @@ fn put_texel_split(i: u32, source: vec4<f32>) {
     }
 }
 
-// PREFETCH: texel li + 128 k of chunk c's window as the sources hold it (zero past the window).
-fn fetch_texel(li: u32, k: u32, c: u32, x0: u32, y0: u32) -> vec4<f32> {
-    let i = li + 128u * k;
-    if i < win_texels() {
-        return window_source(i, c, x0, y0);
+// PREFETCH: window texel i of chunk c as `window_source` reads it, but at the pixel clamped into
+// the level: the load does not wait on the test of the level's edge. `put_prefetched` zeroes it
+// where `window_inside` says the pixel is outside. Which source (or none) still depends on the
+// block, but a lane's block is the same for all its texels of a chunk (i = li + 128 k), so that
+// is one branch around all seven loads, divergent only in a chunk that spans both sources.
+fn window_load(i: u32, c: u32, x0: u32, y0: u32) -> vec4<f32> {
+    let j = i % 4u;
+    let pixel = i / 4u;
+    let x = clamp(i32(x0 + pixel % win_w()) - 1, 0, i32(params.width) - 1);
+    let y = clamp(i32(y0 + pixel / win_w()) - 1, 0, i32(params.height) - 1);
+    let ib = 4u * c + j;
+    var v = vec4<f32>(0.0);
+    if ib < params.cin4_a {
+        v = read_at(src_a, MODE_A, x, y, ib);
+    } else if SOURCE_B && ib < params.cin4_a + params.cin4_b {
+        v = read_at(src_b, MODE_B, x, y, ib - params.cin4_a);
     }
-    return vec4<f32>(0.0);
+    return v;
+}
+
+// Whether window texel i's pixel (of any chunk) is inside the level (else the conv reads zero).
+fn window_inside(i: u32, x0: u32, y0: u32) -> bool {
+    let pixel = i / 4u;
+    let x = i32(x0 + pixel % win_w()) - 1;
+    let y = i32(y0 + pixel / win_w()) - 1;
+    return x >= 0 && y >= 0 && x < i32(params.width) && y < i32(params.height);
+}
+
+// PREFETCH: texel li + 128 k of chunk c's window, loaded by `window_load`. Past the window (the
+// last member of some invocations) it loads the window's last texel again, which
+// `put_prefetched` drops: no test before the load.
+fn fetch_texel(li: u32, k: u32, c: u32, x0: u32, y0: u32) -> vec4<f32> {
+    return window_load(min(li + 128u * k, win_texels() - 1u), c, x0, y0);
 }
 
 // PREFETCH: invocation li's texels of chunk c's window, read but not yet used.
@@ -220,23 +246,25 @@ fn fetch_chunk(li: u32, c: u32, x0: u32, y0: u32) -> Prefetch {
     );
 }
 
-// PREFETCH: texel li + 128 k, read by `fetch_texel`, into `win` as `stage_chunk_split` puts it.
-fn put_prefetched(li: u32, k: u32, v: vec4<f32>) {
+// PREFETCH: texel li + 128 k, read by `fetch_texel`, into `win` as `stage_chunk_split` puts it:
+// zero where its pixel is outside the level, nothing past the window.
+fn put_prefetched(li: u32, k: u32, v: vec4<f32>, x0: u32, y0: u32) {
     let i = li + 128u * k;
     if i < win_texels() {
-        put_texel_split(i, v);
+        put_texel_split(i, select(vec4<f32>(0.0), v, window_inside(i, x0, y0)));
     }
 }
 
-// PREFETCH: what `fetch_chunk` read, into `win`.
-fn put_chunk_split(p: Prefetch, li: u32) {
-    put_prefetched(li, 0u, p.t0);
-    put_prefetched(li, 1u, p.t1);
-    put_prefetched(li, 2u, p.t2);
-    put_prefetched(li, 3u, p.t3);
-    put_prefetched(li, 4u, p.t4);
-    put_prefetched(li, 5u, p.t5);
-    put_prefetched(li, 6u, p.t6);
+// PREFETCH: what `fetch_chunk` read for the window whose top-left output pixel is (x0, y0), into
+// `win`.
+fn put_chunk_split(p: Prefetch, li: u32, x0: u32, y0: u32) {
+    put_prefetched(li, 0u, p.t0, x0, y0);
+    put_prefetched(li, 1u, p.t1, x0, y0);
+    put_prefetched(li, 2u, p.t2, x0, y0);
+    put_prefetched(li, 3u, p.t3, x0, y0);
+    put_prefetched(li, 4u, p.t4, x0, y0);
+    put_prefetched(li, 5u, p.t5, x0, y0);
+    put_prefetched(li, 6u, p.t6, x0, y0);
 }
 
 // Chunk c's window into `win` for a split entry point: from `regs`, where `fetch_chunk` read it
@@ -246,7 +274,7 @@ fn stage_split(regs: ptr<function, Prefetch>, li: u32, c: u32, x0: u32, y0: u32)
         if c == 0u {
             *regs = fetch_chunk(li, 0u, x0, y0);
         }
-        put_chunk_split(*regs, li);
+        put_chunk_split(*regs, li, x0, y0);
     } else {
         stage_chunk_split(li, c, x0, y0);
     }

@@ -62,6 +62,11 @@ fn fetch(t: Source, mode: u32, x: i32, y: i32, layer: u32) -> vec4<f32> {
     if x < 0 || y < 0 || x >= i32(params.width) || y >= i32(params.height) {
         return vec4<f32>(0.0);
     }
+    return read_at(t, mode, x, y, layer);
+}
+
+// `fetch` at a pixel (x, y) inside the level, without the test.
+fn read_at(t: Source, mode: u32, x: i32, y: i32, layer: u32) -> vec4<f32> {
     switch mode {
         case READ_POOL: { return max4(t, vec2<i32>(2 * x, 2 * y), layer); }
         case READ_UPSAMPLE: { return load(t, vec2<i32>(x >> 1u, y >> 1u), layer); }
