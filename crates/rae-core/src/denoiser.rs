@@ -655,7 +655,7 @@ impl Denoiser {
             for (i, group) in self.conv_groups[parity].iter().enumerate() {
                 self.convs.record(&mut pass, i, reset, group);
                 // The pool of a block's new state runs right after the conv that writes it (its
-                // time is counted with that conv's stage).
+                // time is counted with that conv's stage), unless that conv pooled it itself.
                 if let Some((p, g)) = pools.next_if(|(p, _)| p.after == i)
                     && !self.convs.pools(i)
                 {
