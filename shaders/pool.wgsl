@@ -1,7 +1,8 @@
 // 2x2 max-pool of every channel block of an encoder block's output into the next level, once per
 // frame, so the convs that read it pooled (the next block's first conv, and the decoder's skip
 // in the reference network, which upsamples it back) load one texel per value instead of four.
-// A thread per output texel and layer (workgroup z = layer); sizes come from the textures.
+// A thread per output texel and layer (workgroup z = layer); sizes come from the textures. Not
+// run after a conv whose tile writes the pooled value itself (conv3x3.wgsl's POOL_OUT).
 
 @group(0) @binding(0) var src: texture_2d_array<f32>;
 @group(0) @binding(1) var dst: texture_storage_2d_array<rgba32float, write>;

@@ -535,7 +535,8 @@ pub struct Kernels {
     pub output_layout: wgpu::BindGroupLayout,
     /// Layout of pool.wgsl's group 0.
     pub pool_layout: wgpu::BindGroupLayout,
-    /// The 2x2 max-pool pipeline (one pass per encoder block, [`crate::graph::Pool`]).
+    /// The 2x2 max-pool pipeline (a pass per encoder block, [`crate::graph::Pool`], where the
+    /// block's last conv does not pool its own output, [`ConvPlan::pools`]).
     pub pool: wgpu::ComputePipeline,
     /// prep.wgsl, specialised per model by [`Kernels::prep_pipeline`].
     prep_module: wgpu::ShaderModule,
