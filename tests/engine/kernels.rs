@@ -671,6 +671,12 @@ fn plans_make_each_pipeline_once() {
     let plan = kernels::ConvPlan::with_sources(&g.device, &mut kernels, &specs, &[tile], &[mixed[0], mixed[1], mixed[1]]).unwrap();
     assert_eq!(plan.sources(), [mixed[0], mixed[1], mixed[1]]);
     assert_eq!(kernels.conv_pipelines(), 6);
+    // Weights chosen per conv as well: the first conv in uniform chunks (its pipeline again),
+    // the other two in storage (one new pipeline each, in the storage-weights layout).
+    let (uniform, storage) = (WeightMemory::Uniform, WeightMemory::Storage);
+    let plan = ConvPlan::with_choices(&g.device, &mut kernels, &specs, &[tile], &[mixed[0]], &[uniform, storage, storage]).unwrap();
+    assert_eq!(plan.memories(), [uniform, storage, storage]);
+    assert_eq!(kernels.conv_pipelines(), 8);
 }
 
 #[test]

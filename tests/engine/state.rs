@@ -51,6 +51,35 @@ fn two_runs_are_bit_identical() {
 }
 
 #[test]
+fn weights_chosen_by_level_give_the_frames_of_uniform_chunks() {
+    // Left open, each conv reads its weights as its level suits the adapter (on CPU drivers
+    // storage on the 32x32 and smaller levels, uniform chunks on the 64x64 one: one plan, one
+    // weight buffer, both layouts), and the frames are those of every conv in uniform chunks.
+    let (golden, weights) = setup();
+    let g = gpu();
+    let device_type = g.device.adapter_info().device_type;
+    let tiles = TileChoice::Fixed(Tile::cpu(&g.device));
+    let run = |memory: Option<WeightMemory>| {
+        let options = Options { tiles, weights: memory, ..Default::default() };
+        let mut d = Denoiser::with_options(&g.device, &g.queue, &weights, golden.width, golden.height, options).unwrap();
+        let frames = (0..2).flat_map(|i| bits(&d.denoise(&golden.inputs(i)).unwrap())).collect::<Vec<_>>();
+        (d, frames)
+    };
+    let (by_level, frames) = run(None);
+    let want: Vec<WeightMemory> = (by_level.graph().nodes.iter())
+        .map(|n| WeightMemory::for_conv(device_type, golden.width >> n.level, golden.height >> n.level))
+        .collect();
+    assert_eq!(by_level.weight_memories(), want);
+    if device_type == wgpu::DeviceType::Cpu {
+        assert!(want.contains(&WeightMemory::Uniform) && want.contains(&WeightMemory::Storage), "{want:?}");
+        assert_eq!(by_level.weights_name(), "mixed");
+    }
+    let (uniform, uniform_frames) = run(Some(WeightMemory::Uniform));
+    assert_eq!(uniform.weight_memory(), Some(WeightMemory::Uniform));
+    assert!(frames == uniform_frames, "weights by level change the frames");
+}
+
+#[test]
 fn compiling_backwards_leaves_the_frames_of_a_fresh_denoiser() {
     // CompileHelper's pass (every stage once, last first, on whatever the buffers hold) leaves
     // garbage in the hidden state; the reset after it makes the next frame a first frame again,
@@ -182,7 +211,7 @@ fn tuned_tiles_and_storage_weights_give_the_frames_of_the_default_plan() {
         Options { tiles: TileChoice::TunedAmong(&CANDIDATES), weights: Some(WeightMemory::Storage), sources: None, ..Default::default() };
     let mut a = Denoiser::with_options(&g.device, &g.queue, &weights, golden.width, golden.height, fixed).unwrap();
     let mut b = Denoiser::with_options(&g.device, &g.queue, &weights, golden.width, golden.height, tuned).unwrap();
-    assert_eq!(b.weight_memory(), WeightMemory::Storage);
+    assert_eq!(b.weight_memory(), Some(WeightMemory::Storage));
     let default = SourceAccess::for_device_type(g.device.adapter_info().device_type);
     assert!(a.conv_sources().iter().all(|&s| s == default), "an untuned plan reads as the device type suits");
     assert_eq!((a.sources_name(), b.conv_sources().len()), (default.name(), b.graph().nodes.len()));

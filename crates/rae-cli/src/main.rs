@@ -135,7 +135,8 @@ enum Command {
         #[arg(long, value_delimiter = ',', default_value = "auto")]
         tile: Vec<String>,
         /// Where the convs read weights: `uniform` (64 KiB chunks), `storage` (one buffer, a
-        /// dispatch per conv) or `auto` (uniform on CPU drivers, storage on GPUs).
+        /// dispatch per conv) or `auto` (storage on GPUs; on CPU drivers storage for levels of at
+        /// most 32x32 pixels, uniform above: `mixed` in the table).
         #[arg(long, value_delimiter = ',', default_value = "auto")]
         weights_memory: Vec<String>,
         /// How the convs read their input activations: `sampled` (sampled textures, read at
@@ -385,7 +386,7 @@ fn bench(path: &Path, sizes: &[(u32, u32)], frames: usize, layers: bool, sweep: 
                 "{s:>10} {:>9} {:>9} {:>7} {:>7} {build_s:>6.1} {:>10.2} {:>9.2} {g:>9.2} {:>9.2} {res:>9} {pipe:>9} {gflops:>9.1} {share:>7} {mib:>9.1} {alloc:>9} {err:>8.1e}",
                 precision.name(),
                 tile_name(tiles),
-                d.weight_memory().name(),
+                d.weights_name(),
                 d.sources_name(),
                 median(&mut total),
                 median(&mut up),
@@ -495,7 +496,7 @@ fn bench_interleaved(path: &Path, sizes: &[(u32, u32)], rounds: usize, sweep: &S
                 "{s:>10} {:>9} {:>12} {:>7} {:>7} {:>10.2} {fastest:>10.2} {:>9.3}",
                 precision.name(),
                 tile_name(*tiles),
-                d.weight_memory().name(),
+                d.weights_name(),
                 d.sources_name(),
                 median(ms),
                 median(&mut ratio)

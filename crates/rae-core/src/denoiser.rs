@@ -210,8 +210,10 @@ pub struct Options {
     pub precision: Precision,
     /// Register tile of the conv kernel.
     pub tiles: TileChoice,
-    /// Where the conv reads weights; `None`: by adapter type ([`WeightMemory::for_device_type`]),
-    /// or storage for a fixed Mma tile ([`Tile::mma`], [`Tile::mma_split`]).
+    /// Where the convs read weights; `None`: each conv by adapter type and level
+    /// ([`WeightMemory::for_conv`]; tuning times candidates with
+    /// [`WeightMemory::for_device_type`]), or storage for a fixed Mma tile ([`Tile::mma`],
+    /// [`Tile::mma_split`]).
     pub weights: Option<WeightMemory>,
     /// How the convs read their sources. `None`: where tiles are tuned, each conv the faster
     /// of both kinds as timed with its tile (on the H100 storage-texture sources took 0.88x the
@@ -310,13 +312,11 @@ impl Denoiser {
         height: u32,
         options: Options,
     ) -> Result<Self> {
-        let Options { precision, tiles, weights: memory, sources } = options;
+        let Options { precision, tiles, weights: chosen_memory, sources } = options;
         let device_type = device.adapter_info().device_type;
         // Mma tiles read storage weights: a fixed one picks them where the caller left it open.
-        let memory = memory.unwrap_or(match tiles {
-            TileChoice::Fixed(t) if t.method.is_mma() => WeightMemory::Storage,
-            _ => WeightMemory::for_device_type(device_type),
-        });
+        let fixed_mma = matches!(tiles, TileChoice::Fixed(t) if t.method.is_mma());
+        let memory = chosen_memory.unwrap_or(if fixed_mma { WeightMemory::Storage } else { WeightMemory::for_device_type(device_type) });
         let default_sources = sources.unwrap_or(SourceAccess::for_device_type(device_type));
         let arch = weights.arch.clone();
         let multiple = 1u32 << arch.levels();
@@ -434,7 +434,20 @@ impl Denoiser {
             _ if timestamps && !candidates.is_empty() => picks(tune_among(&mut kernels, &candidates)?),
             _ => fixed(Tile::default()),
         };
-        let convs = ConvPlan::with_sources(device, &mut kernels, &specs, &tiles, &conv_sources)?;
+        // Each conv's weight memory by its level (storage for an Mma tile), unless the caller
+        // or a fixed Mma tile chose.
+        let memories: Vec<WeightMemory> =
+            if chosen_memory.is_some() || fixed_mma {
+                vec![memory]
+            } else {
+                let tile = |i: usize| tiles[if tiles.len() == 1 { 0 } else { i }];
+                (specs.iter().enumerate())
+                    .map(|(i, s)| {
+                        if tile(i).method.is_mma() { WeightMemory::Storage } else { WeightMemory::for_conv(device_type, s.width, s.height) }
+                    })
+                    .collect()
+            };
+        let convs = ConvPlan::with_choices(device, &mut kernels, &specs, &tiles, &conv_sources, &memories)?;
         debug_assert_eq!(bytes, activation_bytes(&graph, pwidth, pheight, precision));
         bytes += convs.bytes();
         // Bind groups of both parities (the reset variant only changes the dynamic offset).
@@ -932,9 +945,24 @@ impl Denoiser {
         self.convs.tiles()
     }
 
-    /// Where the convs read their weights.
-    pub fn weight_memory(&self) -> WeightMemory {
-        self.kernels.weight_memory()
+    /// Where the convs read their weights, where every conv reads them alike (`None`: mixed,
+    /// [`Self::weight_memories`]).
+    pub fn weight_memory(&self) -> Option<WeightMemory> {
+        match self.weight_memories() {
+            [first, rest @ ..] if rest.iter().all(|m| m == first) => Some(*first),
+            _ => None,
+        }
+    }
+
+    /// Where the convs read their weights, for tables: the kind's name where all read alike,
+    /// else `mixed`.
+    pub fn weights_name(&self) -> &'static str {
+        self.weight_memory().map_or("mixed", WeightMemory::name)
+    }
+
+    /// Where each conv reads its weights, in [`Graph::nodes`] order.
+    pub fn weight_memories(&self) -> &[WeightMemory] {
+        self.convs.memories()
     }
 
     /// Each conv's tuning finalists in [`Graph::nodes`] order, fastest (the one it runs) first:

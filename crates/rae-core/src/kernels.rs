@@ -81,17 +81,39 @@ impl Precision {
 pub enum WeightMemory {
     /// 64 KiB uniform chunks, bound by dynamic offset: as many output-block groups per dispatch
     /// as fit one chunk. On lavapipe a uniform load is one load and a broadcast, 2.5x faster
-    /// than the storage version (docs/PERF.md), so CPU adapters use this.
+    /// than the storage version (docs/PERF.md), so CPU adapters use this on large levels.
     Uniform,
     /// One read-only storage buffer: every group of a conv in one dispatch. Discrete GPUs,
-    /// whose deep levels are too small to fill the machine one 64 KiB group at a time.
+    /// whose deep levels are too small to fill the machine one 64 KiB group at a time, and the
+    /// small levels on CPU drivers ([`WeightMemory::for_conv`]).
     Storage,
 }
+
+/// The most pixels of a level whose convs read storage weights on CPU drivers
+/// ([`WeightMemory::for_conv`]): 32 x 32.
+pub const CPU_STORAGE_WEIGHTS_MAX_PIXELS: u32 = 32 * 32;
 
 impl WeightMemory {
     /// The kind that suits an adapter: uniform chunks on CPU drivers, storage elsewhere.
     pub fn for_device_type(t: wgpu::DeviceType) -> Self {
         if t == wgpu::DeviceType::Cpu { WeightMemory::Uniform } else { WeightMemory::Storage }
+    }
+
+    /// The kind that suits a conv on a `width` x `height` level of an adapter: storage on GPUs;
+    /// on CPU drivers storage up to [`CPU_STORAGE_WEIGHTS_MAX_PIXELS`], uniform chunks above.
+    ///
+    /// Lavapipe runs a conv's dispatches one after another, and a uniform-chunk conv takes one
+    /// dispatch per 64 KiB of weights. A deep conv (202 -> 101 channels: 12 chunks) on an 8 x 8
+    /// level is then 12 dispatches of a workgroup or two each, which leave a core idle and
+    /// pay each dispatch's start; one storage dispatch took about half the time. On large
+    /// levels every dispatch fills both cores, and the uniform loads win (docs/PERF.md,
+    /// session 20).
+    pub fn for_conv(t: wgpu::DeviceType, width: u32, height: u32) -> Self {
+        if t == wgpu::DeviceType::Cpu && width * height > CPU_STORAGE_WEIGHTS_MAX_PIXELS {
+            WeightMemory::Uniform
+        } else {
+            WeightMemory::Storage
+        }
     }
 
     /// Name for tables and command lines.
@@ -444,6 +466,9 @@ pub struct ConvVariant {
     /// The conv also writes its output max-pooled 2x2 (conv3x3.wgsl's POOL_OUT;
     /// [`ConvPlan::pools`]).
     pub pool: bool,
+    /// Where it reads its weights (the module and bind-group layout it is made with; Mma tiles
+    /// read storage weights).
+    pub memory: WeightMemory,
 }
 
 impl ConvVariant {
@@ -511,7 +536,21 @@ impl Method {
     }
 }
 
-/// The conv modules of one [`SourceAccess`], each made when a pipeline first needs it.
+/// Every pair of source access and weight memory a conv can have, in [`conv_slot`] order.
+const CONV_SLOTS: [(SourceAccess, WeightMemory); 4] = [
+    (SourceAccess::Sampled, WeightMemory::Uniform),
+    (SourceAccess::Sampled, WeightMemory::Storage),
+    (SourceAccess::Storage, WeightMemory::Uniform),
+    (SourceAccess::Storage, WeightMemory::Storage),
+];
+
+/// Where a conv's layouts and modules are kept in [`Kernels`].
+fn conv_slot(access: SourceAccess, memory: WeightMemory) -> usize {
+    access as usize * 2 + memory as usize
+}
+
+/// The conv modules of one [`SourceAccess`] and [`WeightMemory`], each made when a pipeline
+/// first needs it.
 #[derive(Default)]
 struct ConvModules {
     /// conv3x3.wgsl as rewritten for the precision, memory, device and access.
@@ -524,10 +563,11 @@ struct ConvModules {
 
 /// Shader modules, layouts and pipelines of one device; conv pipelines are cached by variant.
 ///
-/// A conv reads its sources as its variant says ([`ConvVariant::sources`]), so one `Kernels`
-/// serves plans that mix sampled and storage-texture sources conv by conv (tuning picks per
-/// conv, [`crate::Denoiser`]); each access has its own bind-group layout, and its modules are
-/// made only when a pipeline of that access is.
+/// A conv reads its sources and its weights as its variant says ([`ConvVariant::sources`],
+/// [`ConvVariant::memory`]), so one `Kernels` serves plans that mix sampled and storage-texture
+/// sources (tuning picks per conv, [`crate::Denoiser`]) and uniform and storage weights (by
+/// level on CPU drivers, [`WeightMemory::for_conv`]) conv by conv; each pair of the two has
+/// its own bind-group layout, and its modules are made only when a pipeline of that pair is.
 pub struct Kernels {
     /// Layout of prep.wgsl's group 0.
     pub prep_layout: wgpu::BindGroupLayout,
@@ -544,12 +584,12 @@ pub struct Kernels {
     prep_pipeline_layout: wgpu::PipelineLayout,
     /// The output pipeline.
     pub output: wgpu::ComputePipeline,
-    /// Layouts of the conv's group 0, `[SourceAccess as usize]`.
-    conv_layouts: [wgpu::BindGroupLayout; 2],
+    /// Layouts of the conv's group 0, at [`conv_slot`] of the source access and weight memory.
+    conv_layouts: [wgpu::BindGroupLayout; 4],
     /// Pipeline layouts over [`Kernels::conv_layouts`], likewise.
-    conv_pipeline_layouts: [wgpu::PipelineLayout; 2],
+    conv_pipeline_layouts: [wgpu::PipelineLayout; 4],
     /// The conv modules, likewise.
-    modules: [ConvModules; 2],
+    modules: [ConvModules; 4],
     /// The device runs Mma tiles in matrix units ([`matrix_units_supported`]).
     matrix_units: bool,
     /// The device has subgroup operations (else [`WITHOUT_SUBGROUPS`] rewrites conv3x3.wgsl).
@@ -582,7 +622,7 @@ impl Kernels {
         let layout = |label, entries: &[wgpu::BindGroupLayoutEntry]| {
             device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some(label), entries })
         };
-        let conv_layout = |access: SourceAccess| {
+        let conv_layout = |access: SourceAccess, memory: WeightMemory| {
             layout(
                 "conv3x3",
                 &[
@@ -645,9 +685,9 @@ impl Kernels {
         let output = pipeline("output", &pipeline_layout(&output_layout), &module("output"), &[]);
         let pool_layout = layout("pool", &[texture_entry(0), storage_texture_entry(1, precision.format())]);
         let pool = pipeline("pool", &pipeline_layout(&pool_layout), &module("pool"), &[]);
-        let conv_layouts = [conv_layout(SourceAccess::Sampled), conv_layout(SourceAccess::Storage)];
+        let conv_layouts = CONV_SLOTS.map(|(access, memory)| conv_layout(access, memory));
         Self {
-            conv_pipeline_layouts: [pipeline_layout(&conv_layouts[0]), pipeline_layout(&conv_layouts[1])],
+            conv_pipeline_layouts: std::array::from_fn(|i| pipeline_layout(&conv_layouts[i])),
             conv_layouts,
             modules: Default::default(),
             matrix_units: matrix_units_supported(device),
@@ -675,12 +715,12 @@ impl Kernels {
 
     /// conv3x3.wgsl as this device, precision, weight memory and source access run it (the
     /// rewrites of [`Kernels::new`]).
-    fn conv_text(&self, access: SourceAccess) -> String {
+    fn conv_text(&self, access: SourceAccess, memory: WeightMemory) -> String {
         let mut src = self.conv_kernel_text("conv3x3.wgsl", conv_module_source("conv3x3"), access);
         if !self.subgroups {
             src = rewrite(src, "conv3x3.wgsl", &WITHOUT_SUBGROUPS);
         }
-        if self.memory == WeightMemory::Storage {
+        if memory == WeightMemory::Storage {
             src = rewrite(src, "conv3x3.wgsl", &[(UNIFORM_WEIGHTS, STORAGE_WEIGHTS)]);
         }
         src
@@ -705,9 +745,9 @@ impl Kernels {
         })
     }
 
-    /// Layout of the conv's group 0 for sources read as `access` says.
-    pub fn conv_layout(&self, access: SourceAccess) -> &wgpu::BindGroupLayout {
-        &self.conv_layouts[access as usize]
+    /// Layout of the conv's group 0 for sources read as `access` says and weights in `memory`.
+    pub fn conv_layout(&self, access: SourceAccess, memory: WeightMemory) -> &wgpu::BindGroupLayout {
+        &self.conv_layouts[conv_slot(access, memory)]
     }
 
     /// How many conv pipelines are made (one per variant; [`Kernels::prepare`]).
@@ -715,7 +755,7 @@ impl Kernels {
         self.conv.len()
     }
 
-    /// Where the conv reads its weights.
+    /// Where the convs of a plan that does not choose per conv read their weights.
     pub fn weight_memory(&self) -> WeightMemory {
         self.memory
     }
@@ -752,24 +792,25 @@ impl Kernels {
         if missing.is_empty() {
             return;
         }
-        // The modules the missing variants run, per source access: conv3x3.wgsl, the module
-        // with conv3x3_rows.wgsl for two-column lanes tiles ([`ROWS_STUB`]), conv3x3_mma.wgsl.
-        for access in [SourceAccess::Sampled, SourceAccess::Storage] {
-            let of_access = || missing.iter().filter(|v| v.sources == access);
-            let m = &self.modules[access as usize];
+        // The modules the missing variants run, per source access and weight memory:
+        // conv3x3.wgsl, the module with conv3x3_rows.wgsl for two-column lanes tiles
+        // ([`ROWS_STUB`]), conv3x3_mma.wgsl (storage weights only).
+        for (access, memory) in CONV_SLOTS {
+            let of_access = || missing.iter().filter(|v| v.sources == access && v.memory == memory);
+            let m = &self.modules[conv_slot(access, memory)];
             let (need_main, need_rows, need_mma) = (
                 m.main.is_none() && of_access().any(|v| !v.method.is_mma() && !v.runs_rows()),
                 m.rows.is_none() && of_access().any(|v| v.runs_rows()),
                 m.mma.is_none() && of_access().any(|v| v.method.is_mma()),
             );
-            let text = if need_main || need_rows { self.conv_text(access) } else { String::new() };
+            let text = if need_main || need_rows { self.conv_text(access, memory) } else { String::new() };
             let mma = need_mma.then(|| shader_module(device, "conv3x3_mma", self.mma_text(access)));
             let rows = need_rows.then(|| {
                 assert!(text.contains(ROWS_STUB), "conv3x3.wgsl has kernels::ROWS_STUB");
                 shader_module(device, "conv3x3 (two-column lanes)", text.replace(ROWS_STUB, shader_source("conv3x3_rows")))
             });
             let main = need_main.then(|| shader_module(device, "conv3x3", text));
-            let m = &mut self.modules[access as usize];
+            let m = &mut self.modules[conv_slot(access, memory)];
             m.main = m.main.take().or(main);
             m.rows = m.rows.take().or(rows);
             m.mma = m.mma.take().or(mma);
@@ -797,7 +838,7 @@ impl Kernels {
 
     /// Create one conv pipeline (its module made by [`Kernels::prepare`]).
     fn create_conv(&self, device: &wgpu::Device, v: ConvVariant) -> wgpu::ComputePipeline {
-        let modules = &self.modules[v.sources as usize];
+        let modules = &self.modules[conv_slot(v.sources, v.memory)];
         // conv_common.wgsl's overrides, then the kernel's own.
         let mut constants = vec![
             ("MODE_A", v.read_a as u32 as f64),
@@ -840,7 +881,7 @@ impl Kernels {
         };
         device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
             label: Some(label),
-            layout: Some(&self.conv_pipeline_layouts[v.sources as usize]),
+            layout: Some(&self.conv_pipeline_layouts[conv_slot(v.sources, v.memory)]),
             module,
             entry_point: Some(entry),
             compilation_options: wgpu::PipelineCompilationOptions { constants: &constants, zero_initialize_workgroup_memory: false },
@@ -1268,6 +1309,8 @@ struct Planned {
     pipeline: wgpu::ComputePipeline,
     /// How the conv reads its sources (its bind groups' layout).
     sources: SourceAccess,
+    /// Where it reads its weights (its bind groups' layout and binding size).
+    memory: WeightMemory,
     /// It writes its output max-pooled too ([`ConvPlan::pools`]).
     pool: bool,
     workgroups: (u32, u32),
@@ -1288,11 +1331,13 @@ pub struct ConvPlan {
     partial: wgpu::Buffer,
     /// What binding 6 (the pooled output) holds for convs that do not pool: 1 x 1 x 1.
     no_pooled: wgpu::TextureView,
-    /// Bytes of the weight binding (one chunk, or the largest conv for storage weights).
-    weight_binding: u64,
+    /// Bytes of a weight binding, `[WeightMemory as usize]`: one chunk for uniform weights, the
+    /// largest storage-weight conv for storage ones.
+    weight_binding: [u64; 2],
     convs: Vec<Planned>,
     tiles: Vec<Tile>,
     sources: Vec<SourceAccess>,
+    memories: Vec<WeightMemory>,
 }
 
 impl ConvPlan {
@@ -1315,9 +1360,24 @@ impl ConvPlan {
         tiles: &[Tile],
         sources: &[SourceAccess],
     ) -> crate::Result<Self> {
+        let memory = kernels.memory;
+        Self::with_choices(device, kernels, specs, tiles, sources, &[memory])
+    }
+
+    /// [`ConvPlan::with_sources`] with conv `i` reading its weights from `memories[i]` (one
+    /// entry: all alike), as [`WeightMemory::for_conv`] picks them by level on CPU drivers.
+    pub fn with_choices(
+        device: &wgpu::Device,
+        kernels: &mut Kernels,
+        specs: &[ConvSpec],
+        tiles: &[Tile],
+        sources: &[SourceAccess],
+        memories: &[WeightMemory],
+    ) -> crate::Result<Self> {
         use wgpu::util::DeviceExt;
         assert!(tiles.len() == 1 || tiles.len() == specs.len(), "one tile, or one per conv");
         assert!(sources.len() == 1 || sources.len() == specs.len(), "one source access, or one per conv");
+        assert!(memories.len() == 1 || memories.len() == specs.len(), "one weight memory, or one per conv");
         let access = |i: usize| sources[if sources.len() == 1 { 0 } else { i }];
         if let Some(t) = tiles.iter().find(|t| t.method == Method::Lanes && !lanes_supported(device)) {
             let info = device.adapter_info();
@@ -1334,17 +1394,15 @@ impl ConvPlan {
                 ),
             });
         }
-        let memory = kernels.memory;
         let limits = device.limits();
-        let align = match memory {
-            WeightMemory::Uniform => limits.min_uniform_buffer_offset_alignment,
-            WeightMemory::Storage => limits.min_uniform_buffer_offset_alignment.max(limits.min_storage_buffer_offset_alignment),
-        } as usize;
+        // Parameter blocks are uniform, and weights may be either: every offset suits both.
+        let align = limits.min_uniform_buffer_offset_alignment.max(limits.min_storage_buffer_offset_alignment) as usize;
         let mut params: Vec<u8> = Vec::new();
         let mut weights: Vec<u8> = Vec::new();
         // Each conv's variant, workgroups, split, groups and reduce pass, before its pipelines.
         let mut pending = Vec::with_capacity(specs.len());
         let mut used = Vec::with_capacity(specs.len());
+        // The largest storage-weight conv's bytes (its binding's size).
         let mut binding = 0u64;
         let mut partial = 0u64;
         // Split-K's partial sums may take as much memory as 16 channels at full resolution in f32
@@ -1353,6 +1411,7 @@ impl ConvPlan {
         let partial_budget = specs.iter().map(|s| s.width as u64 * s.height as u64).max().unwrap_or(0) * 16 * PARTIAL_LAYERS;
         for (i, s) in specs.iter().enumerate() {
             let tile = tiles[if tiles.len() == 1 { 0 } else { i }];
+            let memory = memories[if memories.len() == 1 { 0 } else { i }];
             let (cin4_a, cin4_b) = (blocks(s.ca), blocks(s.cb));
             let cin4 = cin4_a + cin4_b;
             if tile.method.is_mma() {
@@ -1400,6 +1459,7 @@ impl ConvPlan {
                     reduce: false,
                     sources: access(i),
                     pool: false,
+                    memory,
                 };
                 // Workgroups of 4 rows (conv3x3_mma.wgsl's ROWS) x 64 or 32 pixels (16 MT).
                 let pixels = if split { MMA_SPLIT_PIXELS } else { MMA_PIXELS };
@@ -1452,6 +1512,7 @@ impl ConvPlan {
                 reduce: false,
                 sources: access(i),
                 pool,
+                memory,
             };
             // Split-K's partial sums: one buffer for the largest split conv, which every split
             // conv overwrites in turn (the reduce of one runs before the next conv starts).
@@ -1465,7 +1526,9 @@ impl ConvPlan {
                 WeightMemory::Uniform => (WEIGHT_CHUNK / stride).min(group_count),
                 WeightMemory::Storage => group_count,
             };
-            binding = binding.max(per_dispatch as u64 * stride as u64 * 16);
+            if memory == WeightMemory::Storage {
+                binding = binding.max(per_dispatch as u64 * stride as u64 * 16);
+            }
             let mut groups = Vec::new();
             for first in (0..group_count).step_by(per_dispatch as usize) {
                 let count = per_dispatch.min(group_count - first);
@@ -1512,6 +1575,7 @@ impl ConvPlan {
             .map(|(variant, workgroups, split, groups, reduce)| Planned {
                 pipeline: kernels.conv(device, variant),
                 sources: variant.sources,
+                memory: variant.memory,
                 pool: variant.pool,
                 workgroups,
                 split,
@@ -1519,21 +1583,21 @@ impl ConvPlan {
                 reduce: reduce.map(|(v, n)| (kernels.conv(device, v), n)),
             })
             .collect();
-        // Every binding spans a whole chunk (or the largest conv) past its offset.
-        let weight_binding = match memory {
-            WeightMemory::Uniform => WEIGHT_CHUNK_BYTES,
-            WeightMemory::Storage => binding.next_multiple_of(16),
-        };
-        let last = convs.iter().flat_map(|c| &c.groups).map(|g| g.weights as u64).max().unwrap_or(0);
-        weights.resize((last + weight_binding) as usize, 0);
+        // Every binding spans a whole chunk (or the largest storage conv) past its offset.
+        let weight_binding = [WEIGHT_CHUNK_BYTES, binding.next_multiple_of(16)];
+        let end = convs.iter().flat_map(|c| c.groups.iter().map(|g| g.weights as u64 + weight_binding[c.memory as usize])).max();
+        weights.resize(end.unwrap_or(0) as usize, 0);
         params.resize(params.len().next_multiple_of(16), 0);
         let init = |label, contents: &[u8], usage| {
             device.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some(label), contents, usage })
         };
-        let weight_usage = match memory {
-            WeightMemory::Uniform => wgpu::BufferUsages::UNIFORM,
-            WeightMemory::Storage => wgpu::BufferUsages::STORAGE,
-        };
+        let weight_usage = convs
+            .iter()
+            .map(|c| match c.memory {
+                WeightMemory::Uniform => wgpu::BufferUsages::UNIFORM,
+                WeightMemory::Storage => wgpu::BufferUsages::STORAGE,
+            })
+            .fold(wgpu::BufferUsages::empty(), |a, b| a | b);
         Ok(Self {
             params: init("conv params", &params, wgpu::BufferUsages::UNIFORM),
             weights: init("conv weights", &weights, weight_usage),
@@ -1557,6 +1621,7 @@ impl ConvPlan {
                 .create_view(&wgpu::TextureViewDescriptor { dimension: Some(wgpu::TextureViewDimension::D2Array), ..Default::default() }),
             weight_binding,
             sources: convs.iter().map(|c| c.sources).collect(),
+            memories: convs.iter().map(|c| c.memory).collect(),
             convs,
             tiles: used,
         })
@@ -1570,6 +1635,11 @@ impl ConvPlan {
     /// How each conv reads its sources.
     pub fn sources(&self) -> &[SourceAccess] {
         &self.sources
+    }
+
+    /// Where each conv reads its weights.
+    pub fn memories(&self) -> &[WeightMemory] {
+        &self.memories
     }
 
     /// Bytes of the weight, parameter and partial-sum buffers.
@@ -1591,7 +1661,7 @@ impl ConvPlan {
     }
 
     /// A bind group of conv `i` over the given textures (offsets are supplied per dispatch), in
-    /// the layout of its source access. `pooled` is the value its output max-pools into, where
+    /// the layout of its source access and weight memory. `pooled` is the value its output max-pools into, where
     /// it has one; a conv that [pools](ConvPlan::pools) needs it.
     #[allow(clippy::too_many_arguments)]
     pub fn bind_group(
@@ -1613,12 +1683,12 @@ impl ConvPlan {
             |buffer, size| wgpu::BindingResource::Buffer(wgpu::BufferBinding { buffer, offset: 0, size: wgpu::BufferSize::new(size) });
         device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("conv3x3"),
-            layout: kernels.conv_layout(self.convs[i].sources),
+            layout: kernels.conv_layout(self.convs[i].sources, self.convs[i].memory),
             entries: &[
                 wgpu::BindGroupEntry { binding: 0, resource: buffer(&self.params, std::mem::size_of::<ConvParams>() as u64) },
                 wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(a) },
                 wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::TextureView(b) },
-                wgpu::BindGroupEntry { binding: 3, resource: buffer(&self.weights, self.weight_binding) },
+                wgpu::BindGroupEntry { binding: 3, resource: buffer(&self.weights, self.weight_binding[self.convs[i].memory as usize]) },
                 wgpu::BindGroupEntry { binding: 4, resource: wgpu::BindingResource::TextureView(dst) },
                 wgpu::BindGroupEntry { binding: 5, resource: self.partial.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 6, resource: wgpu::BindingResource::TextureView(pooled) },
