@@ -38,7 +38,7 @@ use crate::frame::{FrameInputs, FrameTimings};
 use crate::graph::{Graph, Read, Value};
 use crate::kernels::{
     ConvPlan, ConvSpec, Kernels, MMA_WORKGROUP_BYTES, Method, OutputParams, Precision, PrepLayout, PrepParams, SourceAccess, Tile,
-    WORKGROUP, WeightMemory, blocks,
+    WORKGROUP, WeightMemory, blocks, per_conv,
 };
 use crate::model::{Arch, InputBuffer, Transfer};
 use crate::weights::Weights;
@@ -436,17 +436,16 @@ impl Denoiser {
         };
         // Each conv's weight memory by its level (storage for an Mma tile), unless the caller
         // or a fixed Mma tile chose.
-        let memories: Vec<WeightMemory> =
-            if chosen_memory.is_some() || fixed_mma {
-                vec![memory]
-            } else {
-                let tile = |i: usize| tiles[if tiles.len() == 1 { 0 } else { i }];
-                (specs.iter().enumerate())
-                    .map(|(i, s)| {
-                        if tile(i).method.is_mma() { WeightMemory::Storage } else { WeightMemory::for_conv(device_type, s.width, s.height) }
-                    })
-                    .collect()
-            };
+        let memories: Vec<WeightMemory> = if chosen_memory.is_some() || fixed_mma {
+            vec![memory]
+        } else {
+            (specs.iter().enumerate())
+                .map(|(i, s)| {
+                    let mma = per_conv(&tiles, i).method.is_mma();
+                    if mma { WeightMemory::Storage } else { WeightMemory::for_conv(device_type, s.width, s.height) }
+                })
+                .collect()
+        };
         let convs = ConvPlan::with_choices(device, &mut kernels, &specs, &tiles, &conv_sources, &memories)?;
         debug_assert_eq!(bytes, activation_bytes(&graph, pwidth, pheight, precision));
         bytes += convs.bytes();

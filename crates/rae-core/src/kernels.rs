@@ -536,6 +536,11 @@ impl Method {
     }
 }
 
+/// Conv `i`'s entry of a plan's choices: one entry for every conv, or one per conv.
+pub(crate) fn per_conv<T: Copy>(choices: &[T], i: usize) -> T {
+    choices[if choices.len() == 1 { 0 } else { i }]
+}
+
 /// Every pair of source access and weight memory a conv can have, in [`conv_slot`] order.
 const CONV_SLOTS: [(SourceAccess, WeightMemory); 4] = [
     (SourceAccess::Sampled, WeightMemory::Uniform),
@@ -796,12 +801,12 @@ impl Kernels {
         // conv3x3.wgsl, the module with conv3x3_rows.wgsl for two-column lanes tiles
         // ([`ROWS_STUB`]), conv3x3_mma.wgsl (storage weights only).
         for (access, memory) in CONV_SLOTS {
-            let of_access = || missing.iter().filter(|v| v.sources == access && v.memory == memory);
+            let of_slot = || missing.iter().filter(|v| v.sources == access && v.memory == memory);
             let m = &self.modules[conv_slot(access, memory)];
             let (need_main, need_rows, need_mma) = (
-                m.main.is_none() && of_access().any(|v| !v.method.is_mma() && !v.runs_rows()),
-                m.rows.is_none() && of_access().any(|v| v.runs_rows()),
-                m.mma.is_none() && of_access().any(|v| v.method.is_mma()),
+                m.main.is_none() && of_slot().any(|v| !v.method.is_mma() && !v.runs_rows()),
+                m.rows.is_none() && of_slot().any(|v| v.runs_rows()),
+                m.mma.is_none() && of_slot().any(|v| v.method.is_mma()),
             );
             let text = if need_main || need_rows { self.conv_text(access, memory) } else { String::new() };
             let mma = need_mma.then(|| shader_module(device, "conv3x3_mma", self.mma_text(access)));
@@ -1378,7 +1383,6 @@ impl ConvPlan {
         assert!(tiles.len() == 1 || tiles.len() == specs.len(), "one tile, or one per conv");
         assert!(sources.len() == 1 || sources.len() == specs.len(), "one source access, or one per conv");
         assert!(memories.len() == 1 || memories.len() == specs.len(), "one weight memory, or one per conv");
-        let access = |i: usize| sources[if sources.len() == 1 { 0 } else { i }];
         if let Some(t) = tiles.iter().find(|t| t.method == Method::Lanes && !lanes_supported(device)) {
             let info = device.adapter_info();
             return Err(crate::Error::UnsupportedTile {
@@ -1410,8 +1414,7 @@ impl ConvPlan {
         // split full-resolution conv (gigabytes at 1080p) is split less or not at all.
         let partial_budget = specs.iter().map(|s| s.width as u64 * s.height as u64).max().unwrap_or(0) * 16 * PARTIAL_LAYERS;
         for (i, s) in specs.iter().enumerate() {
-            let tile = tiles[if tiles.len() == 1 { 0 } else { i }];
-            let memory = memories[if memories.len() == 1 { 0 } else { i }];
+            let (tile, access, memory) = (per_conv(tiles, i), per_conv(sources, i), per_conv(memories, i));
             let (cin4_a, cin4_b) = (blocks(s.ca), blocks(s.cb));
             let cin4 = cin4_a + cin4_b;
             if tile.method.is_mma() {
@@ -1457,7 +1460,7 @@ impl ConvPlan {
                     method: tile.method,
                     split: 1,
                     reduce: false,
-                    sources: access(i),
+                    sources: access,
                     pool: false,
                     memory,
                 };
@@ -1510,7 +1513,7 @@ impl ConvPlan {
                 method: tile.method,
                 split,
                 reduce: false,
-                sources: access(i),
+                sources: access,
                 pool,
                 memory,
             };
