@@ -1,7 +1,8 @@
 //! Recurrence, reset, determinism, odd sizes, the caller-buffer path and input errors.
 
 use rae_core::denoiser::TUNE_TILES;
-use rae_core::{Denoiser, Error, FrameInputs, GpuFrameIo, Options, SourceAccess, Tile, TileChoice, WeightMemory, Weights};
+use rae_core::kernels::{CPU_SHORT_TILE_MAX_PIXELS, rows_per_invocation};
+use rae_core::{Denoiser, Error, FrameInputs, GpuFrameIo, Method, Options, SourceAccess, Tile, TileChoice, WeightMemory, Weights};
 use wgpu::util::DeviceExt;
 
 use crate::{Golden, fixture, gpu};
@@ -77,6 +78,32 @@ fn weights_chosen_by_level_give_the_frames_of_uniform_chunks() {
     let (uniform, uniform_frames) = run(Some(WeightMemory::Uniform));
     assert_eq!(uniform.weight_memory(), Some(WeightMemory::Uniform));
     assert!(frames == uniform_frames, "weights by level change the frames");
+}
+
+#[test]
+fn cpu_tiles_by_level_give_the_frames_of_one_tile() {
+    // Left to choose, a CPU driver with subgroups runs 4-row lanes tiles on levels of at most
+    // 8x8 pixels (the 64x64 golden's L3) and 8 rows above. Every output is the same sum in the
+    // same order, so the frames are those of the 8-row tile everywhere.
+    let (golden, weights) = setup();
+    let g = gpu();
+    let run = |tiles: TileChoice| {
+        let options = Options { tiles, ..Default::default() };
+        let mut d = Denoiser::with_options(&g.device, &g.queue, &weights, golden.width, golden.height, options).unwrap();
+        let frames = (0..2).flat_map(|i| bits(&d.denoise(&golden.inputs(i)).unwrap())).collect::<Vec<_>>();
+        (d, frames)
+    };
+    let (auto, frames) = run(TileChoice::Auto);
+    if g.device.adapter_info().device_type == wgpu::DeviceType::Cpu && Tile::cpu(&g.device) == Tile::CPU_LANES {
+        for (n, t) in auto.graph().nodes.iter().zip(auto.conv_tiles()) {
+            let (w, h) = (golden.width >> n.level, golden.height >> n.level);
+            let rows = if w * h <= CPU_SHORT_TILE_MAX_PIXELS { 4 } else { 8 };
+            assert_eq!((t.method, t.rows), (Method::Lanes, rows_per_invocation(h, rows)), "{} on {w}x{h}", n.name);
+        }
+        assert!(auto.conv_tiles().iter().any(|t| t.rows == 4) && auto.conv_tiles().iter().any(|t| t.rows == 8));
+    }
+    let (_, one_tile) = run(TileChoice::Fixed(Tile::cpu(&g.device)));
+    assert!(frames == one_tile, "the tiles by level change the frames");
 }
 
 #[test]

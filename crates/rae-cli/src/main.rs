@@ -59,7 +59,8 @@ enum Command {
         #[arg(long)]
         csv: Option<PathBuf>,
         /// Conv register tile, as `bench --tile` takes it (one): `auto` (tuned on GPUs,
-        /// lanes8x2w2 on CPU drivers), `tuned`, or a fixed tile. On lavapipe `lanes4x2w2` compiles
+        /// lanes8x2w2 on CPU drivers, lanes4x2w2 on levels of at most 8x8), `tuned`, or a fixed
+        /// tile. On lavapipe `lanes4x2w2` compiles
         /// into an empty shader cache in 0.37x the time for frames about 1.07x as long.
         #[arg(long, default_value = "auto")]
         tile: String,
@@ -119,9 +120,10 @@ enum Command {
         /// the subgroup, devices with subgroups of 8 or more lanes; 4 blocks also in 2 columns,
         /// two columns at most 8 rows, e.g. lanes8x2w2, the CPU drivers' default) or
         /// winoROWSxBLOCKS[gGROUPX] (Winograd F(2x2, 3x3); rows 2, 4) for one tile everywhere,
-        /// `tuned` (each conv timed with every candidate on this device while building), or
-        /// `auto` (tuned-mma on GPUs; on CPU drivers lanes8x2w2, or 16x4 without subgroups: what
-        /// `denoise` uses). `mma16`, `mma32`, `mma48`, `mma64`: the matrix-unit kernel (f16
+        /// `tuned` (each conv timed with every candidate on this device while building; on CPU
+        /// drivers with subgroups lanes8x2w2 and lanes4x2w2), or `auto` (tuned-mma on GPUs; on
+        /// CPU drivers lanes8x2w2, lanes4x2w2 on levels of at most 8x8, or 16x4 without
+        /// subgroups: what `denoise` uses). `mma16`, `mma32`, `mma48`, `mma64`: the matrix-unit kernel (f16
         /// products summed in f32, 16 to 64 output channels per workgroup; tensor cores where
         /// wgpu's cooperative matrices have 16x16x16 f16 -> f32, emulated and slow elsewhere;
         /// storage weights and SHADER_F16); `mma16x3` to `mma64x3`: the same with every operand

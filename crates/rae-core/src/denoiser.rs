@@ -120,16 +120,18 @@ struct Profiler {
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub enum TileChoice {
     /// [`TileChoice::TunedMma`] on GPUs that have timestamps inside passes (that is
-    /// [`TileChoice::Tuned`] where the device has no matrix units), [`Tile::cpu`] on CPU
-    /// drivers (lavapipe compiles each variant for seconds, and 16 x 4 with weights across the
-    /// subgroup is its fastest everywhere), the default tile elsewhere.
+    /// [`TileChoice::Tuned`] where the device has no matrix units), [`Tile::cpu_for`] each
+    /// conv's level on CPU drivers (lavapipe compiles each variant for seconds, and its tiles
+    /// are known: 8 x 2 in two columns with weights across the subgroup, 4 rows on the
+    /// smallest levels), the default tile elsewhere.
     #[default]
     Auto,
     /// One tile for every conv (smaller where a level or a conv is smaller).
     Fixed(Tile),
-    /// Time every conv with each of [`TUNE_TILES`] on this device while building, and keep the
-    /// fastest per conv: big levels want tall tiles (fewer weight loads), deep levels want
-    /// small ones (enough invocations to fill the GPU).
+    /// Time every conv with each of [`TUNE_TILES`] on this device while building
+    /// ([`TUNE_TILES_LANES`] on CPU drivers with subgroups), and keep the fastest per conv: big
+    /// levels want tall tiles (fewer weight loads), deep levels want small ones (enough
+    /// invocations to fill the GPU).
     Tuned,
     /// [`TileChoice::Tuned`] among these candidates only (fewer pipelines to compile).
     TunedAmong(&'static [Tile]),
@@ -166,7 +168,13 @@ pub const MMA_SPLIT_TILES: [Tile; 4] = [
     Tile { rows: 4, blocks: 16, cols: 1, group_x: 8, method: Method::MmaSplit, split: 1 },
 ];
 
-/// The tiles [`TileChoice::Tuned`] times.
+/// The tiles [`TileChoice::Tuned`] times on CPU drivers with subgroups (lavapipe), where the
+/// direct tiles of [`TUNE_TILES`] gave 1.9x the frame time of [`Tile::CPU_LANES`]. Tuning
+/// among six lanes tiles (8 x 2 and 4 x 2 in two columns, 2 x 2 in two, 8 x 4, 4 x 4, 16 x 2) at
+/// 256x256 kept only these two (docs/PERF.md, session 21).
+pub const TUNE_TILES_LANES: [Tile; 2] = [Tile::CPU_LANES, Tile { rows: 4, ..Tile::CPU_LANES }];
+
+/// The tiles [`TileChoice::Tuned`] times on GPUs (and CPU drivers without subgroups).
 pub const TUNE_TILES: [Tile; 33] = [
     Tile { rows: 16, blocks: 2, cols: 1, group_x: 8, method: Method::Direct, split: 1 },
     Tile { rows: 8, blocks: 2, cols: 1, group_x: 8, method: Method::Direct, split: 1 },
@@ -211,9 +219,8 @@ pub struct Options {
     /// Register tile of the conv kernel.
     pub tiles: TileChoice,
     /// Where the convs read weights; `None`: each conv by adapter type and level
-    /// ([`WeightMemory::for_conv`]; tuning times candidates with
-    /// [`WeightMemory::for_device_type`]), or storage for a fixed Mma tile ([`Tile::mma`],
-    /// [`Tile::mma_split`]).
+    /// ([`WeightMemory::for_conv`], also while tuning times it), or storage for an Mma tile
+    /// ([`Tile::mma`], [`Tile::mma_split`]).
     pub weights: Option<WeightMemory>,
     /// How the convs read their sources. `None`: where tiles are tuned, each conv the faster
     /// of both kinds as timed with its tile (on the H100 storage-texture sources took 0.88x the
@@ -414,8 +421,21 @@ impl Denoiser {
         // Tuning times both source kinds unless the caller fixed one.
         let both = [default_sources, if default_sources == SourceAccess::Sampled { SourceAccess::Storage } else { SourceAccess::Sampled }];
         let accesses = if sources.is_some() { &both[..1] } else { &both[..] };
-        let tune_among =
-            |kernels: &mut Kernels, candidates: &[Tile]| tune(device, queue, kernels, &specs, &node_views, candidates, accesses);
+        // A conv's weight memory under a tile: the caller's or a fixed Mma tile's choice, else
+        // storage for an Mma tile and by level otherwise. Tuning times each candidate with it,
+        // so that it times what the plan it picks will run.
+        let memory_of = |tile: Tile, spec: &ConvSpec| -> WeightMemory {
+            if chosen_memory.is_some() || fixed_mma {
+                memory
+            } else if tile.method.is_mma() {
+                WeightMemory::Storage
+            } else {
+                WeightMemory::for_conv(device_type, spec.width, spec.height)
+            }
+        };
+        let tune_among = |kernels: &mut Kernels, candidates: &[Tile]| {
+            tune(device, queue, kernels, &specs, &node_views, candidates, accesses, &memory_of)
+        };
         // One tile and kind for every conv, or each conv's fastest tuning finalist.
         let fixed = |t: Tile| (vec![t], vec![default_sources], Vec::new());
         let picks = |finalists: Vec<Vec<Finalist>>| {
@@ -427,25 +447,21 @@ impl Denoiser {
         let mma = kernels.matrix_units()
             && memory == WeightMemory::Storage
             && device.limits().max_compute_workgroup_storage_size >= MMA_WORKGROUP_BYTES;
-        let candidates = tuning_candidates(tiles, precision, mma);
+        // CPU drivers with subgroups tune among lanes tiles: the direct ones take about twice
+        // as long there.
+        let lanes = device_type == wgpu::DeviceType::Cpu && Tile::cpu(device) == Tile::CPU_LANES;
+        let base: &[Tile] = if lanes { &TUNE_TILES_LANES } else { &TUNE_TILES };
+        let candidates = tuning_candidates(tiles, precision, mma, base);
         let (tiles, conv_sources, tuning): (Vec<Tile>, Vec<SourceAccess>, Vec<Vec<Finalist>>) = match tiles {
             TileChoice::Fixed(t) => fixed(t),
-            TileChoice::Auto if device_type == wgpu::DeviceType::Cpu => fixed(Tile::cpu(device)),
+            // The CPU tile by level (shorter on the smallest).
+            TileChoice::Auto if device_type == wgpu::DeviceType::Cpu => {
+                (specs.iter().map(|s| Tile::cpu_for(device, s.width, s.height)).collect(), vec![default_sources], Vec::new())
+            }
             _ if timestamps && !candidates.is_empty() => picks(tune_among(&mut kernels, &candidates)?),
             _ => fixed(Tile::default()),
         };
-        // Each conv's weight memory by its level (storage for an Mma tile), unless the caller
-        // or a fixed Mma tile chose.
-        let memories: Vec<WeightMemory> = if chosen_memory.is_some() || fixed_mma {
-            vec![memory]
-        } else {
-            (specs.iter().enumerate())
-                .map(|(i, s)| {
-                    let mma = per_conv(&tiles, i).method.is_mma();
-                    if mma { WeightMemory::Storage } else { WeightMemory::for_conv(device_type, s.width, s.height) }
-                })
-                .collect()
-        };
+        let memories: Vec<WeightMemory> = specs.iter().enumerate().map(|(i, s)| memory_of(per_conv(&tiles, i), s)).collect();
         let convs = ConvPlan::with_choices(device, &mut kernels, &specs, &tiles, &conv_sources, &memories)?;
         debug_assert_eq!(bytes, activation_bytes(&graph, pwidth, pheight, precision));
         bytes += convs.bytes();
@@ -1072,12 +1088,12 @@ const TUNE_SHORTLIST: usize = 2;
 /// for [`TileChoice::Auto`] and the tuned-mma choices [`TUNE_TILES`], a
 /// [`TileChoice::TunedMmaWith`] list, and where `mma` (matrix units, storage weights, room for
 /// their workgroup memory) the precision's matrix-unit tiles.
-fn tuning_candidates(choice: TileChoice, precision: Precision, mma: bool) -> Vec<Tile> {
+fn tuning_candidates(choice: TileChoice, precision: Precision, mma: bool, base: &[Tile]) -> Vec<Tile> {
     let mut candidates = match choice {
         TileChoice::Fixed(_) => return Vec::new(),
-        TileChoice::Tuned => return TUNE_TILES.to_vec(),
+        TileChoice::Tuned => return base.to_vec(),
         TileChoice::TunedAmong(list) => return list.to_vec(),
-        TileChoice::Auto | TileChoice::TunedMma | TileChoice::TunedMmaWith(_) => TUNE_TILES.to_vec(),
+        TileChoice::Auto | TileChoice::TunedMma | TileChoice::TunedMmaWith(_) => base.to_vec(),
     };
     if let TileChoice::TunedMmaWith(extra) = choice {
         candidates.extend(extra);
@@ -1115,7 +1131,9 @@ struct NodeViews {
 /// A timing runs the plan's convs once untimed (first dispatches) and then [`TUNE_ROUNDS`]
 /// times in one pass, with a timestamp after each conv; a conv's time is the median of its
 /// rounds. The activations hold whatever they hold (zeros on a fresh denoiser): the kernel's
-/// time does not depend on values (no data-dependent branches).
+/// time does not depend on values (no data-dependent branches). Each conv reads its weights
+/// from `memory_of(tile, conv)`, the memory the plan built from the picks gives it.
+#[allow(clippy::too_many_arguments)]
 fn tune(
     device: &wgpu::Device,
     queue: &wgpu::Queue,
@@ -1124,6 +1142,7 @@ fn tune(
     views: &[NodeViews],
     candidates: &[Tile],
     accesses: &[SourceAccess],
+    memory_of: &dyn Fn(Tile, &ConvSpec) -> WeightMemory,
 ) -> Result<Vec<Vec<Finalist>>> {
     let n = specs.len();
     if candidates.len() == 1 && accesses.len() == 1 {
@@ -1133,7 +1152,8 @@ fn tune(
     let count = ((n + 2) * (TUNE_ROUNDS + 1)) as u32;
     let queries = device.create_query_set(&wgpu::QuerySetDescriptor { label: Some("tile tuning"), ty: wgpu::QueryType::Timestamp, count });
     let build = |kernels: &mut Kernels, tile: Tile, access: SourceAccess| -> Result<(ConvPlan, Vec<wgpu::BindGroup>)> {
-        let plan = ConvPlan::with_sources(device, kernels, specs, &[tile], &[access])?;
+        let memories: Vec<WeightMemory> = specs.iter().map(|s| memory_of(tile, s)).collect();
+        let plan = ConvPlan::with_choices(device, kernels, specs, &[tile], &[access], &memories)?;
         let groups =
             views.iter().enumerate().map(|(i, v)| plan.bind_group(device, kernels, i, &v.a, &v.b, &v.out, v.pooled.as_ref())).collect();
         Ok((plan, groups))
@@ -1341,18 +1361,19 @@ mod tests {
         let x3p: &'static [Tile] = Vec::leak(vec![Tile::mma_split_prefetch(32).unwrap()]);
         let join = |parts: &[&[Tile]]| parts.concat();
         // Plain tuning and a list ignore the matrix units; a fixed tile tunes nothing.
-        assert_eq!(tuning_candidates(TileChoice::Tuned, Precision::F32, true), TUNE_TILES);
-        assert_eq!(tuning_candidates(TileChoice::TunedAmong(x3p), Precision::F16, true), x3p);
-        assert!(tuning_candidates(TileChoice::Fixed(Tile::default()), Precision::F32, true).is_empty());
+        assert_eq!(tuning_candidates(TileChoice::Tuned, Precision::F32, true, &TUNE_TILES), TUNE_TILES);
+        assert_eq!(tuning_candidates(TileChoice::Tuned, Precision::F32, false, &TUNE_TILES_LANES), TUNE_TILES_LANES);
+        assert_eq!(tuning_candidates(TileChoice::TunedAmong(x3p), Precision::F16, true, &TUNE_TILES), x3p);
+        assert!(tuning_candidates(TileChoice::Fixed(Tile::default()), Precision::F32, true, &TUNE_TILES).is_empty());
         // Auto and tuned-mma add the precision's matrix-unit tiles where they run.
         for choice in [TileChoice::Auto, TileChoice::TunedMma] {
-            assert_eq!(tuning_candidates(choice, Precision::F32, true), join(&[&TUNE_TILES, &MMA_SPLIT_TILES]));
-            assert_eq!(tuning_candidates(choice, Precision::F16, true), join(&[&TUNE_TILES, &MMA_TILES]));
-            assert_eq!(tuning_candidates(choice, Precision::F32, false), TUNE_TILES);
+            assert_eq!(tuning_candidates(choice, Precision::F32, true, &TUNE_TILES), join(&[&TUNE_TILES, &MMA_SPLIT_TILES]));
+            assert_eq!(tuning_candidates(choice, Precision::F16, true, &TUNE_TILES), join(&[&TUNE_TILES, &MMA_TILES]));
+            assert_eq!(tuning_candidates(choice, Precision::F32, false, &TUNE_TILES), TUNE_TILES);
         }
         // tuned-mma+T+...: the listed tiles as well, whether or not the matrix units run.
         let with = TileChoice::TunedMmaWith(x3p);
-        assert_eq!(tuning_candidates(with, Precision::F32, true), join(&[&TUNE_TILES, x3p, &MMA_SPLIT_TILES]));
-        assert_eq!(tuning_candidates(with, Precision::F32, false), join(&[&TUNE_TILES, x3p]));
+        assert_eq!(tuning_candidates(with, Precision::F32, true, &TUNE_TILES), join(&[&TUNE_TILES, x3p, &MMA_SPLIT_TILES]));
+        assert_eq!(tuning_candidates(with, Precision::F32, false, &TUNE_TILES), join(&[&TUNE_TILES, x3p]));
     }
 }

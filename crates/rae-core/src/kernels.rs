@@ -93,6 +93,10 @@ pub enum WeightMemory {
 /// ([`WeightMemory::for_conv`]): 32 x 32.
 pub const CPU_STORAGE_WEIGHTS_MAX_PIXELS: u32 = 32 * 32;
 
+/// The most pixels of a level whose convs run 4-row lanes tiles on CPU drivers
+/// ([`Tile::cpu_for`]): 8 x 8.
+pub const CPU_SHORT_TILE_MAX_PIXELS: u32 = 8 * 8;
+
 impl WeightMemory {
     /// The kind that suits an adapter: uniform chunks on CPU drivers, storage elsewhere.
     pub fn for_device_type(t: wgpu::DeviceType) -> Self {
@@ -953,6 +957,20 @@ impl Tile {
     /// of 8 or more lanes ([`lanes_supported`]), else [`Tile::CPU`].
     pub fn cpu(device: &wgpu::Device) -> Tile {
         if lanes_supported(device) { Tile::CPU_LANES } else { Tile::CPU }
+    }
+
+    /// The tile of CPU drivers for a conv on a `width` x `height` level: [`Tile::cpu`], with 4
+    /// rows instead of 8 where that is [`Tile::CPU_LANES`] and the level has at most
+    /// [`CPU_SHORT_TILE_MAX_PIXELS`].
+    ///
+    /// An 8 x 8 level is 4 invocations of 8 rows x 2 columns per output group, so 4 of a
+    /// subgroup's 16 lanes have pixels, and the others still load weights for them. At 4 rows
+    /// twice as many lanes work: the 256x256 frame's bottleneck convs (8 x 8, storage weights)
+    /// took 0.74x the time. On 16 x 16 levels the 8 rows were faster still (docs/PERF.md,
+    /// session 21).
+    pub fn cpu_for(device: &wgpu::Device, width: u32, height: u32) -> Tile {
+        let tile = Tile::cpu(device);
+        if tile == Tile::CPU_LANES && width * height <= CPU_SHORT_TILE_MAX_PIXELS { Tile { rows: 4, ..tile } } else { tile }
     }
 
     /// A one-column tile, if the kernel has one of this shape.
