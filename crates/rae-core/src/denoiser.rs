@@ -170,8 +170,8 @@ pub const MMA_SPLIT_TILES: [Tile; 4] = [
 
 /// The tiles [`TileChoice::Tuned`] times on CPU drivers with subgroups (lavapipe), where the
 /// direct tiles of [`TUNE_TILES`] gave 1.9x the frame time of [`Tile::CPU_LANES`]. Tuning
-/// among six lanes tiles (8 x 2 and 4 x 2 in two columns, 2 x 2 in two, 8 x 4, 4 x 4, 16 x 2) at
-/// 256x256 kept only these two (docs/PERF.md, session 21).
+/// among six lanes tiles (8, 4 and 2 rows x 2 blocks in two columns; 8 x 4, 4 x 4 and 16 x 2 in
+/// one) at 256x256 kept only these two (docs/PERF.md, session 21).
 pub const TUNE_TILES_LANES: [Tile; 2] = [Tile::CPU_LANES, Tile { rows: 4, ..Tile::CPU_LANES }];
 
 /// The tiles [`TileChoice::Tuned`] times on GPUs (and CPU drivers without subgroups).

@@ -966,7 +966,7 @@ impl Tile {
     /// An 8 x 8 level is 4 invocations of 8 rows x 2 columns per output group, so 4 of a
     /// subgroup's 16 lanes have pixels, and the others still load weights for them. At 4 rows
     /// twice as many lanes work: the 256x256 frame's bottleneck convs (8 x 8, storage weights)
-    /// took 0.74x the time. On 16 x 16 levels the 8 rows were faster still (docs/PERF.md,
+    /// took 0.72x the time. On 16 x 16 levels the 8 rows were faster still (docs/PERF.md,
     /// session 21).
     pub fn cpu_for(device: &wgpu::Device, width: u32, height: u32) -> Tile {
         let tile = Tile::cpu(device);
