@@ -556,7 +556,9 @@ fn wino_accumulate(m0: ptr<function, Wino>, m1: ptr<function, Wino>, m2: ptr<fun
 }
 
 // Y = A^T M A (A^T = [1 1 1 0; 0 1 -1 -1]) plus the bias, stored at (x .. x + 1, y0 .. y0 + 1)
-// where inside the output.
+// where inside the output; with POOL_OUT (winograd_lanes only) also their max, activated, into
+// `pooled` at (x / 2, y0 / 2), as `store_pooled` pools (x and y0 are even there, and levels have
+// even sizes, so a tile inside is a whole 2x2 window).
 fn wino_store(m: Wino, bias: vec4<f32>, x: u32, y0: u32, layer: u32) {
     // Row i of M times A: columns 0 and 1 of the 4x2 product.
     let s00 = m.r0.c0 + m.r0.c1 + m.r0.c2;
@@ -567,12 +569,19 @@ fn wino_store(m: Wino, bias: vec4<f32>, x: u32, y0: u32, layer: u32) {
     let s21 = m.r2.c1 - m.r2.c2 - m.r2.c3;
     let s30 = m.r3.c0 + m.r3.c1 + m.r3.c2;
     let s31 = m.r3.c1 - m.r3.c2 - m.r3.c3;
+    let o00 = bias + s00 + s10 + s20;
+    let o01 = bias + s01 + s11 + s21;
+    let o10 = bias + s10 - s20 - s30;
+    let o11 = bias + s11 - s21 - s31;
     let right = x + 1u < params.width;
-    textureStore(dst, vec2<u32>(x, y0), layer, activate(bias + s00 + s10 + s20));
-    if right { textureStore(dst, vec2<u32>(x + 1u, y0), layer, activate(bias + s01 + s11 + s21)); }
+    textureStore(dst, vec2<u32>(x, y0), layer, activate(o00));
+    if right { textureStore(dst, vec2<u32>(x + 1u, y0), layer, activate(o01)); }
     if y0 + 1u < params.height {
-        textureStore(dst, vec2<u32>(x, y0 + 1u), layer, activate(bias + s10 - s20 - s30));
-        if right { textureStore(dst, vec2<u32>(x + 1u, y0 + 1u), layer, activate(bias + s11 - s21 - s31)); }
+        textureStore(dst, vec2<u32>(x, y0 + 1u), layer, activate(o10));
+        if right { textureStore(dst, vec2<u32>(x + 1u, y0 + 1u), layer, activate(o11)); }
+    }
+    if POOL_OUT {
+        textureStore(pooled, vec2<u32>(x / 2u, y0 / 2u), layer, activate(max(max(o00, o01), max(o10, o11))));
     }
 }
 

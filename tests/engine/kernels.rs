@@ -505,6 +505,96 @@ fn conv_winograd_tiles_match_cpu() {
     assert_eq!(Tile::winograd(4, 1).unwrap().to_string(), "wino4x1");
 }
 
+#[test]
+fn conv_winograd_lanes_tiles_match_cpu_and_the_winograd_tiles() {
+    // Winograd with its weights across the subgroup: two and four stacked 2x2 tiles, one and
+    // two blocks, both weight memories and every read mode, on levels 13 and 22 wide and 19
+    // and 12 high (partial tiles on both edges, lanes past them loading for the others).
+    let g = gpu();
+    let wl = |rows, blocks| Tile::winograd_lanes(rows, blocks).expect("a Winograd lanes tile");
+    if !kernels::winograd_lanes_supported(&g.device) {
+        // Refused, with the reason, where the device has no subgroups of 16 lanes.
+        let mut k = Kernels::new(&g.device, kernels::Precision::F32, WeightMemory::Uniform);
+        let (weight, bias) = (vec![0.0; 4 * 4 * 9], vec![0.0; 4]);
+        let err = ConvPlan::new(&g.device, &mut k, &[one_source_spec("c", 16, 16, 4, &weight, &bias)], &[wl(8, 2)]).err().expect("refused");
+        assert!(err.to_string().contains("subgroups of at least 16 lanes"), "{err}");
+        return;
+    }
+    let cases = [
+        (wl(8, 2), WeightMemory::Uniform),
+        (wl(4, 1).with_group(32).unwrap(), WeightMemory::Storage),
+        (wl(8, 1), WeightMemory::Storage),
+        (wl(4, 2), WeightMemory::Uniform),
+    ];
+    for (i, (tile, memory)) in cases.into_iter().enumerate() {
+        assert_eq!((tile.cols, tile.taps()), (2, 16));
+        let seed = 800 + 3 * i as u64;
+        if i % 2 == 0 {
+            check_conv_tile(
+                (tensor(6, 38, 26, seed), Read::Pool),
+                Some((tensor(5, 19, 13, seed + 1), Read::Direct)),
+                11,
+                true,
+                13,
+                19,
+                seed + 2,
+                tile,
+                memory,
+            );
+        } else {
+            check_conv_tile(
+                (tensor(6, 6, 11, seed), Read::Upsample),
+                Some((tensor(5, 12, 22, seed + 1), Read::PoolUpsample)),
+                11,
+                false,
+                22,
+                12,
+                seed + 2,
+                tile,
+                memory,
+            );
+        }
+    }
+    // One row: a deep level of a small frame.
+    check_conv_tile((tensor(9, 1, 11, 830), Read::Direct), None, 8, true, 11, 1, 831, wl(8, 2), WeightMemory::Storage);
+    // The same transforms and sums in the same order as `winograd`'s: bit-identical, whatever
+    // the number of stacked tiles.
+    let (a, b) = (tensor(6, 38, 26, 840), tensor(5, 19, 13, 841));
+    let (weight, bias) = (noise(11 * 11 * 9, 842), noise(11, 843));
+    let run = |tile| gpu_conv((&a, Read::Pool), Some((&b, Read::Direct)), &weight, &bias, true, 13, 19, tile, WeightMemory::Uniform).data;
+    let wino = run(Tile::winograd(4, 2).unwrap());
+    assert_eq!(run(wl(8, 2)), wino, "winolanes8x2 against wino4x2");
+    assert_eq!(run(wl(4, 2)), wino, "winolanes4x2 against wino4x2");
+    assert_eq!(run(wl(8, 1)), run(Tile::winograd(2, 1).unwrap()), "winolanes8x1 against wino2x1");
+    // Its pooled output is the 2x2 max of its output, bit for bit (the pool pass's).
+    let (c, d) = (tensor(5, 92, 76, 850), tensor(3, 46, 38, 851));
+    let (weight, bias) = (noise(9 * 8 * 9, 852), noise(9, 853));
+    let sources = SourceAccess::for_device_type(g.device.adapter_info().device_type);
+    let (out, pooled) = gpu_conv_pooled(
+        (&c, Read::Pool),
+        Some((&d, Read::Direct)),
+        &weight,
+        &bias,
+        true,
+        38,
+        46,
+        wl(8, 2),
+        WeightMemory::Uniform,
+        sources,
+        true,
+    );
+    let pooled = pooled.expect("a Winograd lanes tile pools its output");
+    let want = cpu::read(&out, Read::Pool, 23, 19);
+    assert!(pooled.data.iter().zip(&want.data).all(|(p, w)| p.to_bits() == w.to_bits()), "pooled values differ from the 2x2 max");
+    assert!(out.data.iter().any(|&v| v < 0.0), "the LeakyReLU's negative side is exercised");
+    assert_eq!(wl(8, 2).to_string(), "winolanes8x2");
+    assert_eq!(Tile::CPU_WINOGRAD, wl(8, 2), "the CPU drivers' Winograd tile is one the kernel has");
+    assert_eq!(Tile::winograd_lanes(2, 1), None);
+    assert_eq!(Tile::winograd_lanes(16, 1), None);
+    assert_eq!(Tile::winograd_lanes(8, 4), None);
+    assert_eq!(wl(8, 2).with_split(2), None);
+}
+
 /// A LeakyReLU conv reading `ca` channels of one source directly (`bias.len()` outputs).
 fn one_source_spec<'a>(name: &'a str, width: u32, height: u32, ca: usize, weight: &'a [f32], bias: &'a [f32]) -> ConvSpec<'a> {
     ConvSpec {

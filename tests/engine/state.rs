@@ -1,7 +1,7 @@
 //! Recurrence, reset, determinism, odd sizes, the caller-buffer path and input errors.
 
 use rae_core::denoiser::TUNE_TILES;
-use rae_core::kernels::{CPU_SHORT_TILE_MAX_PIXELS, rows_per_invocation};
+use rae_core::kernels::{self, CPU_SHORT_TILE_MAX_PIXELS, CPU_WINOGRAD_MIN_BLOCKS, blocks, rows_per_invocation};
 use rae_core::{Denoiser, Error, FrameInputs, GpuFrameIo, Method, Options, SourceAccess, Tile, TileChoice, WeightMemory, Weights};
 use wgpu::util::DeviceExt;
 
@@ -81,29 +81,50 @@ fn weights_chosen_by_level_give_the_frames_of_uniform_chunks() {
 }
 
 #[test]
-fn cpu_tiles_by_level_give_the_frames_of_one_tile() {
+fn cpu_tiles_by_level_and_width_follow_the_rule() {
     // Left to choose, a CPU driver with subgroups runs 4-row lanes tiles on levels of at most
-    // 8x8 pixels (the 64x64 golden's L3) and 8 rows above. Every output is the same sum in the
-    // same order, so the frames are those of the 8-row tile everywhere.
+    // 8x8 pixels (the 64x64 golden's L3), Winograd lanes tiles above them for convs of 32
+    // channels and more (where 16-lane subgroups allow), and 8-row lanes tiles for the others.
+    // The 4- and 8-row direct tiles take the same sums in the same order, so with Winograd
+    // only where it is chosen the frames stay bit for bit those of the rule's tiles; against
+    // the 8-row tile everywhere they differ by Winograd's rounding alone.
     let (golden, weights) = setup();
     let g = gpu();
     let run = |tiles: TileChoice| {
         let options = Options { tiles, ..Default::default() };
         let mut d = Denoiser::with_options(&g.device, &g.queue, &weights, golden.width, golden.height, options).unwrap();
-        let frames = (0..2).flat_map(|i| bits(&d.denoise(&golden.inputs(i)).unwrap())).collect::<Vec<_>>();
+        let frames = (0..2).flat_map(|i| d.denoise(&golden.inputs(i)).unwrap()).collect::<Vec<_>>();
         (d, frames)
     };
     let (auto, frames) = run(TileChoice::Auto);
-    if g.device.adapter_info().device_type == wgpu::DeviceType::Cpu && Tile::cpu(&g.device) == Tile::CPU_LANES {
-        for (n, t) in auto.graph().nodes.iter().zip(auto.conv_tiles()) {
-            let (w, h) = (golden.width >> n.level, golden.height >> n.level);
-            let rows = if w * h <= CPU_SHORT_TILE_MAX_PIXELS { 4 } else { 8 };
-            assert_eq!((t.method, t.rows), (Method::Lanes, rows_per_invocation(h, rows)), "{} on {w}x{h}", n.name);
-        }
-        assert!(auto.conv_tiles().iter().any(|t| t.rows == 4) && auto.conv_tiles().iter().any(|t| t.rows == 8));
-    }
     let (_, one_tile) = run(TileChoice::Fixed(Tile::cpu(&g.device)));
-    assert!(frames == one_tile, "the tiles by level change the frames");
+    if g.device.adapter_info().device_type != wgpu::DeviceType::Cpu || Tile::cpu(&g.device) != Tile::CPU_LANES {
+        assert!(frames.iter().zip(&one_tile).all(|(a, b)| a.to_bits() == b.to_bits()), "one tile everywhere");
+        return;
+    }
+    let wino = kernels::winograd_lanes_supported(&g.device);
+    for (n, t) in auto.graph().nodes.iter().zip(auto.conv_tiles()) {
+        let (w, h) = (golden.width >> n.level, golden.height >> n.level);
+        let in_blocks = blocks(n.a.channels) + n.b.map_or(0, |b| blocks(b.channels));
+        let want = if w * h <= CPU_SHORT_TILE_MAX_PIXELS {
+            (Method::Lanes, rows_per_invocation(h, 4))
+        } else if wino && in_blocks >= CPU_WINOGRAD_MIN_BLOCKS {
+            (Method::WinogradLanes, rows_per_invocation(h, 8))
+        } else {
+            (Method::Lanes, rows_per_invocation(h, 8))
+        };
+        assert_eq!((t.method, t.rows), want, "{} on {w}x{h} reading {in_blocks} blocks", n.name);
+    }
+    let methods: Vec<Method> = auto.conv_tiles().iter().map(|t| t.method).collect();
+    assert!(methods.contains(&Method::Lanes));
+    assert_eq!(methods.contains(&Method::WinogradLanes), wino);
+    // Winograd's rounding only: the frames within 1e-5 of the largest value.
+    let scale = one_tile.iter().fold(1f32, |m, v| m.max(v.abs()));
+    let worst = frames.iter().zip(&one_tile).fold(0f32, |m, (a, b)| m.max((a - b).abs()));
+    assert!(worst <= 1e-5 * scale, "largest difference {worst} (scale {scale})");
+    if !wino {
+        assert!(frames.iter().zip(&one_tile).all(|(a, b)| a.to_bits() == b.to_bits()), "the direct tiles by level change the frames");
+    }
 }
 
 #[test]

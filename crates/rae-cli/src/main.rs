@@ -209,7 +209,7 @@ fn parse_tile(s: &str) -> Result<TileChoice> {
         };
         return tile.map(TileChoice::Fixed).with_context(|| format!("tile `{s}`: matrix-unit tiles are mma16, mma32, mma48 or mma64 (output channels per workgroup), split mma16x3 to mma64x3, or split with prefetched windows mma16x3p to mma64x3p"));
     }
-    let bad = || format!("tile `{s}` is not [wino|lanes]ROWSxBLOCKS[wCOLS][gGROUPX][kSPLIT], tuned or auto");
+    let bad = || format!("tile `{s}` is not [wino|lanes|winolanes]ROWSxBLOCKS[wCOLS][gGROUPX][kSPLIT], tuned or auto");
     let (winograd, s2) = s.strip_prefix("wino").map_or((false, s), |r| (true, r));
     let (lanes, s2) = s2.strip_prefix("lanes").map_or((false, s2), |r| (true, r));
     let (s2, split) = s2.split_once('k').map_or((s2, "1"), |(a, k)| (a, k));
@@ -219,6 +219,15 @@ fn parse_tile(s: &str) -> Result<TileChoice> {
     let (shape, cols) = rest.split_once('w').map_or((rest, "1"), |(a, c)| (a, c));
     let (r, b) = shape.split_once('x').with_context(bad)?;
     let (r, b, c) = (r.parse().with_context(bad)?, b.parse().with_context(bad)?, cols.parse().with_context(bad)?);
+    if winograd && lanes {
+        return Tile::winograd_lanes(r, b)
+            .filter(|_| c == 1 && split == 1)
+            .and_then(|t| t.with_group(group))
+            .map(TileChoice::Fixed)
+            .with_context(|| {
+                format!("tile `{s}`: Winograd lanes tiles have 4 or 8 rows, 1 or 2 blocks and workgroups 8, 16, 32 or 64 wide")
+            });
+    }
     if winograd {
         return Tile::winograd(r, b)
             .filter(|_| c == 1 && split == 1)

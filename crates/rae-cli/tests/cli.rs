@@ -494,10 +494,11 @@ fn bench_times_sampled_and_storage_sources() {
 
 #[test]
 fn bench_reports_each_combinations_error_and_skips_what_it_cannot_run() {
-    // The err column: the CPU drivers' tile is the reference itself (0); the matrix-unit kernel
-    // (emulated on lavapipe) rounds its operands to f16, off by a little, and its split tiles
-    // by far less; with uniform weights they cannot run, which is a row saying so, not a
-    // failed run.
+    // The err column: the reference is the CPU drivers' direct tile, which `auto` runs or
+    // (with 16-lane subgroups) replaces by Winograd's on the 32-channel convs above 8x8, off
+    // by Winograd's rounding; the matrix-unit kernel (emulated on lavapipe) rounds its operands
+    // to f16, off by more, and its split tiles by far less; with uniform weights they cannot
+    // run, which is a row saying so, not a failed run.
     let out = rae()
         .args([
             "bench",
@@ -523,7 +524,8 @@ fn bench_reports_each_combinations_error_and_skips_what_it_cannot_run() {
         text.lines().map(|l| l.split_whitespace().collect::<Vec<_>>()).filter(|f| f.first() == Some(&"32x32")).collect();
     assert_eq!(rows.len(), 6, "{text}");
     let value = |row: &[&str]| -> f64 { row.last().unwrap().parse().unwrap_or_else(|_| panic!("err of {row:?}")) };
-    assert_eq!((rows[0][2], rows[0][3], value(&rows[0])), ("auto", "storage", 0.0), "{text}");
+    assert_eq!((rows[0][2], rows[0][3]), ("auto", "storage"), "{text}");
+    assert!(value(&rows[0]) < 1e-5, "{text}");
     assert_eq!((rows[1][2], rows[1][3]), ("mma16", "storage"), "{text}");
     assert!((1e-6..1e-2).contains(&value(&rows[1])), "{text}");
     assert_eq!((rows[2][2], rows[2][3]), ("mma16x3", "storage"), "{text}");

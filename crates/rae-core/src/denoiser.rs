@@ -122,8 +122,9 @@ pub enum TileChoice {
     /// [`TileChoice::TunedMma`] on GPUs that have timestamps inside passes (that is
     /// [`TileChoice::Tuned`] where the device has no matrix units), [`Tile::cpu_for`] each
     /// conv's level on CPU drivers (lavapipe compiles each variant for seconds, and its tiles
-    /// are known: 8 x 2 in two columns with weights across the subgroup, 4 rows on the
-    /// smallest levels), the default tile elsewhere.
+    /// are known: Winograd 8 x 2 with weights across the subgroup for convs of 32 channels
+    /// and more, direct 8 x 2 in two columns for the others, 4 rows on the smallest levels),
+    /// the default tile elsewhere.
     #[default]
     Auto,
     /// One tile for every conv (smaller where a level or a conv is smaller).
@@ -456,7 +457,8 @@ impl Denoiser {
             TileChoice::Fixed(t) => fixed(t),
             // The CPU tile by level (shorter on the smallest).
             TileChoice::Auto if device_type == wgpu::DeviceType::Cpu => {
-                (specs.iter().map(|s| Tile::cpu_for(device, s.width, s.height)).collect(), vec![default_sources], Vec::new())
+                let tiles = specs.iter().map(|s| Tile::cpu_for(device, s.width, s.height, blocks(s.ca) + blocks(s.cb))).collect();
+                (tiles, vec![default_sources], Vec::new())
             }
             _ if timestamps && !candidates.is_empty() => picks(tune_among(&mut kernels, &candidates)?),
             _ => fixed(Tile::default()),

@@ -11,6 +11,7 @@ use crate::graph::Read;
 pub const SHADERS: &[(&str, &str)] = &[
     ("conv3x3", include_str!("../../../shaders/conv3x3.wgsl")),
     ("conv3x3_rows", include_str!("../../../shaders/conv3x3_rows.wgsl")),
+    ("conv3x3_wino", include_str!("../../../shaders/conv3x3_wino.wgsl")),
     ("conv3x3_mma", include_str!("../../../shaders/conv3x3_mma.wgsl")),
     ("conv3x3_mma_coop", include_str!("../../../shaders/conv3x3_mma_coop.wgsl")),
     ("conv_common", include_str!("../../../shaders/conv_common.wgsl")),
@@ -97,6 +98,11 @@ pub const CPU_STORAGE_WEIGHTS_MAX_PIXELS: u32 = 32 * 32;
 /// ([`Tile::cpu_for`]): 8 x 8.
 pub const CPU_SHORT_TILE_MAX_PIXELS: u32 = 8 * 8;
 
+/// The fewest input blocks (4 channels each) of a conv that runs [`Tile::CPU_WINOGRAD`] on CPU
+/// drivers ([`Tile::cpu_for`]): 8 (32 channels). The frame's 8- and 3-channel convs ran slower
+/// in it (docs/PERF.md, session 22).
+pub const CPU_WINOGRAD_MIN_BLOCKS: u32 = 8;
+
 impl WeightMemory {
     /// The kind that suits an adapter: uniform chunks on CPU drivers, storage elsewhere.
     pub fn for_device_type(t: wgpu::DeviceType) -> Self {
@@ -173,6 +179,14 @@ pub const STORAGE_SOURCES: [(&str, &str); 2] = [
 /// driver's front end seconds per pipeline even where no call reaches it).
 pub const ROWS_STUB: &str = "fn accumulate_rows(acc0: ptr<function, Tile>, acc1: ptr<function, Tile>, acc2: ptr<function, Tile>, acc3: ptr<function, Tile>, acc4: ptr<function, Tile>, acc5: ptr<function, Tile>, acc6: ptr<function, Tile>, acc7: ptr<function, Tile>, t: Source, mode: u32, layer: u32, cb: u32, w: u32, x: i32, y0: i32) {}";
 
+/// The conv module `conv` (conv3x3.wgsl as [`Kernels`] rewrites it) as the lanes tiles run it:
+/// its [`ROWS_STUB`] replaced by conv3x3_rows.wgsl (two-column lanes tiles) and
+/// conv3x3_wino.wgsl (`winograd_lanes`).
+pub fn lanes_module_source(conv: &str) -> String {
+    assert!(conv.contains(ROWS_STUB), "conv3x3.wgsl has kernels::ROWS_STUB");
+    conv.replace(ROWS_STUB, &format!("{}\n{}", shader_source("conv3x3_rows"), shader_source("conv3x3_wino")))
+}
+
 /// The rewrites of conv3x3.wgsl for devices without [`wgpu::Features::SUBGROUP`] (naga refuses
 /// subgroup operations anywhere in a module there): its subgroup operations become plain
 /// functions and the `lanes` entry point's subgroup builtin another builtin. [`Method::Lanes`]
@@ -191,6 +205,12 @@ pub const PREP_WITHOUT_SUBGROUPS: [(&str, &str); 1] = [("subgroupMax(", "no_subg
 /// weights are spread over lanes 0 to 7).
 pub fn lanes_supported(device: &wgpu::Device) -> bool {
     device.features().contains(wgpu::Features::SUBGROUP) && device.adapter_info().subgroup_min_size >= 8
+}
+
+/// Whether a device runs [`Method::WinogradLanes`]: it has subgroups of at least 16 lanes (one
+/// input block's transformed weights are loaded 16 vec4s at a time).
+pub fn winograd_lanes_supported(device: &wgpu::Device) -> bool {
+    device.features().contains(wgpu::Features::SUBGROUP) && device.adapter_info().subgroup_min_size >= 16
 }
 
 /// The enable directive of conv3x3_mma.wgsl that [`mma_source`] extends.
@@ -476,9 +496,10 @@ pub struct ConvVariant {
 }
 
 impl ConvVariant {
-    /// Whether the variant runs conv3x3_rows.wgsl's `accumulate_rows` (two-column lanes tiles).
+    /// Whether the variant runs in the module with conv3x3_rows.wgsl and conv3x3_wino.wgsl:
+    /// `accumulate_rows` (two-column lanes tiles) or `winograd_lanes`.
     fn runs_rows(&self) -> bool {
-        self.method == Method::Lanes && self.cols > 1 && !self.reduce
+        (self.method == Method::Lanes && self.cols > 1 && !self.reduce) || self.method == Method::WinogradLanes
     }
 }
 
@@ -495,6 +516,10 @@ pub enum Method {
     /// subgroups of at least 8 lanes, [`lanes_supported`]). On lavapipe a weight load is
     /// otherwise a lane-by-lane gather.
     Lanes,
+    /// `winograd_lanes` (conv3x3_wino.wgsl): [`Method::Winograd`] with each weight vec4 loaded
+    /// by one lane of the subgroup and broadcast to the others (subgroups of at least 16
+    /// lanes, [`winograd_lanes_supported`]), for CPU drivers.
+    WinogradLanes,
     /// conv3x3_mma.wgsl: an implicit matrix product in 16 x 16 x 16 tiles of f16 products
     /// summed in f32, in the device's matrix units (tensor cores, [`matrix_units_supported`])
     /// or emulated where it has none ([`Tile::mma`]).
@@ -512,7 +537,7 @@ impl Method {
     pub fn taps(self) -> u32 {
         match self {
             Method::Direct | Method::Lanes | Method::Mma | Method::MmaSplit | Method::MmaSplitPrefetch => 9,
-            Method::Winograd => 16,
+            Method::Winograd | Method::WinogradLanes => 16,
         }
     }
 
@@ -523,9 +548,16 @@ impl Method {
             Method::Direct => "main",
             Method::Winograd => "winograd",
             Method::Lanes => "lanes",
+            Method::WinogradLanes => "winograd_lanes",
             Method::Mma => "mma",
             Method::MmaSplit | Method::MmaSplitPrefetch => "mma_split",
         }
+    }
+
+    /// Whether this is Winograd F(2x2, 3x3) ([`Method::Winograd`], [`Method::WinogradLanes`]):
+    /// 2x2 output tiles, 16 transformed weights per channel pair, no split.
+    pub fn is_winograd(self) -> bool {
+        matches!(self, Method::Winograd | Method::WinogradLanes)
     }
 
     /// Whether this is one of conv3x3_mma.wgsl's methods ([`Method::Mma`] and the split ones).
@@ -814,10 +846,7 @@ impl Kernels {
             );
             let text = if need_main || need_rows { self.conv_text(access, memory) } else { String::new() };
             let mma = need_mma.then(|| shader_module(device, "conv3x3_mma", self.mma_text(access)));
-            let rows = need_rows.then(|| {
-                assert!(text.contains(ROWS_STUB), "conv3x3.wgsl has kernels::ROWS_STUB");
-                shader_module(device, "conv3x3 (two-column lanes)", text.replace(ROWS_STUB, shader_source("conv3x3_rows")))
-            });
+            let rows = need_rows.then(|| shader_module(device, "conv3x3 (lanes tiles)", lanes_module_source(&text)));
             let main = need_main.then(|| shader_module(device, "conv3x3", text));
             let m = &mut self.modules[conv_slot(access, memory)];
             m.main = m.main.take().or(main);
@@ -953,24 +982,42 @@ impl Tile {
     /// per machine and driver (docs/PERF.md, session 11).
     pub const CPU_LANES: Tile = Tile { rows: 8, blocks: 2, cols: 2, group_x: WORKGROUP, method: Method::Lanes, split: 1 };
 
+    /// The CPU drivers' Winograd tile: F(2x2, 3x3) in four stacked 2x2 output tiles (8 rows x
+    /// 2 columns) x 2 blocks, weights loaded across the subgroup ([`Method::WinogradLanes`]).
+    /// 256 multiply-adds per 4 outputs and input block where [`Tile::CPU_LANES`] takes 576, for
+    /// the same 40 texel fetches per 16 outputs; on lavapipe (Zen 5, 512-bit vectors) the
+    /// 256x256 frame's convs of 32 input channels and more took about 0.9x the time
+    /// (docs/PERF.md, session 22). The rounding is Winograd's: within the golden tolerance.
+    pub const CPU_WINOGRAD: Tile = Tile { rows: 8, blocks: 2, cols: 2, group_x: WORKGROUP, method: Method::WinogradLanes, split: 1 };
+
     /// The tile of CPU drivers on `device`: [`Tile::CPU_LANES`] where the device has subgroups
     /// of 8 or more lanes ([`lanes_supported`]), else [`Tile::CPU`].
     pub fn cpu(device: &wgpu::Device) -> Tile {
         if lanes_supported(device) { Tile::CPU_LANES } else { Tile::CPU }
     }
 
-    /// The tile of CPU drivers for a conv on a `width` x `height` level: [`Tile::cpu`], with 4
-    /// rows instead of 8 where that is [`Tile::CPU_LANES`] and the level has at most
-    /// [`CPU_SHORT_TILE_MAX_PIXELS`].
+    /// The tile of CPU drivers for a conv reading `in_blocks` input blocks on a `width` x
+    /// `height` level: [`Tile::cpu`]; where that is [`Tile::CPU_LANES`], 4 rows instead of 8 on
+    /// levels of at most [`CPU_SHORT_TILE_MAX_PIXELS`], and [`Tile::CPU_WINOGRAD`] above them
+    /// for convs of at least [`CPU_WINOGRAD_MIN_BLOCKS`] where the device runs it
+    /// ([`winograd_lanes_supported`]).
     ///
     /// An 8 x 8 level is 4 invocations of 8 rows x 2 columns per output group, so 4 of a
     /// subgroup's 16 lanes have pixels, and the others still load weights for them. At 4 rows
     /// twice as many lanes work: the 256x256 frame's bottleneck convs (8 x 8, storage weights)
     /// took 0.72x the time. On 16 x 16 levels the 8 rows were faster still (docs/PERF.md,
     /// session 21).
-    pub fn cpu_for(device: &wgpu::Device, width: u32, height: u32) -> Tile {
+    pub fn cpu_for(device: &wgpu::Device, width: u32, height: u32, in_blocks: u32) -> Tile {
         let tile = Tile::cpu(device);
-        if tile == Tile::CPU_LANES && width * height <= CPU_SHORT_TILE_MAX_PIXELS { Tile { rows: 4, ..tile } } else { tile }
+        if tile != Tile::CPU_LANES {
+            tile
+        } else if width * height <= CPU_SHORT_TILE_MAX_PIXELS {
+            Tile { rows: 4, ..tile }
+        } else if in_blocks >= CPU_WINOGRAD_MIN_BLOCKS && winograd_lanes_supported(device) {
+            Tile::CPU_WINOGRAD
+        } else {
+            tile
+        }
     }
 
     /// A one-column tile, if the kernel has one of this shape.
@@ -994,6 +1041,20 @@ impl Tile {
             cols: 2,
             group_x: WORKGROUP,
             method: Method::Winograd,
+            split: 1,
+        })
+    }
+
+    /// A Winograd F(2x2, 3x3) tile with its weights loaded across the subgroup
+    /// ([`Method::WinogradLanes`]): `rows` (4: two stacked 2x2 output tiles, 8: four) x `blocks`
+    /// (1 or 2), if the kernel has it.
+    pub fn winograd_lanes(rows: u32, blocks: u32) -> Option<Self> {
+        ([4, 8].contains(&rows) && (1..=2).contains(&blocks)).then_some(Tile {
+            rows,
+            blocks,
+            cols: 2,
+            group_x: WORKGROUP,
+            method: Method::WinogradLanes,
             split: 1,
         })
     }
@@ -1076,7 +1137,7 @@ impl Tile {
     /// This direct tile with its input blocks split `split` ways (1 to 16; 1: no split), if it
     /// is direct.
     pub fn with_split(self, split: u32) -> Option<Self> {
-        (self.method != Method::Winograd && (1..=16).contains(&split)).then_some(Tile { split, ..self })
+        (!self.method.is_winograd() && (1..=16).contains(&split)).then_some(Tile { split, ..self })
     }
 
     /// Workgroup height in invocations.
@@ -1099,9 +1160,10 @@ impl std::fmt::Display for Tile {
             Method::Direct => {}
             Method::Winograd => write!(f, "wino")?,
             Method::Lanes => write!(f, "lanes")?,
+            Method::WinogradLanes => write!(f, "winolanes")?,
         }
         write!(f, "{}x{}", self.rows, self.blocks)?;
-        if self.cols > 1 && self.method != Method::Winograd {
+        if self.cols > 1 && !self.method.is_winograd() {
             write!(f, "w{}", self.cols)?;
         }
         if self.group_x != WORKGROUP {
@@ -1157,7 +1219,7 @@ pub fn winograd_taps(g: &[f32]) -> [f32; 16] {
 /// zero, so padding channels (always written as zero) and padding outputs contribute nothing.
 pub fn pack_group(spec: &ConvSpec, ob0: usize, ob: usize, method: Method) -> Vec<[f32; 4]> {
     let (weight, bias, cout, ca, cb) = (spec.weight, spec.bias, spec.cout, spec.ca, spec.cb);
-    let winograd = method == Method::Winograd;
+    let winograd = method.is_winograd();
     let cin = ca + cb;
     debug_assert_eq!(weight.len(), cout * cin * 9);
     let (ba, bb) = (blocks(ca) as usize, blocks(cb) as usize);
@@ -1401,6 +1463,21 @@ impl ConvPlan {
         assert!(tiles.len() == 1 || tiles.len() == specs.len(), "one tile, or one per conv");
         assert!(sources.len() == 1 || sources.len() == specs.len(), "one source access, or one per conv");
         assert!(memories.len() == 1 || memories.len() == specs.len(), "one weight memory, or one per conv");
+        if let Some(t) = tiles.iter().find(|t| t.method == Method::WinogradLanes && !winograd_lanes_supported(device)) {
+            let info = device.adapter_info();
+            return Err(crate::Error::UnsupportedTile {
+                tile: t.to_string(),
+                reason: format!(
+                    "Winograd weights across lanes need subgroups of at least 16 lanes; {} has {}",
+                    info.name,
+                    if device.features().contains(wgpu::Features::SUBGROUP) {
+                        format!("{} to {}", info.subgroup_min_size, info.subgroup_max_size)
+                    } else {
+                        "none".to_string()
+                    }
+                ),
+            });
+        }
         if let Some(t) = tiles.iter().find(|t| t.method == Method::Lanes && !lanes_supported(device)) {
             let info = device.adapter_info();
             return Err(crate::Error::UnsupportedTile {
@@ -1496,7 +1573,7 @@ impl ConvPlan {
                         "{} input channels ({cin4} blocks of 4, padded per source) exceed one 64 KiB weight chunk (at most {} blocks with {} tiles)",
                         s.ca + s.cb,
                         (WEIGHT_CHUNK - 1) / (taps * 4),
-                        if tile.method == Method::Winograd { "Winograd" } else { "direct" }
+                        if tile.method.is_winograd() { "Winograd" } else { "direct" }
                     ),
                 })?,
                 WeightMemory::Storage => 4,
@@ -1510,15 +1587,16 @@ impl ConvPlan {
             }
             let rows = rows_per_invocation(s.height, tile.rows);
             // Two columns only where the level is wider than one (Winograd tiles are 2 wide).
-            let cols = if s.width > 1 || tile.method == Method::Winograd { tile.cols } else { 1 };
+            let cols = if s.width > 1 || tile.method.is_winograd() { tile.cols } else { 1 };
             // Split (direct tiles only) no further than one input block per part, nor beyond the
             // partial-sum budget.
             let part_bytes = cout4 as u64 * s.width as u64 * s.height as u64 * 16;
-            let split =
-                if tile.method != Method::Winograd { tile.split.min(cin4).min((partial_budget / part_bytes) as u32).max(1) } else { 1 };
+            let split = if !tile.method.is_winograd() { tile.split.min(cin4).min((partial_budget / part_bytes) as u32).max(1) } else { 1 };
             let used_tile = Tile { rows, blocks: ob, cols, group_x: tile.group_x, method: tile.method, split };
             // The conv pools its own output where each invocation holds whole 2x2 windows.
-            let pool = s.pooled && tile.method == Method::Lanes && cols == 2 && rows.is_multiple_of(2) && split == 1;
+            let pool = s.pooled
+                && ((tile.method == Method::Lanes && cols == 2 && rows.is_multiple_of(2) && split == 1)
+                    || tile.method == Method::WinogradLanes);
             let variant = ConvVariant {
                 read_a: s.read_a,
                 read_b: s.read_b,

@@ -43,7 +43,7 @@ fn strip_array_strides(w: Vec<u32>) -> Vec<u32> {
 fn main() {
     let mut modules: Vec<(String, String, Vec<(&str, f64)>)> = Vec::new();
     for (name, _) in SHADERS {
-        if ["conv3x3_rows", "conv3x3_mma", "conv3x3_mma_coop", "conv_common"].contains(name) {
+        if ["conv3x3_rows", "conv3x3_wino", "conv3x3_mma", "conv3x3_mma_coop", "conv_common"].contains(name) {
             continue;
         }
         modules.push((name.to_string(), conv_module_source(name), vec![]));

@@ -1,0 +1,311 @@
+// conv3x3.wgsl's Winograd F(2x2, 3x3) with its weights loaded across the subgroup: the entry
+// point `winograd_lanes` (kernels::Method::WinogradLanes), for CPU drivers with subgroups of at
+// least 16 lanes. Appended, with conv3x3_rows.wgsl, to the conv module that runs two-column lanes
+// tiles; it uses conv3x3.wgsl's declarations (Quad, Wino, wino_v, wino_store, mac, lane, the
+// overrides) and conv3x3_rows.wgsl's Column.
+//
+// An invocation computes ROWS / 2 stacked 2x2 output tiles (ROWS = 4 or 8) of 2 columns for OB
+// output blocks (1 or 2). Each input block costs 4 columns of ROWS + 2 fetched texels, their
+// transforms V = B^T d B (additions only), and per tile and output block 16 products of a 4x4
+// weight matrix with a vec4: 256 multiply-adds per 4 outputs and input block where the direct
+// sum takes 576. Weights sit as conv3x3.wgsl's `winograd` reads them (input block cb, position
+// p, input lane l, output block j at w + ((cb * 16 + p) * 4 + l) * OB + j); one input block's
+// 64 x OB vec4s are loaded 16 at a time, lane k loading the k-th (`WinoGather`), and each
+// position's matrix is taken from the lanes by subgroupBroadcast. The sums run in `winograd`'s
+// order, so a tile's outputs are bit for bit those of `winograd` with the same OB.
+
+// One input block's transformed weights spread over the lanes: vec4 16 i + k in lane k of g<i>
+// (OB = 1 uses g0..g3).
+struct WinoGather {
+    g0: vec4<f32>, g1: vec4<f32>, g2: vec4<f32>, g3: vec4<f32>,
+    g4: vec4<f32>, g5: vec4<f32>, g6: vec4<f32>, g7: vec4<f32>,
+}
+
+fn wino_gather(base: u32) -> WinoGather {
+    var s: WinoGather;
+    s.g0 = weights[base + lane];
+    s.g1 = weights[base + 16u + lane];
+    s.g2 = weights[base + 32u + lane];
+    s.g3 = weights[base + 48u + lane];
+    if OB > 1u {
+        s.g4 = weights[base + 64u + lane];
+        s.g5 = weights[base + 80u + lane];
+        s.g6 = weights[base + 96u + lane];
+        s.g7 = weights[base + 112u + lane];
+    }
+    return s;
+}
+
+// The 4x4 of position p from its gather: with OB = 1 the matrix of p sits in lanes 4 (p % 4) ..
+// + 3 of g<p / 4>; with OB = 2 block j's in lanes 8 (p % 2) + j + 0, 2, 4, 6 of g<p / 2>.
+fn ob1_0(a: vec4<f32>) -> mat4x4<f32> {
+    return mat4x4<f32>(subgroupBroadcast(a, 0u), subgroupBroadcast(a, 1u), subgroupBroadcast(a, 2u), subgroupBroadcast(a, 3u));
+}
+fn ob1_1(a: vec4<f32>) -> mat4x4<f32> {
+    return mat4x4<f32>(subgroupBroadcast(a, 4u), subgroupBroadcast(a, 5u), subgroupBroadcast(a, 6u), subgroupBroadcast(a, 7u));
+}
+fn ob1_2(a: vec4<f32>) -> mat4x4<f32> {
+    return mat4x4<f32>(subgroupBroadcast(a, 8u), subgroupBroadcast(a, 9u), subgroupBroadcast(a, 10u), subgroupBroadcast(a, 11u));
+}
+fn ob1_3(a: vec4<f32>) -> mat4x4<f32> {
+    return mat4x4<f32>(subgroupBroadcast(a, 12u), subgroupBroadcast(a, 13u), subgroupBroadcast(a, 14u), subgroupBroadcast(a, 15u));
+}
+fn ob2_00(a: vec4<f32>) -> mat4x4<f32> {
+    return mat4x4<f32>(subgroupBroadcast(a, 0u), subgroupBroadcast(a, 2u), subgroupBroadcast(a, 4u), subgroupBroadcast(a, 6u));
+}
+fn ob2_01(a: vec4<f32>) -> mat4x4<f32> {
+    return mat4x4<f32>(subgroupBroadcast(a, 1u), subgroupBroadcast(a, 3u), subgroupBroadcast(a, 5u), subgroupBroadcast(a, 7u));
+}
+fn ob2_10(a: vec4<f32>) -> mat4x4<f32> {
+    return mat4x4<f32>(subgroupBroadcast(a, 8u), subgroupBroadcast(a, 10u), subgroupBroadcast(a, 12u), subgroupBroadcast(a, 14u));
+}
+fn ob2_11(a: vec4<f32>) -> mat4x4<f32> {
+    return mat4x4<f32>(subgroupBroadcast(a, 9u), subgroupBroadcast(a, 11u), subgroupBroadcast(a, 13u), subgroupBroadcast(a, 15u));
+}
+
+// Input row i of the window (columns x - 1 .. x + 2) times B.
+fn wino_row_of(d0: vec4<f32>, d1: vec4<f32>, d2: vec4<f32>, d3: vec4<f32>) -> Quad {
+    return Quad(d0 - d2, d1 + d2, d2 - d1, d1 - d3);
+}
+
+// Add input block `layer` of `t` at weight block `cb` to the transformed tiles m<t><j> (tile t
+// from the top, output block j) whose top-left output is (x, y0): the window's columns are
+// fetched once, each of its rows transformed once, and each position's weights, taken from the
+// lanes once, go to every tile before the next position's.
+fn wino_step(m00: ptr<function, Wino>, m01: ptr<function, Wino>, m10: ptr<function, Wino>, m11: ptr<function, Wino>, m20: ptr<function, Wino>, m21: ptr<function, Wino>, m30: ptr<function, Wino>, m31: ptr<function, Wino>, t: Source, mode: u32, layer: u32, cb: u32, w: u32, x: i32, y0: i32) {
+    let k0 = column(t, mode, x - 1, y0, layer);
+    let k1 = column(t, mode, x, y0, layer);
+    let k2 = column(t, mode, x + 1, y0, layer);
+    let k3 = column(t, mode, x + 2, y0, layer);
+    let e0 = wino_row_of(k0.v0, k1.v0, k2.v0, k3.v0);
+    let e1 = wino_row_of(k0.v1, k1.v1, k2.v1, k3.v1);
+    let e2 = wino_row_of(k0.v2, k1.v2, k2.v2, k3.v2);
+    let e3 = wino_row_of(k0.v3, k1.v3, k2.v3, k3.v3);
+    let e4 = wino_row_of(k0.v4, k1.v4, k2.v4, k3.v4);
+    let e5 = wino_row_of(k0.v5, k1.v5, k2.v5, k3.v5);
+    let v0 = wino_v(e0, e1, e2, e3);
+    let v1 = wino_v(e2, e3, e4, e5);
+    var v2 = v0;
+    var v3 = v0;
+    if ROWS > 4u {
+        let e6 = wino_row_of(k0.v6, k1.v6, k2.v6, k3.v6);
+        let e7 = wino_row_of(k0.v7, k1.v7, k2.v7, k3.v7);
+        let e8 = wino_row_of(k0.v8, k1.v8, k2.v8, k3.v8);
+        let e9 = wino_row_of(k0.v9, k1.v9, k2.v9, k3.v9);
+        v2 = wino_v(e4, e5, e6, e7);
+        v3 = wino_v(e6, e7, e8, e9);
+    }
+    let g = wino_gather(w + cb * 64u * OB);
+    // Position p = 4 i + c of each tile (Wino's r<i>.c<c>), block by block.
+    if OB == 1u {
+        { let u = ob1_0(g.g0);
+          (*m00).r0.c0 = mac((*m00).r0.c0, u, v0.r0.c0); (*m10).r0.c0 = mac((*m10).r0.c0, u, v1.r0.c0);
+          if ROWS > 4u { (*m20).r0.c0 = mac((*m20).r0.c0, u, v2.r0.c0); (*m30).r0.c0 = mac((*m30).r0.c0, u, v3.r0.c0); } }
+        { let u = ob1_1(g.g0);
+          (*m00).r0.c1 = mac((*m00).r0.c1, u, v0.r0.c1); (*m10).r0.c1 = mac((*m10).r0.c1, u, v1.r0.c1);
+          if ROWS > 4u { (*m20).r0.c1 = mac((*m20).r0.c1, u, v2.r0.c1); (*m30).r0.c1 = mac((*m30).r0.c1, u, v3.r0.c1); } }
+        { let u = ob1_2(g.g0);
+          (*m00).r0.c2 = mac((*m00).r0.c2, u, v0.r0.c2); (*m10).r0.c2 = mac((*m10).r0.c2, u, v1.r0.c2);
+          if ROWS > 4u { (*m20).r0.c2 = mac((*m20).r0.c2, u, v2.r0.c2); (*m30).r0.c2 = mac((*m30).r0.c2, u, v3.r0.c2); } }
+        { let u = ob1_3(g.g0);
+          (*m00).r0.c3 = mac((*m00).r0.c3, u, v0.r0.c3); (*m10).r0.c3 = mac((*m10).r0.c3, u, v1.r0.c3);
+          if ROWS > 4u { (*m20).r0.c3 = mac((*m20).r0.c3, u, v2.r0.c3); (*m30).r0.c3 = mac((*m30).r0.c3, u, v3.r0.c3); } }
+        { let u = ob1_0(g.g1);
+          (*m00).r1.c0 = mac((*m00).r1.c0, u, v0.r1.c0); (*m10).r1.c0 = mac((*m10).r1.c0, u, v1.r1.c0);
+          if ROWS > 4u { (*m20).r1.c0 = mac((*m20).r1.c0, u, v2.r1.c0); (*m30).r1.c0 = mac((*m30).r1.c0, u, v3.r1.c0); } }
+        { let u = ob1_1(g.g1);
+          (*m00).r1.c1 = mac((*m00).r1.c1, u, v0.r1.c1); (*m10).r1.c1 = mac((*m10).r1.c1, u, v1.r1.c1);
+          if ROWS > 4u { (*m20).r1.c1 = mac((*m20).r1.c1, u, v2.r1.c1); (*m30).r1.c1 = mac((*m30).r1.c1, u, v3.r1.c1); } }
+        { let u = ob1_2(g.g1);
+          (*m00).r1.c2 = mac((*m00).r1.c2, u, v0.r1.c2); (*m10).r1.c2 = mac((*m10).r1.c2, u, v1.r1.c2);
+          if ROWS > 4u { (*m20).r1.c2 = mac((*m20).r1.c2, u, v2.r1.c2); (*m30).r1.c2 = mac((*m30).r1.c2, u, v3.r1.c2); } }
+        { let u = ob1_3(g.g1);
+          (*m00).r1.c3 = mac((*m00).r1.c3, u, v0.r1.c3); (*m10).r1.c3 = mac((*m10).r1.c3, u, v1.r1.c3);
+          if ROWS > 4u { (*m20).r1.c3 = mac((*m20).r1.c3, u, v2.r1.c3); (*m30).r1.c3 = mac((*m30).r1.c3, u, v3.r1.c3); } }
+        { let u = ob1_0(g.g2);
+          (*m00).r2.c0 = mac((*m00).r2.c0, u, v0.r2.c0); (*m10).r2.c0 = mac((*m10).r2.c0, u, v1.r2.c0);
+          if ROWS > 4u { (*m20).r2.c0 = mac((*m20).r2.c0, u, v2.r2.c0); (*m30).r2.c0 = mac((*m30).r2.c0, u, v3.r2.c0); } }
+        { let u = ob1_1(g.g2);
+          (*m00).r2.c1 = mac((*m00).r2.c1, u, v0.r2.c1); (*m10).r2.c1 = mac((*m10).r2.c1, u, v1.r2.c1);
+          if ROWS > 4u { (*m20).r2.c1 = mac((*m20).r2.c1, u, v2.r2.c1); (*m30).r2.c1 = mac((*m30).r2.c1, u, v3.r2.c1); } }
+        { let u = ob1_2(g.g2);
+          (*m00).r2.c2 = mac((*m00).r2.c2, u, v0.r2.c2); (*m10).r2.c2 = mac((*m10).r2.c2, u, v1.r2.c2);
+          if ROWS > 4u { (*m20).r2.c2 = mac((*m20).r2.c2, u, v2.r2.c2); (*m30).r2.c2 = mac((*m30).r2.c2, u, v3.r2.c2); } }
+        { let u = ob1_3(g.g2);
+          (*m00).r2.c3 = mac((*m00).r2.c3, u, v0.r2.c3); (*m10).r2.c3 = mac((*m10).r2.c3, u, v1.r2.c3);
+          if ROWS > 4u { (*m20).r2.c3 = mac((*m20).r2.c3, u, v2.r2.c3); (*m30).r2.c3 = mac((*m30).r2.c3, u, v3.r2.c3); } }
+        { let u = ob1_0(g.g3);
+          (*m00).r3.c0 = mac((*m00).r3.c0, u, v0.r3.c0); (*m10).r3.c0 = mac((*m10).r3.c0, u, v1.r3.c0);
+          if ROWS > 4u { (*m20).r3.c0 = mac((*m20).r3.c0, u, v2.r3.c0); (*m30).r3.c0 = mac((*m30).r3.c0, u, v3.r3.c0); } }
+        { let u = ob1_1(g.g3);
+          (*m00).r3.c1 = mac((*m00).r3.c1, u, v0.r3.c1); (*m10).r3.c1 = mac((*m10).r3.c1, u, v1.r3.c1);
+          if ROWS > 4u { (*m20).r3.c1 = mac((*m20).r3.c1, u, v2.r3.c1); (*m30).r3.c1 = mac((*m30).r3.c1, u, v3.r3.c1); } }
+        { let u = ob1_2(g.g3);
+          (*m00).r3.c2 = mac((*m00).r3.c2, u, v0.r3.c2); (*m10).r3.c2 = mac((*m10).r3.c2, u, v1.r3.c2);
+          if ROWS > 4u { (*m20).r3.c2 = mac((*m20).r3.c2, u, v2.r3.c2); (*m30).r3.c2 = mac((*m30).r3.c2, u, v3.r3.c2); } }
+        { let u = ob1_3(g.g3);
+          (*m00).r3.c3 = mac((*m00).r3.c3, u, v0.r3.c3); (*m10).r3.c3 = mac((*m10).r3.c3, u, v1.r3.c3);
+          if ROWS > 4u { (*m20).r3.c3 = mac((*m20).r3.c3, u, v2.r3.c3); (*m30).r3.c3 = mac((*m30).r3.c3, u, v3.r3.c3); } }
+    } else {
+        { let u = ob2_00(g.g0);
+          (*m00).r0.c0 = mac((*m00).r0.c0, u, v0.r0.c0); (*m10).r0.c0 = mac((*m10).r0.c0, u, v1.r0.c0);
+          if ROWS > 4u { (*m20).r0.c0 = mac((*m20).r0.c0, u, v2.r0.c0); (*m30).r0.c0 = mac((*m30).r0.c0, u, v3.r0.c0); } }
+        { let u = ob2_01(g.g0);
+          (*m01).r0.c0 = mac((*m01).r0.c0, u, v0.r0.c0); (*m11).r0.c0 = mac((*m11).r0.c0, u, v1.r0.c0);
+          if ROWS > 4u { (*m21).r0.c0 = mac((*m21).r0.c0, u, v2.r0.c0); (*m31).r0.c0 = mac((*m31).r0.c0, u, v3.r0.c0); } }
+        { let u = ob2_10(g.g0);
+          (*m00).r0.c1 = mac((*m00).r0.c1, u, v0.r0.c1); (*m10).r0.c1 = mac((*m10).r0.c1, u, v1.r0.c1);
+          if ROWS > 4u { (*m20).r0.c1 = mac((*m20).r0.c1, u, v2.r0.c1); (*m30).r0.c1 = mac((*m30).r0.c1, u, v3.r0.c1); } }
+        { let u = ob2_11(g.g0);
+          (*m01).r0.c1 = mac((*m01).r0.c1, u, v0.r0.c1); (*m11).r0.c1 = mac((*m11).r0.c1, u, v1.r0.c1);
+          if ROWS > 4u { (*m21).r0.c1 = mac((*m21).r0.c1, u, v2.r0.c1); (*m31).r0.c1 = mac((*m31).r0.c1, u, v3.r0.c1); } }
+        { let u = ob2_00(g.g1);
+          (*m00).r0.c2 = mac((*m00).r0.c2, u, v0.r0.c2); (*m10).r0.c2 = mac((*m10).r0.c2, u, v1.r0.c2);
+          if ROWS > 4u { (*m20).r0.c2 = mac((*m20).r0.c2, u, v2.r0.c2); (*m30).r0.c2 = mac((*m30).r0.c2, u, v3.r0.c2); } }
+        { let u = ob2_01(g.g1);
+          (*m01).r0.c2 = mac((*m01).r0.c2, u, v0.r0.c2); (*m11).r0.c2 = mac((*m11).r0.c2, u, v1.r0.c2);
+          if ROWS > 4u { (*m21).r0.c2 = mac((*m21).r0.c2, u, v2.r0.c2); (*m31).r0.c2 = mac((*m31).r0.c2, u, v3.r0.c2); } }
+        { let u = ob2_10(g.g1);
+          (*m00).r0.c3 = mac((*m00).r0.c3, u, v0.r0.c3); (*m10).r0.c3 = mac((*m10).r0.c3, u, v1.r0.c3);
+          if ROWS > 4u { (*m20).r0.c3 = mac((*m20).r0.c3, u, v2.r0.c3); (*m30).r0.c3 = mac((*m30).r0.c3, u, v3.r0.c3); } }
+        { let u = ob2_11(g.g1);
+          (*m01).r0.c3 = mac((*m01).r0.c3, u, v0.r0.c3); (*m11).r0.c3 = mac((*m11).r0.c3, u, v1.r0.c3);
+          if ROWS > 4u { (*m21).r0.c3 = mac((*m21).r0.c3, u, v2.r0.c3); (*m31).r0.c3 = mac((*m31).r0.c3, u, v3.r0.c3); } }
+        { let u = ob2_00(g.g2);
+          (*m00).r1.c0 = mac((*m00).r1.c0, u, v0.r1.c0); (*m10).r1.c0 = mac((*m10).r1.c0, u, v1.r1.c0);
+          if ROWS > 4u { (*m20).r1.c0 = mac((*m20).r1.c0, u, v2.r1.c0); (*m30).r1.c0 = mac((*m30).r1.c0, u, v3.r1.c0); } }
+        { let u = ob2_01(g.g2);
+          (*m01).r1.c0 = mac((*m01).r1.c0, u, v0.r1.c0); (*m11).r1.c0 = mac((*m11).r1.c0, u, v1.r1.c0);
+          if ROWS > 4u { (*m21).r1.c0 = mac((*m21).r1.c0, u, v2.r1.c0); (*m31).r1.c0 = mac((*m31).r1.c0, u, v3.r1.c0); } }
+        { let u = ob2_10(g.g2);
+          (*m00).r1.c1 = mac((*m00).r1.c1, u, v0.r1.c1); (*m10).r1.c1 = mac((*m10).r1.c1, u, v1.r1.c1);
+          if ROWS > 4u { (*m20).r1.c1 = mac((*m20).r1.c1, u, v2.r1.c1); (*m30).r1.c1 = mac((*m30).r1.c1, u, v3.r1.c1); } }
+        { let u = ob2_11(g.g2);
+          (*m01).r1.c1 = mac((*m01).r1.c1, u, v0.r1.c1); (*m11).r1.c1 = mac((*m11).r1.c1, u, v1.r1.c1);
+          if ROWS > 4u { (*m21).r1.c1 = mac((*m21).r1.c1, u, v2.r1.c1); (*m31).r1.c1 = mac((*m31).r1.c1, u, v3.r1.c1); } }
+        { let u = ob2_00(g.g3);
+          (*m00).r1.c2 = mac((*m00).r1.c2, u, v0.r1.c2); (*m10).r1.c2 = mac((*m10).r1.c2, u, v1.r1.c2);
+          if ROWS > 4u { (*m20).r1.c2 = mac((*m20).r1.c2, u, v2.r1.c2); (*m30).r1.c2 = mac((*m30).r1.c2, u, v3.r1.c2); } }
+        { let u = ob2_01(g.g3);
+          (*m01).r1.c2 = mac((*m01).r1.c2, u, v0.r1.c2); (*m11).r1.c2 = mac((*m11).r1.c2, u, v1.r1.c2);
+          if ROWS > 4u { (*m21).r1.c2 = mac((*m21).r1.c2, u, v2.r1.c2); (*m31).r1.c2 = mac((*m31).r1.c2, u, v3.r1.c2); } }
+        { let u = ob2_10(g.g3);
+          (*m00).r1.c3 = mac((*m00).r1.c3, u, v0.r1.c3); (*m10).r1.c3 = mac((*m10).r1.c3, u, v1.r1.c3);
+          if ROWS > 4u { (*m20).r1.c3 = mac((*m20).r1.c3, u, v2.r1.c3); (*m30).r1.c3 = mac((*m30).r1.c3, u, v3.r1.c3); } }
+        { let u = ob2_11(g.g3);
+          (*m01).r1.c3 = mac((*m01).r1.c3, u, v0.r1.c3); (*m11).r1.c3 = mac((*m11).r1.c3, u, v1.r1.c3);
+          if ROWS > 4u { (*m21).r1.c3 = mac((*m21).r1.c3, u, v2.r1.c3); (*m31).r1.c3 = mac((*m31).r1.c3, u, v3.r1.c3); } }
+        { let u = ob2_00(g.g4);
+          (*m00).r2.c0 = mac((*m00).r2.c0, u, v0.r2.c0); (*m10).r2.c0 = mac((*m10).r2.c0, u, v1.r2.c0);
+          if ROWS > 4u { (*m20).r2.c0 = mac((*m20).r2.c0, u, v2.r2.c0); (*m30).r2.c0 = mac((*m30).r2.c0, u, v3.r2.c0); } }
+        { let u = ob2_01(g.g4);
+          (*m01).r2.c0 = mac((*m01).r2.c0, u, v0.r2.c0); (*m11).r2.c0 = mac((*m11).r2.c0, u, v1.r2.c0);
+          if ROWS > 4u { (*m21).r2.c0 = mac((*m21).r2.c0, u, v2.r2.c0); (*m31).r2.c0 = mac((*m31).r2.c0, u, v3.r2.c0); } }
+        { let u = ob2_10(g.g4);
+          (*m00).r2.c1 = mac((*m00).r2.c1, u, v0.r2.c1); (*m10).r2.c1 = mac((*m10).r2.c1, u, v1.r2.c1);
+          if ROWS > 4u { (*m20).r2.c1 = mac((*m20).r2.c1, u, v2.r2.c1); (*m30).r2.c1 = mac((*m30).r2.c1, u, v3.r2.c1); } }
+        { let u = ob2_11(g.g4);
+          (*m01).r2.c1 = mac((*m01).r2.c1, u, v0.r2.c1); (*m11).r2.c1 = mac((*m11).r2.c1, u, v1.r2.c1);
+          if ROWS > 4u { (*m21).r2.c1 = mac((*m21).r2.c1, u, v2.r2.c1); (*m31).r2.c1 = mac((*m31).r2.c1, u, v3.r2.c1); } }
+        { let u = ob2_00(g.g5);
+          (*m00).r2.c2 = mac((*m00).r2.c2, u, v0.r2.c2); (*m10).r2.c2 = mac((*m10).r2.c2, u, v1.r2.c2);
+          if ROWS > 4u { (*m20).r2.c2 = mac((*m20).r2.c2, u, v2.r2.c2); (*m30).r2.c2 = mac((*m30).r2.c2, u, v3.r2.c2); } }
+        { let u = ob2_01(g.g5);
+          (*m01).r2.c2 = mac((*m01).r2.c2, u, v0.r2.c2); (*m11).r2.c2 = mac((*m11).r2.c2, u, v1.r2.c2);
+          if ROWS > 4u { (*m21).r2.c2 = mac((*m21).r2.c2, u, v2.r2.c2); (*m31).r2.c2 = mac((*m31).r2.c2, u, v3.r2.c2); } }
+        { let u = ob2_10(g.g5);
+          (*m00).r2.c3 = mac((*m00).r2.c3, u, v0.r2.c3); (*m10).r2.c3 = mac((*m10).r2.c3, u, v1.r2.c3);
+          if ROWS > 4u { (*m20).r2.c3 = mac((*m20).r2.c3, u, v2.r2.c3); (*m30).r2.c3 = mac((*m30).r2.c3, u, v3.r2.c3); } }
+        { let u = ob2_11(g.g5);
+          (*m01).r2.c3 = mac((*m01).r2.c3, u, v0.r2.c3); (*m11).r2.c3 = mac((*m11).r2.c3, u, v1.r2.c3);
+          if ROWS > 4u { (*m21).r2.c3 = mac((*m21).r2.c3, u, v2.r2.c3); (*m31).r2.c3 = mac((*m31).r2.c3, u, v3.r2.c3); } }
+        { let u = ob2_00(g.g6);
+          (*m00).r3.c0 = mac((*m00).r3.c0, u, v0.r3.c0); (*m10).r3.c0 = mac((*m10).r3.c0, u, v1.r3.c0);
+          if ROWS > 4u { (*m20).r3.c0 = mac((*m20).r3.c0, u, v2.r3.c0); (*m30).r3.c0 = mac((*m30).r3.c0, u, v3.r3.c0); } }
+        { let u = ob2_01(g.g6);
+          (*m01).r3.c0 = mac((*m01).r3.c0, u, v0.r3.c0); (*m11).r3.c0 = mac((*m11).r3.c0, u, v1.r3.c0);
+          if ROWS > 4u { (*m21).r3.c0 = mac((*m21).r3.c0, u, v2.r3.c0); (*m31).r3.c0 = mac((*m31).r3.c0, u, v3.r3.c0); } }
+        { let u = ob2_10(g.g6);
+          (*m00).r3.c1 = mac((*m00).r3.c1, u, v0.r3.c1); (*m10).r3.c1 = mac((*m10).r3.c1, u, v1.r3.c1);
+          if ROWS > 4u { (*m20).r3.c1 = mac((*m20).r3.c1, u, v2.r3.c1); (*m30).r3.c1 = mac((*m30).r3.c1, u, v3.r3.c1); } }
+        { let u = ob2_11(g.g6);
+          (*m01).r3.c1 = mac((*m01).r3.c1, u, v0.r3.c1); (*m11).r3.c1 = mac((*m11).r3.c1, u, v1.r3.c1);
+          if ROWS > 4u { (*m21).r3.c1 = mac((*m21).r3.c1, u, v2.r3.c1); (*m31).r3.c1 = mac((*m31).r3.c1, u, v3.r3.c1); } }
+        { let u = ob2_00(g.g7);
+          (*m00).r3.c2 = mac((*m00).r3.c2, u, v0.r3.c2); (*m10).r3.c2 = mac((*m10).r3.c2, u, v1.r3.c2);
+          if ROWS > 4u { (*m20).r3.c2 = mac((*m20).r3.c2, u, v2.r3.c2); (*m30).r3.c2 = mac((*m30).r3.c2, u, v3.r3.c2); } }
+        { let u = ob2_01(g.g7);
+          (*m01).r3.c2 = mac((*m01).r3.c2, u, v0.r3.c2); (*m11).r3.c2 = mac((*m11).r3.c2, u, v1.r3.c2);
+          if ROWS > 4u { (*m21).r3.c2 = mac((*m21).r3.c2, u, v2.r3.c2); (*m31).r3.c2 = mac((*m31).r3.c2, u, v3.r3.c2); } }
+        { let u = ob2_10(g.g7);
+          (*m00).r3.c3 = mac((*m00).r3.c3, u, v0.r3.c3); (*m10).r3.c3 = mac((*m10).r3.c3, u, v1.r3.c3);
+          if ROWS > 4u { (*m20).r3.c3 = mac((*m20).r3.c3, u, v2.r3.c3); (*m30).r3.c3 = mac((*m30).r3.c3, u, v3.r3.c3); } }
+        { let u = ob2_11(g.g7);
+          (*m01).r3.c3 = mac((*m01).r3.c3, u, v0.r3.c3); (*m11).r3.c3 = mac((*m11).r3.c3, u, v1.r3.c3);
+          if ROWS > 4u { (*m21).r3.c3 = mac((*m21).r3.c3, u, v2.r3.c3); (*m31).r3.c3 = mac((*m31).r3.c3, u, v3.r3.c3); } }
+    }
+}
+
+// `winograd` with its weights loaded across the subgroup, in one-dimensional workgroups of WG_X x
+// WG_Y invocations (subgroup builtins need them) laid out as `winograd`'s.
+@compute @workgroup_size(64, 1, 1)
+fn winograd_lanes(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) l: vec3<u32>, @builtin(subgroup_invocation_id) sg: u32) {
+    lane = sg;
+    let x = (wg.x * WG_X + l.x % WG_X) * 2u;
+    let y0 = (wg.y * WG_Y + l.x / WG_X) * ROWS;
+    let ob0 = params.ob0 + wg.z * OB;
+    let w = wg.z * params.group_stride;
+    if ob0 >= params.cout4 {
+        return;
+    }
+    // Lanes past the edge load weights for the others (a broadcast from an inactive lane is
+    // undefined) and store nothing.
+    let inside = x < params.width && y0 < params.height;
+    if !subgroupAny(inside) {
+        return;
+    }
+    let z = Quad(vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0));
+    var m00 = Wino(z, z, z, z);
+    var m01 = m00;
+    var m10 = m00;
+    var m11 = m00;
+    var m20 = m00;
+    var m21 = m00;
+    var m30 = m00;
+    var m31 = m00;
+    let xi = i32(x);
+    let yi = i32(y0);
+    for (var c = 0u; c < params.cin4_a; c++) {
+        wino_step(&m00, &m01, &m10, &m11, &m20, &m21, &m30, &m31, src_a, MODE_A, c, c, w, xi, yi);
+    }
+    if SOURCE_B {
+        for (var c = 0u; c < params.cin4_b; c++) {
+            wino_step(&m00, &m01, &m10, &m11, &m20, &m21, &m30, &m31, src_b, MODE_B, c, params.cin4_a + c, w, xi, yi);
+        }
+    }
+    if !inside {
+        return;
+    }
+    let bias_at = w + params.cin4_total * 64u * OB;
+    let second = OB > 1u && ob0 + 1u < params.cout4;
+    let b0 = weights[bias_at];
+    var b1 = b0;
+    if OB > 1u {
+        b1 = weights[bias_at + 1u];
+    }
+    // Tile t's outputs at rows y0 + 2t, y0 + 2t + 1 (wino_store drops a row past the bottom).
+    wino_store(m00, b0, x, y0, ob0);
+    if second { wino_store(m01, b1, x, y0, ob0 + 1u); }
+    if y0 + 2u < params.height {
+        wino_store(m10, b0, x, y0 + 2u, ob0);
+        if second { wino_store(m11, b1, x, y0 + 2u, ob0 + 1u); }
+    }
+    if ROWS > 4u && y0 + 4u < params.height {
+        wino_store(m20, b0, x, y0 + 4u, ob0);
+        if second { wino_store(m21, b1, x, y0 + 4u, ob0 + 1u); }
+    }
+    if ROWS > 4u && y0 + 6u < params.height {
+        wino_store(m30, b0, x, y0 + 6u, ob0);
+        if second { wino_store(m31, b1, x, y0 + 6u, ob0 + 1u); }
+    }
+}
