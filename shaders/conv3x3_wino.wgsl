@@ -5,20 +5,24 @@
 // overrides) and conv3x3_rows.wgsl's Column.
 //
 // An invocation computes ROWS / 2 stacked 2x2 output tiles (ROWS = 4 or 8) of 2 columns for OB
-// output blocks (1 or 2). Each input block costs 4 columns of ROWS + 2 fetched texels, their
+// output blocks (1, 2 or 4). Each input block costs 4 columns of ROWS + 2 fetched texels, their
 // transforms V = B^T d B (additions only), and per tile and output block 16 products of a 4x4
 // weight matrix with a vec4: 256 multiply-adds per 4 outputs and input block where the direct
-// sum takes 576. Weights sit as conv3x3.wgsl's `winograd` reads them (input block cb, position
+// sum takes 576. On lavapipe a texel fetch is about half of the time (each is ~100 instructions
+// of per-lane addressing, loads and transposes), so the CPU tile takes OB = 4: each fetched
+// texel feeds 16 output channels of 4 stacked tiles (kernels::Tile::CPU_WINOGRAD). Weights sit as conv3x3.wgsl's `winograd` reads them (input block cb, position
 // p, input lane l, output block j at w + ((cb * 16 + p) * 4 + l) * OB + j); one input block's
 // 64 x OB vec4s are loaded 16 at a time, lane k loading the k-th (`WinoGather`), and each
 // position's matrix is taken from the lanes by subgroupBroadcast. The sums run in `winograd`'s
 // order, so a tile's outputs are bit for bit those of `winograd` with the same OB.
 
 // One input block's transformed weights spread over the lanes: vec4 16 i + k in lane k of g<i>
-// (OB = 1 uses g0..g3).
+// (OB = 1 uses g0..g3, OB = 2 g0..g7).
 struct WinoGather {
     g0: vec4<f32>, g1: vec4<f32>, g2: vec4<f32>, g3: vec4<f32>,
     g4: vec4<f32>, g5: vec4<f32>, g6: vec4<f32>, g7: vec4<f32>,
+    g8: vec4<f32>, g9: vec4<f32>, g10: vec4<f32>, g11: vec4<f32>,
+    g12: vec4<f32>, g13: vec4<f32>, g14: vec4<f32>, g15: vec4<f32>,
 }
 
 fn wino_gather(base: u32) -> WinoGather {
@@ -33,11 +37,22 @@ fn wino_gather(base: u32) -> WinoGather {
         s.g6 = weights[base + 96u + lane];
         s.g7 = weights[base + 112u + lane];
     }
+    if OB > 2u {
+        s.g8 = weights[base + 128u + lane];
+        s.g9 = weights[base + 144u + lane];
+        s.g10 = weights[base + 160u + lane];
+        s.g11 = weights[base + 176u + lane];
+        s.g12 = weights[base + 192u + lane];
+        s.g13 = weights[base + 208u + lane];
+        s.g14 = weights[base + 224u + lane];
+        s.g15 = weights[base + 240u + lane];
+    }
     return s;
 }
 
 // The 4x4 of position p from its gather: with OB = 1 the matrix of p sits in lanes 4 (p % 4) ..
-// + 3 of g<p / 4>; with OB = 2 block j's in lanes 8 (p % 2) + j + 0, 2, 4, 6 of g<p / 2>.
+// + 3 of g<p / 4>; with OB = 2 block j's in lanes 8 (p % 2) + j + 0, 2, 4, 6 of g<p / 2>; with
+// OB = 4 block j's in lanes j + 0, 4, 8, 12 of g<p>.
 fn ob1_0(a: vec4<f32>) -> mat4x4<f32> {
     return mat4x4<f32>(subgroupBroadcast(a, 0u), subgroupBroadcast(a, 1u), subgroupBroadcast(a, 2u), subgroupBroadcast(a, 3u));
 }
@@ -63,6 +78,19 @@ fn ob2_11(a: vec4<f32>) -> mat4x4<f32> {
     return mat4x4<f32>(subgroupBroadcast(a, 9u), subgroupBroadcast(a, 11u), subgroupBroadcast(a, 13u), subgroupBroadcast(a, 15u));
 }
 
+fn ob4_0(a: vec4<f32>) -> mat4x4<f32> {
+    return mat4x4<f32>(subgroupBroadcast(a, 0u), subgroupBroadcast(a, 4u), subgroupBroadcast(a, 8u), subgroupBroadcast(a, 12u));
+}
+fn ob4_1(a: vec4<f32>) -> mat4x4<f32> {
+    return mat4x4<f32>(subgroupBroadcast(a, 1u), subgroupBroadcast(a, 5u), subgroupBroadcast(a, 9u), subgroupBroadcast(a, 13u));
+}
+fn ob4_2(a: vec4<f32>) -> mat4x4<f32> {
+    return mat4x4<f32>(subgroupBroadcast(a, 2u), subgroupBroadcast(a, 6u), subgroupBroadcast(a, 10u), subgroupBroadcast(a, 14u));
+}
+fn ob4_3(a: vec4<f32>) -> mat4x4<f32> {
+    return mat4x4<f32>(subgroupBroadcast(a, 3u), subgroupBroadcast(a, 7u), subgroupBroadcast(a, 11u), subgroupBroadcast(a, 15u));
+}
+
 // Input row i of the window (columns x - 1 .. x + 2) times B.
 fn wino_row_of(d0: vec4<f32>, d1: vec4<f32>, d2: vec4<f32>, d3: vec4<f32>) -> Quad {
     return Quad(d0 - d2, d1 + d2, d2 - d1, d1 - d3);
@@ -71,8 +99,10 @@ fn wino_row_of(d0: vec4<f32>, d1: vec4<f32>, d2: vec4<f32>, d3: vec4<f32>) -> Qu
 // Add input block `layer` of `t` at weight block `cb` to the transformed tiles m<t><j> (tile t
 // from the top, output block j) whose top-left output is (x, y0): the window's columns are
 // fetched once, each of its rows transformed once, and each position's weights, taken from the
-// lanes once, go to every tile before the next position's.
-fn wino_step(m00: ptr<function, Wino>, m01: ptr<function, Wino>, m10: ptr<function, Wino>, m11: ptr<function, Wino>, m20: ptr<function, Wino>, m21: ptr<function, Wino>, m30: ptr<function, Wino>, m31: ptr<function, Wino>, t: Source, mode: u32, layer: u32, cb: u32, w: u32, x: i32, y0: i32) {
+// lanes once, go to every tile before the next position's. The body is one unrolled basic
+// block per (OB, ROWS), the overrides dropping the others: 4 x 4 x 16 products of a 4x4 and a
+// vec4 at most (the 16 transformed tiles, 1,024 vec4s, stay in the stack between blocks).
+fn wino_step(m00: ptr<function, Wino>, m01: ptr<function, Wino>, m02: ptr<function, Wino>, m03: ptr<function, Wino>, m10: ptr<function, Wino>, m11: ptr<function, Wino>, m12: ptr<function, Wino>, m13: ptr<function, Wino>, m20: ptr<function, Wino>, m21: ptr<function, Wino>, m22: ptr<function, Wino>, m23: ptr<function, Wino>, m30: ptr<function, Wino>, m31: ptr<function, Wino>, m32: ptr<function, Wino>, m33: ptr<function, Wino>, t: Source, mode: u32, layer: u32, cb: u32, w: u32, x: i32, y0: i32) {
     let k0 = column(t, mode, x - 1, y0, layer);
     let k1 = column(t, mode, x, y0, layer);
     let k2 = column(t, mode, x + 1, y0, layer);
@@ -146,7 +176,7 @@ fn wino_step(m00: ptr<function, Wino>, m01: ptr<function, Wino>, m10: ptr<functi
         { let u = ob1_3(g.g3);
           (*m00).r3.c3 = mac((*m00).r3.c3, u, v0.r3.c3); (*m10).r3.c3 = mac((*m10).r3.c3, u, v1.r3.c3);
           if ROWS > 4u { (*m20).r3.c3 = mac((*m20).r3.c3, u, v2.r3.c3); (*m30).r3.c3 = mac((*m30).r3.c3, u, v3.r3.c3); } }
-    } else {
+    } else if OB == 2u {
         { let u = ob2_00(g.g0);
           (*m00).r0.c0 = mac((*m00).r0.c0, u, v0.r0.c0); (*m10).r0.c0 = mac((*m10).r0.c0, u, v1.r0.c0);
           if ROWS > 4u { (*m20).r0.c0 = mac((*m20).r0.c0, u, v2.r0.c0); (*m30).r0.c0 = mac((*m30).r0.c0, u, v3.r0.c0); } }
@@ -243,6 +273,199 @@ fn wino_step(m00: ptr<function, Wino>, m01: ptr<function, Wino>, m10: ptr<functi
         { let u = ob2_11(g.g7);
           (*m01).r3.c3 = mac((*m01).r3.c3, u, v0.r3.c3); (*m11).r3.c3 = mac((*m11).r3.c3, u, v1.r3.c3);
           if ROWS > 4u { (*m21).r3.c3 = mac((*m21).r3.c3, u, v2.r3.c3); (*m31).r3.c3 = mac((*m31).r3.c3, u, v3.r3.c3); } }
+    } else {
+        { let u = ob4_0(g.g0);
+          (*m00).r0.c0 = mac((*m00).r0.c0, u, v0.r0.c0); (*m10).r0.c0 = mac((*m10).r0.c0, u, v1.r0.c0);
+          if ROWS > 4u { (*m20).r0.c0 = mac((*m20).r0.c0, u, v2.r0.c0); (*m30).r0.c0 = mac((*m30).r0.c0, u, v3.r0.c0); } }
+        { let u = ob4_1(g.g0);
+          (*m01).r0.c0 = mac((*m01).r0.c0, u, v0.r0.c0); (*m11).r0.c0 = mac((*m11).r0.c0, u, v1.r0.c0);
+          if ROWS > 4u { (*m21).r0.c0 = mac((*m21).r0.c0, u, v2.r0.c0); (*m31).r0.c0 = mac((*m31).r0.c0, u, v3.r0.c0); } }
+        { let u = ob4_2(g.g0);
+          (*m02).r0.c0 = mac((*m02).r0.c0, u, v0.r0.c0); (*m12).r0.c0 = mac((*m12).r0.c0, u, v1.r0.c0);
+          if ROWS > 4u { (*m22).r0.c0 = mac((*m22).r0.c0, u, v2.r0.c0); (*m32).r0.c0 = mac((*m32).r0.c0, u, v3.r0.c0); } }
+        { let u = ob4_3(g.g0);
+          (*m03).r0.c0 = mac((*m03).r0.c0, u, v0.r0.c0); (*m13).r0.c0 = mac((*m13).r0.c0, u, v1.r0.c0);
+          if ROWS > 4u { (*m23).r0.c0 = mac((*m23).r0.c0, u, v2.r0.c0); (*m33).r0.c0 = mac((*m33).r0.c0, u, v3.r0.c0); } }
+        { let u = ob4_0(g.g1);
+          (*m00).r0.c1 = mac((*m00).r0.c1, u, v0.r0.c1); (*m10).r0.c1 = mac((*m10).r0.c1, u, v1.r0.c1);
+          if ROWS > 4u { (*m20).r0.c1 = mac((*m20).r0.c1, u, v2.r0.c1); (*m30).r0.c1 = mac((*m30).r0.c1, u, v3.r0.c1); } }
+        { let u = ob4_1(g.g1);
+          (*m01).r0.c1 = mac((*m01).r0.c1, u, v0.r0.c1); (*m11).r0.c1 = mac((*m11).r0.c1, u, v1.r0.c1);
+          if ROWS > 4u { (*m21).r0.c1 = mac((*m21).r0.c1, u, v2.r0.c1); (*m31).r0.c1 = mac((*m31).r0.c1, u, v3.r0.c1); } }
+        { let u = ob4_2(g.g1);
+          (*m02).r0.c1 = mac((*m02).r0.c1, u, v0.r0.c1); (*m12).r0.c1 = mac((*m12).r0.c1, u, v1.r0.c1);
+          if ROWS > 4u { (*m22).r0.c1 = mac((*m22).r0.c1, u, v2.r0.c1); (*m32).r0.c1 = mac((*m32).r0.c1, u, v3.r0.c1); } }
+        { let u = ob4_3(g.g1);
+          (*m03).r0.c1 = mac((*m03).r0.c1, u, v0.r0.c1); (*m13).r0.c1 = mac((*m13).r0.c1, u, v1.r0.c1);
+          if ROWS > 4u { (*m23).r0.c1 = mac((*m23).r0.c1, u, v2.r0.c1); (*m33).r0.c1 = mac((*m33).r0.c1, u, v3.r0.c1); } }
+        { let u = ob4_0(g.g2);
+          (*m00).r0.c2 = mac((*m00).r0.c2, u, v0.r0.c2); (*m10).r0.c2 = mac((*m10).r0.c2, u, v1.r0.c2);
+          if ROWS > 4u { (*m20).r0.c2 = mac((*m20).r0.c2, u, v2.r0.c2); (*m30).r0.c2 = mac((*m30).r0.c2, u, v3.r0.c2); } }
+        { let u = ob4_1(g.g2);
+          (*m01).r0.c2 = mac((*m01).r0.c2, u, v0.r0.c2); (*m11).r0.c2 = mac((*m11).r0.c2, u, v1.r0.c2);
+          if ROWS > 4u { (*m21).r0.c2 = mac((*m21).r0.c2, u, v2.r0.c2); (*m31).r0.c2 = mac((*m31).r0.c2, u, v3.r0.c2); } }
+        { let u = ob4_2(g.g2);
+          (*m02).r0.c2 = mac((*m02).r0.c2, u, v0.r0.c2); (*m12).r0.c2 = mac((*m12).r0.c2, u, v1.r0.c2);
+          if ROWS > 4u { (*m22).r0.c2 = mac((*m22).r0.c2, u, v2.r0.c2); (*m32).r0.c2 = mac((*m32).r0.c2, u, v3.r0.c2); } }
+        { let u = ob4_3(g.g2);
+          (*m03).r0.c2 = mac((*m03).r0.c2, u, v0.r0.c2); (*m13).r0.c2 = mac((*m13).r0.c2, u, v1.r0.c2);
+          if ROWS > 4u { (*m23).r0.c2 = mac((*m23).r0.c2, u, v2.r0.c2); (*m33).r0.c2 = mac((*m33).r0.c2, u, v3.r0.c2); } }
+        { let u = ob4_0(g.g3);
+          (*m00).r0.c3 = mac((*m00).r0.c3, u, v0.r0.c3); (*m10).r0.c3 = mac((*m10).r0.c3, u, v1.r0.c3);
+          if ROWS > 4u { (*m20).r0.c3 = mac((*m20).r0.c3, u, v2.r0.c3); (*m30).r0.c3 = mac((*m30).r0.c3, u, v3.r0.c3); } }
+        { let u = ob4_1(g.g3);
+          (*m01).r0.c3 = mac((*m01).r0.c3, u, v0.r0.c3); (*m11).r0.c3 = mac((*m11).r0.c3, u, v1.r0.c3);
+          if ROWS > 4u { (*m21).r0.c3 = mac((*m21).r0.c3, u, v2.r0.c3); (*m31).r0.c3 = mac((*m31).r0.c3, u, v3.r0.c3); } }
+        { let u = ob4_2(g.g3);
+          (*m02).r0.c3 = mac((*m02).r0.c3, u, v0.r0.c3); (*m12).r0.c3 = mac((*m12).r0.c3, u, v1.r0.c3);
+          if ROWS > 4u { (*m22).r0.c3 = mac((*m22).r0.c3, u, v2.r0.c3); (*m32).r0.c3 = mac((*m32).r0.c3, u, v3.r0.c3); } }
+        { let u = ob4_3(g.g3);
+          (*m03).r0.c3 = mac((*m03).r0.c3, u, v0.r0.c3); (*m13).r0.c3 = mac((*m13).r0.c3, u, v1.r0.c3);
+          if ROWS > 4u { (*m23).r0.c3 = mac((*m23).r0.c3, u, v2.r0.c3); (*m33).r0.c3 = mac((*m33).r0.c3, u, v3.r0.c3); } }
+        { let u = ob4_0(g.g4);
+          (*m00).r1.c0 = mac((*m00).r1.c0, u, v0.r1.c0); (*m10).r1.c0 = mac((*m10).r1.c0, u, v1.r1.c0);
+          if ROWS > 4u { (*m20).r1.c0 = mac((*m20).r1.c0, u, v2.r1.c0); (*m30).r1.c0 = mac((*m30).r1.c0, u, v3.r1.c0); } }
+        { let u = ob4_1(g.g4);
+          (*m01).r1.c0 = mac((*m01).r1.c0, u, v0.r1.c0); (*m11).r1.c0 = mac((*m11).r1.c0, u, v1.r1.c0);
+          if ROWS > 4u { (*m21).r1.c0 = mac((*m21).r1.c0, u, v2.r1.c0); (*m31).r1.c0 = mac((*m31).r1.c0, u, v3.r1.c0); } }
+        { let u = ob4_2(g.g4);
+          (*m02).r1.c0 = mac((*m02).r1.c0, u, v0.r1.c0); (*m12).r1.c0 = mac((*m12).r1.c0, u, v1.r1.c0);
+          if ROWS > 4u { (*m22).r1.c0 = mac((*m22).r1.c0, u, v2.r1.c0); (*m32).r1.c0 = mac((*m32).r1.c0, u, v3.r1.c0); } }
+        { let u = ob4_3(g.g4);
+          (*m03).r1.c0 = mac((*m03).r1.c0, u, v0.r1.c0); (*m13).r1.c0 = mac((*m13).r1.c0, u, v1.r1.c0);
+          if ROWS > 4u { (*m23).r1.c0 = mac((*m23).r1.c0, u, v2.r1.c0); (*m33).r1.c0 = mac((*m33).r1.c0, u, v3.r1.c0); } }
+        { let u = ob4_0(g.g5);
+          (*m00).r1.c1 = mac((*m00).r1.c1, u, v0.r1.c1); (*m10).r1.c1 = mac((*m10).r1.c1, u, v1.r1.c1);
+          if ROWS > 4u { (*m20).r1.c1 = mac((*m20).r1.c1, u, v2.r1.c1); (*m30).r1.c1 = mac((*m30).r1.c1, u, v3.r1.c1); } }
+        { let u = ob4_1(g.g5);
+          (*m01).r1.c1 = mac((*m01).r1.c1, u, v0.r1.c1); (*m11).r1.c1 = mac((*m11).r1.c1, u, v1.r1.c1);
+          if ROWS > 4u { (*m21).r1.c1 = mac((*m21).r1.c1, u, v2.r1.c1); (*m31).r1.c1 = mac((*m31).r1.c1, u, v3.r1.c1); } }
+        { let u = ob4_2(g.g5);
+          (*m02).r1.c1 = mac((*m02).r1.c1, u, v0.r1.c1); (*m12).r1.c1 = mac((*m12).r1.c1, u, v1.r1.c1);
+          if ROWS > 4u { (*m22).r1.c1 = mac((*m22).r1.c1, u, v2.r1.c1); (*m32).r1.c1 = mac((*m32).r1.c1, u, v3.r1.c1); } }
+        { let u = ob4_3(g.g5);
+          (*m03).r1.c1 = mac((*m03).r1.c1, u, v0.r1.c1); (*m13).r1.c1 = mac((*m13).r1.c1, u, v1.r1.c1);
+          if ROWS > 4u { (*m23).r1.c1 = mac((*m23).r1.c1, u, v2.r1.c1); (*m33).r1.c1 = mac((*m33).r1.c1, u, v3.r1.c1); } }
+        { let u = ob4_0(g.g6);
+          (*m00).r1.c2 = mac((*m00).r1.c2, u, v0.r1.c2); (*m10).r1.c2 = mac((*m10).r1.c2, u, v1.r1.c2);
+          if ROWS > 4u { (*m20).r1.c2 = mac((*m20).r1.c2, u, v2.r1.c2); (*m30).r1.c2 = mac((*m30).r1.c2, u, v3.r1.c2); } }
+        { let u = ob4_1(g.g6);
+          (*m01).r1.c2 = mac((*m01).r1.c2, u, v0.r1.c2); (*m11).r1.c2 = mac((*m11).r1.c2, u, v1.r1.c2);
+          if ROWS > 4u { (*m21).r1.c2 = mac((*m21).r1.c2, u, v2.r1.c2); (*m31).r1.c2 = mac((*m31).r1.c2, u, v3.r1.c2); } }
+        { let u = ob4_2(g.g6);
+          (*m02).r1.c2 = mac((*m02).r1.c2, u, v0.r1.c2); (*m12).r1.c2 = mac((*m12).r1.c2, u, v1.r1.c2);
+          if ROWS > 4u { (*m22).r1.c2 = mac((*m22).r1.c2, u, v2.r1.c2); (*m32).r1.c2 = mac((*m32).r1.c2, u, v3.r1.c2); } }
+        { let u = ob4_3(g.g6);
+          (*m03).r1.c2 = mac((*m03).r1.c2, u, v0.r1.c2); (*m13).r1.c2 = mac((*m13).r1.c2, u, v1.r1.c2);
+          if ROWS > 4u { (*m23).r1.c2 = mac((*m23).r1.c2, u, v2.r1.c2); (*m33).r1.c2 = mac((*m33).r1.c2, u, v3.r1.c2); } }
+        { let u = ob4_0(g.g7);
+          (*m00).r1.c3 = mac((*m00).r1.c3, u, v0.r1.c3); (*m10).r1.c3 = mac((*m10).r1.c3, u, v1.r1.c3);
+          if ROWS > 4u { (*m20).r1.c3 = mac((*m20).r1.c3, u, v2.r1.c3); (*m30).r1.c3 = mac((*m30).r1.c3, u, v3.r1.c3); } }
+        { let u = ob4_1(g.g7);
+          (*m01).r1.c3 = mac((*m01).r1.c3, u, v0.r1.c3); (*m11).r1.c3 = mac((*m11).r1.c3, u, v1.r1.c3);
+          if ROWS > 4u { (*m21).r1.c3 = mac((*m21).r1.c3, u, v2.r1.c3); (*m31).r1.c3 = mac((*m31).r1.c3, u, v3.r1.c3); } }
+        { let u = ob4_2(g.g7);
+          (*m02).r1.c3 = mac((*m02).r1.c3, u, v0.r1.c3); (*m12).r1.c3 = mac((*m12).r1.c3, u, v1.r1.c3);
+          if ROWS > 4u { (*m22).r1.c3 = mac((*m22).r1.c3, u, v2.r1.c3); (*m32).r1.c3 = mac((*m32).r1.c3, u, v3.r1.c3); } }
+        { let u = ob4_3(g.g7);
+          (*m03).r1.c3 = mac((*m03).r1.c3, u, v0.r1.c3); (*m13).r1.c3 = mac((*m13).r1.c3, u, v1.r1.c3);
+          if ROWS > 4u { (*m23).r1.c3 = mac((*m23).r1.c3, u, v2.r1.c3); (*m33).r1.c3 = mac((*m33).r1.c3, u, v3.r1.c3); } }
+        { let u = ob4_0(g.g8);
+          (*m00).r2.c0 = mac((*m00).r2.c0, u, v0.r2.c0); (*m10).r2.c0 = mac((*m10).r2.c0, u, v1.r2.c0);
+          if ROWS > 4u { (*m20).r2.c0 = mac((*m20).r2.c0, u, v2.r2.c0); (*m30).r2.c0 = mac((*m30).r2.c0, u, v3.r2.c0); } }
+        { let u = ob4_1(g.g8);
+          (*m01).r2.c0 = mac((*m01).r2.c0, u, v0.r2.c0); (*m11).r2.c0 = mac((*m11).r2.c0, u, v1.r2.c0);
+          if ROWS > 4u { (*m21).r2.c0 = mac((*m21).r2.c0, u, v2.r2.c0); (*m31).r2.c0 = mac((*m31).r2.c0, u, v3.r2.c0); } }
+        { let u = ob4_2(g.g8);
+          (*m02).r2.c0 = mac((*m02).r2.c0, u, v0.r2.c0); (*m12).r2.c0 = mac((*m12).r2.c0, u, v1.r2.c0);
+          if ROWS > 4u { (*m22).r2.c0 = mac((*m22).r2.c0, u, v2.r2.c0); (*m32).r2.c0 = mac((*m32).r2.c0, u, v3.r2.c0); } }
+        { let u = ob4_3(g.g8);
+          (*m03).r2.c0 = mac((*m03).r2.c0, u, v0.r2.c0); (*m13).r2.c0 = mac((*m13).r2.c0, u, v1.r2.c0);
+          if ROWS > 4u { (*m23).r2.c0 = mac((*m23).r2.c0, u, v2.r2.c0); (*m33).r2.c0 = mac((*m33).r2.c0, u, v3.r2.c0); } }
+        { let u = ob4_0(g.g9);
+          (*m00).r2.c1 = mac((*m00).r2.c1, u, v0.r2.c1); (*m10).r2.c1 = mac((*m10).r2.c1, u, v1.r2.c1);
+          if ROWS > 4u { (*m20).r2.c1 = mac((*m20).r2.c1, u, v2.r2.c1); (*m30).r2.c1 = mac((*m30).r2.c1, u, v3.r2.c1); } }
+        { let u = ob4_1(g.g9);
+          (*m01).r2.c1 = mac((*m01).r2.c1, u, v0.r2.c1); (*m11).r2.c1 = mac((*m11).r2.c1, u, v1.r2.c1);
+          if ROWS > 4u { (*m21).r2.c1 = mac((*m21).r2.c1, u, v2.r2.c1); (*m31).r2.c1 = mac((*m31).r2.c1, u, v3.r2.c1); } }
+        { let u = ob4_2(g.g9);
+          (*m02).r2.c1 = mac((*m02).r2.c1, u, v0.r2.c1); (*m12).r2.c1 = mac((*m12).r2.c1, u, v1.r2.c1);
+          if ROWS > 4u { (*m22).r2.c1 = mac((*m22).r2.c1, u, v2.r2.c1); (*m32).r2.c1 = mac((*m32).r2.c1, u, v3.r2.c1); } }
+        { let u = ob4_3(g.g9);
+          (*m03).r2.c1 = mac((*m03).r2.c1, u, v0.r2.c1); (*m13).r2.c1 = mac((*m13).r2.c1, u, v1.r2.c1);
+          if ROWS > 4u { (*m23).r2.c1 = mac((*m23).r2.c1, u, v2.r2.c1); (*m33).r2.c1 = mac((*m33).r2.c1, u, v3.r2.c1); } }
+        { let u = ob4_0(g.g10);
+          (*m00).r2.c2 = mac((*m00).r2.c2, u, v0.r2.c2); (*m10).r2.c2 = mac((*m10).r2.c2, u, v1.r2.c2);
+          if ROWS > 4u { (*m20).r2.c2 = mac((*m20).r2.c2, u, v2.r2.c2); (*m30).r2.c2 = mac((*m30).r2.c2, u, v3.r2.c2); } }
+        { let u = ob4_1(g.g10);
+          (*m01).r2.c2 = mac((*m01).r2.c2, u, v0.r2.c2); (*m11).r2.c2 = mac((*m11).r2.c2, u, v1.r2.c2);
+          if ROWS > 4u { (*m21).r2.c2 = mac((*m21).r2.c2, u, v2.r2.c2); (*m31).r2.c2 = mac((*m31).r2.c2, u, v3.r2.c2); } }
+        { let u = ob4_2(g.g10);
+          (*m02).r2.c2 = mac((*m02).r2.c2, u, v0.r2.c2); (*m12).r2.c2 = mac((*m12).r2.c2, u, v1.r2.c2);
+          if ROWS > 4u { (*m22).r2.c2 = mac((*m22).r2.c2, u, v2.r2.c2); (*m32).r2.c2 = mac((*m32).r2.c2, u, v3.r2.c2); } }
+        { let u = ob4_3(g.g10);
+          (*m03).r2.c2 = mac((*m03).r2.c2, u, v0.r2.c2); (*m13).r2.c2 = mac((*m13).r2.c2, u, v1.r2.c2);
+          if ROWS > 4u { (*m23).r2.c2 = mac((*m23).r2.c2, u, v2.r2.c2); (*m33).r2.c2 = mac((*m33).r2.c2, u, v3.r2.c2); } }
+        { let u = ob4_0(g.g11);
+          (*m00).r2.c3 = mac((*m00).r2.c3, u, v0.r2.c3); (*m10).r2.c3 = mac((*m10).r2.c3, u, v1.r2.c3);
+          if ROWS > 4u { (*m20).r2.c3 = mac((*m20).r2.c3, u, v2.r2.c3); (*m30).r2.c3 = mac((*m30).r2.c3, u, v3.r2.c3); } }
+        { let u = ob4_1(g.g11);
+          (*m01).r2.c3 = mac((*m01).r2.c3, u, v0.r2.c3); (*m11).r2.c3 = mac((*m11).r2.c3, u, v1.r2.c3);
+          if ROWS > 4u { (*m21).r2.c3 = mac((*m21).r2.c3, u, v2.r2.c3); (*m31).r2.c3 = mac((*m31).r2.c3, u, v3.r2.c3); } }
+        { let u = ob4_2(g.g11);
+          (*m02).r2.c3 = mac((*m02).r2.c3, u, v0.r2.c3); (*m12).r2.c3 = mac((*m12).r2.c3, u, v1.r2.c3);
+          if ROWS > 4u { (*m22).r2.c3 = mac((*m22).r2.c3, u, v2.r2.c3); (*m32).r2.c3 = mac((*m32).r2.c3, u, v3.r2.c3); } }
+        { let u = ob4_3(g.g11);
+          (*m03).r2.c3 = mac((*m03).r2.c3, u, v0.r2.c3); (*m13).r2.c3 = mac((*m13).r2.c3, u, v1.r2.c3);
+          if ROWS > 4u { (*m23).r2.c3 = mac((*m23).r2.c3, u, v2.r2.c3); (*m33).r2.c3 = mac((*m33).r2.c3, u, v3.r2.c3); } }
+        { let u = ob4_0(g.g12);
+          (*m00).r3.c0 = mac((*m00).r3.c0, u, v0.r3.c0); (*m10).r3.c0 = mac((*m10).r3.c0, u, v1.r3.c0);
+          if ROWS > 4u { (*m20).r3.c0 = mac((*m20).r3.c0, u, v2.r3.c0); (*m30).r3.c0 = mac((*m30).r3.c0, u, v3.r3.c0); } }
+        { let u = ob4_1(g.g12);
+          (*m01).r3.c0 = mac((*m01).r3.c0, u, v0.r3.c0); (*m11).r3.c0 = mac((*m11).r3.c0, u, v1.r3.c0);
+          if ROWS > 4u { (*m21).r3.c0 = mac((*m21).r3.c0, u, v2.r3.c0); (*m31).r3.c0 = mac((*m31).r3.c0, u, v3.r3.c0); } }
+        { let u = ob4_2(g.g12);
+          (*m02).r3.c0 = mac((*m02).r3.c0, u, v0.r3.c0); (*m12).r3.c0 = mac((*m12).r3.c0, u, v1.r3.c0);
+          if ROWS > 4u { (*m22).r3.c0 = mac((*m22).r3.c0, u, v2.r3.c0); (*m32).r3.c0 = mac((*m32).r3.c0, u, v3.r3.c0); } }
+        { let u = ob4_3(g.g12);
+          (*m03).r3.c0 = mac((*m03).r3.c0, u, v0.r3.c0); (*m13).r3.c0 = mac((*m13).r3.c0, u, v1.r3.c0);
+          if ROWS > 4u { (*m23).r3.c0 = mac((*m23).r3.c0, u, v2.r3.c0); (*m33).r3.c0 = mac((*m33).r3.c0, u, v3.r3.c0); } }
+        { let u = ob4_0(g.g13);
+          (*m00).r3.c1 = mac((*m00).r3.c1, u, v0.r3.c1); (*m10).r3.c1 = mac((*m10).r3.c1, u, v1.r3.c1);
+          if ROWS > 4u { (*m20).r3.c1 = mac((*m20).r3.c1, u, v2.r3.c1); (*m30).r3.c1 = mac((*m30).r3.c1, u, v3.r3.c1); } }
+        { let u = ob4_1(g.g13);
+          (*m01).r3.c1 = mac((*m01).r3.c1, u, v0.r3.c1); (*m11).r3.c1 = mac((*m11).r3.c1, u, v1.r3.c1);
+          if ROWS > 4u { (*m21).r3.c1 = mac((*m21).r3.c1, u, v2.r3.c1); (*m31).r3.c1 = mac((*m31).r3.c1, u, v3.r3.c1); } }
+        { let u = ob4_2(g.g13);
+          (*m02).r3.c1 = mac((*m02).r3.c1, u, v0.r3.c1); (*m12).r3.c1 = mac((*m12).r3.c1, u, v1.r3.c1);
+          if ROWS > 4u { (*m22).r3.c1 = mac((*m22).r3.c1, u, v2.r3.c1); (*m32).r3.c1 = mac((*m32).r3.c1, u, v3.r3.c1); } }
+        { let u = ob4_3(g.g13);
+          (*m03).r3.c1 = mac((*m03).r3.c1, u, v0.r3.c1); (*m13).r3.c1 = mac((*m13).r3.c1, u, v1.r3.c1);
+          if ROWS > 4u { (*m23).r3.c1 = mac((*m23).r3.c1, u, v2.r3.c1); (*m33).r3.c1 = mac((*m33).r3.c1, u, v3.r3.c1); } }
+        { let u = ob4_0(g.g14);
+          (*m00).r3.c2 = mac((*m00).r3.c2, u, v0.r3.c2); (*m10).r3.c2 = mac((*m10).r3.c2, u, v1.r3.c2);
+          if ROWS > 4u { (*m20).r3.c2 = mac((*m20).r3.c2, u, v2.r3.c2); (*m30).r3.c2 = mac((*m30).r3.c2, u, v3.r3.c2); } }
+        { let u = ob4_1(g.g14);
+          (*m01).r3.c2 = mac((*m01).r3.c2, u, v0.r3.c2); (*m11).r3.c2 = mac((*m11).r3.c2, u, v1.r3.c2);
+          if ROWS > 4u { (*m21).r3.c2 = mac((*m21).r3.c2, u, v2.r3.c2); (*m31).r3.c2 = mac((*m31).r3.c2, u, v3.r3.c2); } }
+        { let u = ob4_2(g.g14);
+          (*m02).r3.c2 = mac((*m02).r3.c2, u, v0.r3.c2); (*m12).r3.c2 = mac((*m12).r3.c2, u, v1.r3.c2);
+          if ROWS > 4u { (*m22).r3.c2 = mac((*m22).r3.c2, u, v2.r3.c2); (*m32).r3.c2 = mac((*m32).r3.c2, u, v3.r3.c2); } }
+        { let u = ob4_3(g.g14);
+          (*m03).r3.c2 = mac((*m03).r3.c2, u, v0.r3.c2); (*m13).r3.c2 = mac((*m13).r3.c2, u, v1.r3.c2);
+          if ROWS > 4u { (*m23).r3.c2 = mac((*m23).r3.c2, u, v2.r3.c2); (*m33).r3.c2 = mac((*m33).r3.c2, u, v3.r3.c2); } }
+        { let u = ob4_0(g.g15);
+          (*m00).r3.c3 = mac((*m00).r3.c3, u, v0.r3.c3); (*m10).r3.c3 = mac((*m10).r3.c3, u, v1.r3.c3);
+          if ROWS > 4u { (*m20).r3.c3 = mac((*m20).r3.c3, u, v2.r3.c3); (*m30).r3.c3 = mac((*m30).r3.c3, u, v3.r3.c3); } }
+        { let u = ob4_1(g.g15);
+          (*m01).r3.c3 = mac((*m01).r3.c3, u, v0.r3.c3); (*m11).r3.c3 = mac((*m11).r3.c3, u, v1.r3.c3);
+          if ROWS > 4u { (*m21).r3.c3 = mac((*m21).r3.c3, u, v2.r3.c3); (*m31).r3.c3 = mac((*m31).r3.c3, u, v3.r3.c3); } }
+        { let u = ob4_2(g.g15);
+          (*m02).r3.c3 = mac((*m02).r3.c3, u, v0.r3.c3); (*m12).r3.c3 = mac((*m12).r3.c3, u, v1.r3.c3);
+          if ROWS > 4u { (*m22).r3.c3 = mac((*m22).r3.c3, u, v2.r3.c3); (*m32).r3.c3 = mac((*m32).r3.c3, u, v3.r3.c3); } }
+        { let u = ob4_3(g.g15);
+          (*m03).r3.c3 = mac((*m03).r3.c3, u, v0.r3.c3); (*m13).r3.c3 = mac((*m13).r3.c3, u, v1.r3.c3);
+          if ROWS > 4u { (*m23).r3.c3 = mac((*m23).r3.c3, u, v2.r3.c3); (*m33).r3.c3 = mac((*m33).r3.c3, u, v3.r3.c3); } }
     }
 }
 
@@ -273,14 +496,22 @@ fn winograd_lanes(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocatio
     var m21 = m00;
     var m30 = m00;
     var m31 = m00;
+    var m02 = m00;
+    var m03 = m00;
+    var m12 = m00;
+    var m13 = m00;
+    var m22 = m00;
+    var m23 = m00;
+    var m32 = m00;
+    var m33 = m00;
     let xi = i32(x);
     let yi = i32(y0);
     for (var c = 0u; c < params.cin4_a; c++) {
-        wino_step(&m00, &m01, &m10, &m11, &m20, &m21, &m30, &m31, src_a, MODE_A, c, c, w, xi, yi);
+        wino_step(&m00, &m01, &m02, &m03, &m10, &m11, &m12, &m13, &m20, &m21, &m22, &m23, &m30, &m31, &m32, &m33, src_a, MODE_A, c, c, w, xi, yi);
     }
     if SOURCE_B {
         for (var c = 0u; c < params.cin4_b; c++) {
-            wino_step(&m00, &m01, &m10, &m11, &m20, &m21, &m30, &m31, src_b, MODE_B, c, params.cin4_a + c, w, xi, yi);
+            wino_step(&m00, &m01, &m02, &m03, &m10, &m11, &m12, &m13, &m20, &m21, &m22, &m23, &m30, &m31, &m32, &m33, src_b, MODE_B, c, params.cin4_a + c, w, xi, yi);
         }
     }
     if !inside {
@@ -290,22 +521,38 @@ fn winograd_lanes(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocatio
     let second = OB > 1u && ob0 + 1u < params.cout4;
     let b0 = weights[bias_at];
     var b1 = b0;
+    var b2 = b0;
+    var b3 = b0;
     if OB > 1u {
         b1 = weights[bias_at + 1u];
     }
+    if OB > 2u {
+        b2 = weights[bias_at + 2u];
+        b3 = weights[bias_at + 3u];
+    }
+    let third = OB > 2u && ob0 + 2u < params.cout4;
+    let fourth = OB > 2u && ob0 + 3u < params.cout4;
     // Tile t's outputs at rows y0 + 2t, y0 + 2t + 1 (wino_store drops a row past the bottom).
     wino_store(m00, b0, x, y0, ob0);
     if second { wino_store(m01, b1, x, y0, ob0 + 1u); }
+    if third { wino_store(m02, b2, x, y0, ob0 + 2u); }
+    if fourth { wino_store(m03, b3, x, y0, ob0 + 3u); }
     if y0 + 2u < params.height {
         wino_store(m10, b0, x, y0 + 2u, ob0);
         if second { wino_store(m11, b1, x, y0 + 2u, ob0 + 1u); }
+        if third { wino_store(m12, b2, x, y0 + 2u, ob0 + 2u); }
+        if fourth { wino_store(m13, b3, x, y0 + 2u, ob0 + 3u); }
     }
     if ROWS > 4u && y0 + 4u < params.height {
         wino_store(m20, b0, x, y0 + 4u, ob0);
         if second { wino_store(m21, b1, x, y0 + 4u, ob0 + 1u); }
+        if third { wino_store(m22, b2, x, y0 + 4u, ob0 + 2u); }
+        if fourth { wino_store(m23, b3, x, y0 + 4u, ob0 + 3u); }
     }
     if ROWS > 4u && y0 + 6u < params.height {
         wino_store(m30, b0, x, y0 + 6u, ob0);
         if second { wino_store(m31, b1, x, y0 + 6u, ob0 + 1u); }
+        if third { wino_store(m32, b2, x, y0 + 6u, ob0 + 2u); }
+        if fourth { wino_store(m33, b3, x, y0 + 6u, ob0 + 3u); }
     }
 }

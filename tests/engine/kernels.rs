@@ -507,8 +507,8 @@ fn conv_winograd_tiles_match_cpu() {
 
 #[test]
 fn conv_winograd_lanes_tiles_match_cpu_and_the_winograd_tiles() {
-    // Winograd with its weights across the subgroup: two and four stacked 2x2 tiles, one and
-    // two blocks, both weight memories and every read mode, on levels 13 and 22 wide and 19
+    // Winograd with its weights across the subgroup: two and four stacked 2x2 tiles, one, two
+    // and four blocks, both weight memories and every read mode, on levels 13 and 22 wide and 19
     // and 12 high (partial tiles on both edges, lanes past them loading for the others).
     let g = gpu();
     let wl = |rows, blocks| Tile::winograd_lanes(rows, blocks).expect("a Winograd lanes tile");
@@ -523,8 +523,10 @@ fn conv_winograd_lanes_tiles_match_cpu_and_the_winograd_tiles() {
     let cases = [
         (wl(8, 2), WeightMemory::Uniform),
         (wl(4, 1).with_group(32).unwrap(), WeightMemory::Storage),
-        (wl(8, 1), WeightMemory::Storage),
+        (wl(8, 4), WeightMemory::Storage),
         (wl(4, 2), WeightMemory::Uniform),
+        (wl(4, 4), WeightMemory::Uniform),
+        (wl(8, 1), WeightMemory::Storage),
     ];
     for (i, (tile, memory)) in cases.into_iter().enumerate() {
         assert_eq!((tile.cols, tile.taps()), (2, 16));
@@ -556,7 +558,7 @@ fn conv_winograd_lanes_tiles_match_cpu_and_the_winograd_tiles() {
         }
     }
     // One row: a deep level of a small frame.
-    check_conv_tile((tensor(9, 1, 11, 830), Read::Direct), None, 8, true, 11, 1, 831, wl(8, 2), WeightMemory::Storage);
+    check_conv_tile((tensor(9, 1, 11, 830), Read::Direct), None, 8, true, 11, 1, 831, wl(8, 4), WeightMemory::Storage);
     // The same transforms and sums in the same order as `winograd`'s: bit-identical, whatever
     // the number of stacked tiles.
     let (a, b) = (tensor(6, 38, 26, 840), tensor(5, 19, 13, 841));
@@ -564,6 +566,7 @@ fn conv_winograd_lanes_tiles_match_cpu_and_the_winograd_tiles() {
     let run = |tile| gpu_conv((&a, Read::Pool), Some((&b, Read::Direct)), &weight, &bias, true, 13, 19, tile, WeightMemory::Uniform).data;
     let wino = run(Tile::winograd(4, 2).unwrap());
     assert_eq!(run(wl(8, 2)), wino, "winolanes8x2 against wino4x2");
+    assert_eq!(run(wl(8, 4)), wino, "winolanes8x4 against wino4x2");
     assert_eq!(run(wl(4, 2)), wino, "winolanes4x2 against wino4x2");
     assert_eq!(run(wl(8, 1)), run(Tile::winograd(2, 1).unwrap()), "winolanes8x1 against wino2x1");
     // Its pooled output is the 2x2 max of its output, bit for bit (the pool pass's).
@@ -578,8 +581,8 @@ fn conv_winograd_lanes_tiles_match_cpu_and_the_winograd_tiles() {
         true,
         38,
         46,
-        wl(8, 2),
-        WeightMemory::Uniform,
+        wl(8, 4),
+        WeightMemory::Storage,
         sources,
         true,
     );
@@ -588,10 +591,10 @@ fn conv_winograd_lanes_tiles_match_cpu_and_the_winograd_tiles() {
     assert!(pooled.data.iter().zip(&want.data).all(|(p, w)| p.to_bits() == w.to_bits()), "pooled values differ from the 2x2 max");
     assert!(out.data.iter().any(|&v| v < 0.0), "the LeakyReLU's negative side is exercised");
     assert_eq!(wl(8, 2).to_string(), "winolanes8x2");
-    assert_eq!(Tile::CPU_WINOGRAD, wl(8, 2), "the CPU drivers' Winograd tile is one the kernel has");
+    assert_eq!(Tile::CPU_WINOGRAD, wl(8, 4), "the CPU drivers' Winograd tile is one the kernel has");
     assert_eq!(Tile::winograd_lanes(2, 1), None);
     assert_eq!(Tile::winograd_lanes(16, 1), None);
-    assert_eq!(Tile::winograd_lanes(8, 4), None);
+    assert_eq!(Tile::winograd_lanes(8, 3), None);
     assert_eq!(wl(8, 2).with_split(2), None);
 }
 

@@ -225,7 +225,7 @@ fn parse_tile(s: &str) -> Result<TileChoice> {
             .and_then(|t| t.with_group(group))
             .map(TileChoice::Fixed)
             .with_context(|| {
-                format!("tile `{s}`: Winograd lanes tiles have 4 or 8 rows, 1 or 2 blocks and workgroups 8, 16, 32 or 64 wide")
+                format!("tile `{s}`: Winograd lanes tiles have 4 or 8 rows, 1, 2 or 4 blocks and workgroups 8, 16, 32 or 64 wide")
             });
     }
     if winograd {

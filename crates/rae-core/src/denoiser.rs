@@ -428,7 +428,10 @@ impl Denoiser {
         let memory_of = |tile: Tile, spec: &ConvSpec| -> WeightMemory {
             if chosen_memory.is_some() || fixed_mma {
                 memory
-            } else if tile.method.is_mma() {
+            } else if tile.method.is_mma() || tile.method == Method::WinogradLanes {
+                // Mma tiles read only storage weights; Winograd's 16 weights per channel pair
+                // in 4 blocks fill a uniform chunk at 16 input blocks (and ran as fast from
+                // storage, docs/PERF.md session 22).
                 WeightMemory::Storage
             } else {
                 WeightMemory::for_conv(device_type, spec.width, spec.height)

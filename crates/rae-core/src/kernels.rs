@@ -983,12 +983,15 @@ impl Tile {
     pub const CPU_LANES: Tile = Tile { rows: 8, blocks: 2, cols: 2, group_x: WORKGROUP, method: Method::Lanes, split: 1 };
 
     /// The CPU drivers' Winograd tile: F(2x2, 3x3) in four stacked 2x2 output tiles (8 rows x
-    /// 2 columns) x 2 blocks, weights loaded across the subgroup ([`Method::WinogradLanes`]).
-    /// 256 multiply-adds per 4 outputs and input block where [`Tile::CPU_LANES`] takes 576, for
-    /// the same 40 texel fetches per 16 outputs; on lavapipe (Zen 5, 512-bit vectors) the
-    /// 256x256 frame's convs of 32 input channels and more took about 0.9x the time
-    /// (docs/PERF.md, session 22). The rounding is Winograd's: within the golden tolerance.
-    pub const CPU_WINOGRAD: Tile = Tile { rows: 8, blocks: 2, cols: 2, group_x: WORKGROUP, method: Method::WinogradLanes, split: 1 };
+    /// 2 columns) x 4 blocks, weights loaded across the subgroup ([`Method::WinogradLanes`]).
+    /// It takes 256 multiply-adds per 4 outputs and input block where [`Tile::CPU_LANES`] takes
+    /// 576, and 40 texel fetches per 16 outputs x 16 channels where that takes 40 per 16 x 8.
+    /// On lavapipe (Zen 5, 512-bit vectors) the 256x256 frame's convs of 32 input channels and
+    /// more took about 0.85x the time (docs/PERF.md, session 22). Four blocks of 16 weights
+    /// per channel pair fit a 64 KiB uniform chunk only up to 15 input blocks, so the Denoiser
+    /// gives these convs storage weights. The rounding is Winograd's: within the golden
+    /// tolerance.
+    pub const CPU_WINOGRAD: Tile = Tile { rows: 8, blocks: 4, cols: 2, group_x: WORKGROUP, method: Method::WinogradLanes, split: 1 };
 
     /// The tile of CPU drivers on `device`: [`Tile::CPU_LANES`] where the device has subgroups
     /// of 8 or more lanes ([`lanes_supported`]), else [`Tile::CPU`].
@@ -1047,9 +1050,9 @@ impl Tile {
 
     /// A Winograd F(2x2, 3x3) tile with its weights loaded across the subgroup
     /// ([`Method::WinogradLanes`]): `rows` (4: two stacked 2x2 output tiles, 8: four) x `blocks`
-    /// (1 or 2), if the kernel has it.
+    /// (1, 2 or 4), if the kernel has it.
     pub fn winograd_lanes(rows: u32, blocks: u32) -> Option<Self> {
-        ([4, 8].contains(&rows) && (1..=2).contains(&blocks)).then_some(Tile {
+        ([4, 8].contains(&rows) && [1, 2, 4].contains(&blocks)).then_some(Tile {
             rows,
             blocks,
             cols: 2,
