@@ -175,6 +175,10 @@ pub const MMA_SPLIT_TILES: [Tile; 4] = [
 /// one) at 256x256 kept only these two (docs/PERF.md, session 21).
 pub const TUNE_TILES_LANES: [Tile; 2] = [Tile::CPU_LANES, Tile { rows: 4, ..Tile::CPU_LANES }];
 
+/// [`TUNE_TILES_LANES`] and [`Tile::CPU_WINOGRAD`]: what [`TileChoice::Tuned`] times on CPU
+/// drivers with subgroups of 16 lanes ([`crate::kernels::winograd_lanes_supported`]).
+pub const TUNE_TILES_LANES_WINOGRAD: [Tile; 3] = [Tile::CPU_LANES, Tile { rows: 4, ..Tile::CPU_LANES }, Tile::CPU_WINOGRAD];
+
 /// The tiles [`TileChoice::Tuned`] times on GPUs (and CPU drivers without subgroups).
 pub const TUNE_TILES: [Tile; 33] = [
     Tile { rows: 16, blocks: 2, cols: 1, group_x: 8, method: Method::Direct, split: 1 },
@@ -454,7 +458,11 @@ impl Denoiser {
         // CPU drivers with subgroups tune among lanes tiles: the direct ones take about twice
         // as long there.
         let lanes = device_type == wgpu::DeviceType::Cpu && Tile::cpu(device) == Tile::CPU_LANES;
-        let base: &[Tile] = if lanes { &TUNE_TILES_LANES } else { &TUNE_TILES };
+        let base: &[Tile] = match (lanes, crate::kernels::winograd_lanes_supported(device)) {
+            (true, true) => &TUNE_TILES_LANES_WINOGRAD,
+            (true, false) => &TUNE_TILES_LANES,
+            (false, _) => &TUNE_TILES,
+        };
         let candidates = tuning_candidates(tiles, precision, mma, base);
         let (tiles, conv_sources, tuning): (Vec<Tile>, Vec<SourceAccess>, Vec<Vec<Finalist>>) = match tiles {
             TileChoice::Fixed(t) => fixed(t),
