@@ -58,10 +58,11 @@ enum Command {
         /// relMSE/PSNR/SSIM of input and result to this CSV file.
         #[arg(long)]
         csv: Option<PathBuf>,
-        /// Conv register tile, as `bench --tile` takes it (one): `auto` (tuned on GPUs,
-        /// lanes8x2w2 on CPU drivers, lanes4x2w2 on levels of at most 8x8), `tuned`, or a fixed
-        /// tile. On lavapipe `lanes4x2w2` compiles
-        /// into an empty shader cache in 0.37x the time for frames about 1.07x as long.
+        /// Conv register tile, as `bench --tile` takes it (one): `auto` (tuned on GPUs; on CPU
+        /// drivers winolanes8x4 for convs of 32+ channels above 8x8, lanes8x2w2 for the others,
+        /// lanes4x2w2 on levels of at most 8x8), `tuned`, or a fixed tile. On lavapipe
+        /// `lanes4x2w2` compiles into an empty shader cache sooner (the sample sequence's whole
+        /// run 14.9 s against 18.8 s with `auto`) for slower frames.
         #[arg(long, default_value = "auto")]
         tile: String,
         /// On CPU drivers, do not compile kernels on a second device while a slow first frame
@@ -118,12 +119,14 @@ enum Command {
         /// blocks 1, 2, 4 (4 with one column); columns 1, 2; workgroups 8, 16, 32, 64 wide;
         /// input blocks split 1 to 16 ways), the same prefixed `lanes` (weights loaded across
         /// the subgroup, devices with subgroups of 8 or more lanes; 4 blocks also in 2 columns,
-        /// two columns at most 8 rows, e.g. lanes8x2w2, the CPU drivers' default) or
-        /// winoROWSxBLOCKS[gGROUPX] (Winograd F(2x2, 3x3); rows 2, 4) for one tile everywhere,
-        /// `tuned` (each conv timed with every candidate on this device while building; on CPU
-        /// drivers with subgroups lanes8x2w2 and lanes4x2w2), or `auto` (tuned-mma on GPUs; on
-        /// CPU drivers lanes8x2w2, lanes4x2w2 on levels of at most 8x8, or 16x4 without
-        /// subgroups: what `denoise` uses). `mma16`, `mma32`, `mma48`, `mma64`: the matrix-unit kernel (f16
+        /// two columns at most 8 rows, e.g. lanes8x2w2), winoROWSxBLOCKS[gGROUPX] (Winograd
+        /// F(2x2, 3x3); rows 2, 4) or winolanesROWSxBLOCKS[gGROUPX] (Winograd with weights
+        /// across the subgroup, devices with 16-lane subgroups; rows 4, 8; blocks 1, 2, 4) for
+        /// one tile everywhere, `tuned` (each conv timed with every candidate on this device
+        /// while building; on CPU drivers with subgroups lanes8x2w2, lanes4x2w2 and, with
+        /// 16-lane subgroups, winolanes8x4), or `auto` (tuned-mma on GPUs; on CPU drivers
+        /// winolanes8x4 for convs of 32+ channels and lanes8x2w2 for the others, lanes4x2w2 on
+        /// levels of at most 8x8, or 16x4 without subgroups: what `denoise` uses). `mma16`, `mma32`, `mma48`, `mma64`: the matrix-unit kernel (f16
         /// products summed in f32, 16 to 64 output channels per workgroup; tensor cores where
         /// wgpu's cooperative matrices have 16x16x16 f16 -> f32, emulated and slow elsewhere;
         /// storage weights and SHADER_F16); `mma16x3` to `mma64x3`: the same with every operand

@@ -99,8 +99,8 @@ pub const CPU_STORAGE_WEIGHTS_MAX_PIXELS: u32 = 32 * 32;
 pub const CPU_SHORT_TILE_MAX_PIXELS: u32 = 8 * 8;
 
 /// The fewest input blocks (4 channels each) of a conv that runs [`Tile::CPU_WINOGRAD`] on CPU
-/// drivers ([`Tile::cpu_for`]): 8 (32 channels). The frame's 8- and 3-channel convs ran slower
-/// in it (docs/PERF.md, session 22).
+/// drivers ([`Tile::cpu_for`]): 8 (32 channels). The frame's 3-channel conv ran slower in it,
+/// its 8-channel one as fast (docs/PERF.md, session 22).
 pub const CPU_WINOGRAD_MIN_BLOCKS: u32 = 8;
 
 impl WeightMemory {
@@ -986,8 +986,8 @@ impl Tile {
     /// 2 columns) x 4 blocks, weights loaded across the subgroup ([`Method::WinogradLanes`]).
     /// It takes 256 multiply-adds per 4 outputs and input block where [`Tile::CPU_LANES`] takes
     /// 576, and 40 texel fetches per 16 outputs x 16 channels where that takes 40 per 16 x 8.
-    /// On lavapipe (Zen 5, 512-bit vectors) the 256x256 frame's convs of 32 input channels and
-    /// more took about 0.85x the time (docs/PERF.md, session 22). Four blocks of 16 weights
+    /// On lavapipe (Zen 5, 512-bit vectors) the 256x256 frame's big convs of 32 input channels
+    /// and more took about 0.8x the time of `lanes8x2w2` (docs/PERF.md, session 22). Four blocks of 16 weights
     /// per channel pair fit a 64 KiB uniform chunk only up to 15 input blocks, so the Denoiser
     /// gives these convs storage weights. The rounding is Winograd's: within the golden
     /// tolerance.
@@ -1466,34 +1466,22 @@ impl ConvPlan {
         assert!(tiles.len() == 1 || tiles.len() == specs.len(), "one tile, or one per conv");
         assert!(sources.len() == 1 || sources.len() == specs.len(), "one source access, or one per conv");
         assert!(memories.len() == 1 || memories.len() == specs.len(), "one weight memory, or one per conv");
-        if let Some(t) = tiles.iter().find(|t| t.method == Method::WinogradLanes && !winograd_lanes_supported(device)) {
+        // Tiles with weights across the lanes, on a device whose subgroups are too narrow.
+        let narrow = |t: &&Tile| match t.method {
+            Method::Lanes => (!lanes_supported(device)).then_some(("weights across lanes", 8)),
+            Method::WinogradLanes => (!winograd_lanes_supported(device)).then_some(("Winograd weights across lanes", 16)),
+            _ => None,
+        };
+        if let Some((t, (what, lanes))) = tiles.iter().find_map(|t| narrow(&t).map(|n| (t, n))) {
             let info = device.adapter_info();
+            let has = if device.features().contains(wgpu::Features::SUBGROUP) {
+                format!("{} to {}", info.subgroup_min_size, info.subgroup_max_size)
+            } else {
+                "none".to_string()
+            };
             return Err(crate::Error::UnsupportedTile {
                 tile: t.to_string(),
-                reason: format!(
-                    "Winograd weights across lanes need subgroups of at least 16 lanes; {} has {}",
-                    info.name,
-                    if device.features().contains(wgpu::Features::SUBGROUP) {
-                        format!("{} to {}", info.subgroup_min_size, info.subgroup_max_size)
-                    } else {
-                        "none".to_string()
-                    }
-                ),
-            });
-        }
-        if let Some(t) = tiles.iter().find(|t| t.method == Method::Lanes && !lanes_supported(device)) {
-            let info = device.adapter_info();
-            return Err(crate::Error::UnsupportedTile {
-                tile: t.to_string(),
-                reason: format!(
-                    "weights across lanes need subgroups of at least 8 lanes; {} has {}",
-                    info.name,
-                    if device.features().contains(wgpu::Features::SUBGROUP) {
-                        format!("{} to {}", info.subgroup_min_size, info.subgroup_max_size)
-                    } else {
-                        "none".to_string()
-                    }
-                ),
+                reason: format!("{what} need subgroups of at least {lanes} lanes; {} has {has}", info.name),
             });
         }
         let limits = device.limits();
