@@ -209,6 +209,38 @@ fn check_conv_tile(
     );
 }
 
+/// Case `i` of a tile's sweep, seeded with `seed`: even cases read a pooled and a direct source
+/// into 11 LeakyReLU outputs on a 13 x 19 level, odd ones an upsampled and a pooled-upsampled
+/// source into 11 linear outputs on a 22 x 12 level (partial tiles on both edges, lanes past
+/// them).
+fn check_conv_case(i: usize, seed: u64, tile: Tile, memory: WeightMemory) {
+    if i.is_multiple_of(2) {
+        check_conv_tile(
+            (tensor(6, 38, 26, seed), Read::Pool),
+            Some((tensor(5, 19, 13, seed + 1), Read::Direct)),
+            11,
+            true,
+            13,
+            19,
+            seed + 2,
+            tile,
+            memory,
+        );
+    } else {
+        check_conv_tile(
+            (tensor(6, 6, 11, seed), Read::Upsample),
+            Some((tensor(5, 12, 22, seed + 1), Read::PoolUpsample)),
+            11,
+            false,
+            22,
+            12,
+            seed + 2,
+            tile,
+            memory,
+        );
+    }
+}
+
 fn tensor(c: usize, h: usize, w: usize, seed: u64) -> Chw {
     Chw { c, h, w, data: noise(c * h * w, seed) }
 }
@@ -398,32 +430,7 @@ fn conv_lanes_tiles_match_cpu() {
         return;
     }
     for (i, (tile, memory)) in cases.into_iter().enumerate() {
-        let seed = 700 + 3 * i as u64;
-        if i % 2 == 0 {
-            check_conv_tile(
-                (tensor(6, 38, 26, seed), Read::Pool),
-                Some((tensor(5, 19, 13, seed + 1), Read::Direct)),
-                11,
-                true,
-                13,
-                19,
-                seed + 2,
-                tile,
-                memory,
-            );
-        } else {
-            check_conv_tile(
-                (tensor(6, 6, 11, seed), Read::Upsample),
-                Some((tensor(5, 12, 22, seed + 1), Read::PoolUpsample)),
-                11,
-                false,
-                22,
-                12,
-                seed + 2,
-                tile,
-                memory,
-            );
-        }
+        check_conv_case(i, 700 + 3 * i as u64, tile, memory);
     }
     // The same products summed in the same order as the direct tile: bit-identical.
     let (a, b) = (tensor(6, 38, 26, 710), tensor(5, 19, 13, 711));
@@ -459,32 +466,7 @@ fn conv_winograd_tiles_match_cpu() {
     for (i, (rows, blocks, memory, group)) in cases.into_iter().enumerate() {
         let tile = Tile::winograd(rows, blocks).and_then(|t| t.with_group(group)).expect("a Winograd tile");
         assert_eq!((tile.cols, tile.taps()), (2, 16));
-        let seed = 200 + 3 * i as u64;
-        if i % 2 == 0 {
-            check_conv_tile(
-                (tensor(6, 38, 26, seed), Read::Pool),
-                Some((tensor(5, 19, 13, seed + 1), Read::Direct)),
-                11,
-                true,
-                13,
-                19,
-                seed + 2,
-                tile,
-                memory,
-            );
-        } else {
-            check_conv_tile(
-                (tensor(6, 6, 11, seed), Read::Upsample),
-                Some((tensor(5, 12, 22, seed + 1), Read::PoolUpsample)),
-                11,
-                false,
-                22,
-                12,
-                seed + 2,
-                tile,
-                memory,
-            );
-        }
+        check_conv_case(i, 200 + 3 * i as u64, tile, memory);
     }
     // One row: the level of a deep conv on a small frame.
     check_conv_tile((tensor(9, 1, 11, 230), Read::Direct), None, 8, true, 11, 1, 231, Tile::winograd(4, 2).unwrap(), WeightMemory::Storage);
@@ -530,32 +512,7 @@ fn conv_winograd_lanes_tiles_match_cpu_and_the_winograd_tiles() {
     ];
     for (i, (tile, memory)) in cases.into_iter().enumerate() {
         assert_eq!((tile.cols, tile.taps()), (2, 16));
-        let seed = 800 + 3 * i as u64;
-        if i % 2 == 0 {
-            check_conv_tile(
-                (tensor(6, 38, 26, seed), Read::Pool),
-                Some((tensor(5, 19, 13, seed + 1), Read::Direct)),
-                11,
-                true,
-                13,
-                19,
-                seed + 2,
-                tile,
-                memory,
-            );
-        } else {
-            check_conv_tile(
-                (tensor(6, 6, 11, seed), Read::Upsample),
-                Some((tensor(5, 12, 22, seed + 1), Read::PoolUpsample)),
-                11,
-                false,
-                22,
-                12,
-                seed + 2,
-                tile,
-                memory,
-            );
-        }
+        check_conv_case(i, 800 + 3 * i as u64, tile, memory);
     }
     // One row: a deep level of a small frame.
     check_conv_tile((tensor(9, 1, 11, 830), Read::Direct), None, 8, true, 11, 1, 831, wl(8, 4), WeightMemory::Storage);
