@@ -128,7 +128,7 @@ fn gpu_conv_pooled(
         b_is_hidden: false,
         pooled,
     };
-    let plan = ConvPlan::with_sources(dev, &mut kernels, &[spec], &[tile], &[sources]).unwrap();
+    let plan = ConvPlan::with_sources(dev, &g.queue, &mut kernels, &[spec], &[tile], &[sources]).unwrap();
     assert_eq!(plan.sources(), [sources]);
     let ta = upload(a.0);
     let tb = upload(b.map_or(&Chw::zeros(1, 1, 1), |b| b.0));
@@ -191,7 +191,10 @@ fn check_conv_tile(
     // float64 reference: the rounding of the running sum grows like sqrt(terms) (a 2,250-term
     // sum of these values is off by up to ~3e-5), so the tolerance grows with it from 1e-5 at
     // 100 terms.
-    let rel = 1e-5 * ((9 * cin) as f32 / 100.0).sqrt().max(1.0);
+    // Winograd F(4x4, 3x3)'s transforms (coefficients up to 5 in B, 8 in A, 1/24 in G) round
+    // more: 1.4x that bound on 120 input channels; it gets 4x.
+    let winograd4 = if tile.method == kernels::Method::Winograd4Lanes { 4.0 } else { 1.0 };
+    let rel = winograd4 * 1e-5 * ((9 * cin) as f32 / 100.0).sqrt().max(1.0);
     let weight: Vec<f32> = noise(cout * cin * 9, seed).iter().map(|v| v * 0.3).collect();
     let bias = noise(cout, seed + 1);
     let got = gpu_conv((&a.0, a.1), b.as_ref().map(|b| (&b.0, b.1)), &weight, &bias, leaky, w, h, tile, memory);
@@ -424,8 +427,9 @@ fn conv_lanes_tiles_match_cpu() {
         // Refused, with the reason, where the device has no subgroups of 8 lanes.
         let mut k = Kernels::new(&g.device, kernels::Precision::F32, WeightMemory::Uniform);
         let (weight, bias) = (vec![0.0; 4 * 4 * 9], vec![0.0; 4]);
-        let err =
-            ConvPlan::new(&g.device, &mut k, &[one_source_spec("c", 16, 16, 4, &weight, &bias)], &[cases[0].0]).err().expect("refused");
+        let err = ConvPlan::new(&g.device, &g.queue, &mut k, &[one_source_spec("c", 16, 16, 4, &weight, &bias)], &[cases[0].0])
+            .err()
+            .expect("refused");
         assert!(err.to_string().contains("subgroups of at least 8 lanes"), "{err}");
         return;
     }
@@ -498,7 +502,9 @@ fn conv_winograd_lanes_tiles_match_cpu_and_the_winograd_tiles() {
         // Refused, with the reason, where the device has no subgroups of 16 lanes.
         let mut k = Kernels::new(&g.device, kernels::Precision::F32, WeightMemory::Uniform);
         let (weight, bias) = (vec![0.0; 4 * 4 * 9], vec![0.0; 4]);
-        let err = ConvPlan::new(&g.device, &mut k, &[one_source_spec("c", 16, 16, 4, &weight, &bias)], &[wl(8, 2)]).err().expect("refused");
+        let err = ConvPlan::new(&g.device, &g.queue, &mut k, &[one_source_spec("c", 16, 16, 4, &weight, &bias)], &[wl(8, 2)])
+            .err()
+            .expect("refused");
         assert!(err.to_string().contains("subgroups of at least 16 lanes"), "{err}");
         return;
     }
@@ -553,6 +559,79 @@ fn conv_winograd_lanes_tiles_match_cpu_and_the_winograd_tiles() {
     assert_eq!(Tile::winograd_lanes(16, 1), None);
     assert_eq!(Tile::winograd_lanes(8, 3), None);
     assert_eq!(wl(8, 2).with_split(2), None);
+}
+
+#[test]
+fn conv_winograd4_lanes_tiles_match_cpu_and_pool_their_output() {
+    // Winograd F(4x4, 3x3) with its weights in the plan's weight texture, across the subgroup:
+    // one and two stacked 4x4 tiles, one, two and four blocks, either weight memory (the texture
+    // serves both layouts) and every read mode, on levels 13 and 22 wide (4-column tiles with 1
+    // and 2 columns inside) and 19 and 12 high, against the float64 sum.
+    let g = gpu();
+    let w4 = |rows, blocks| Tile::winograd4_lanes(rows, blocks).expect("a Winograd F(4x4) lanes tile");
+    if !kernels::winograd_lanes_supported(&g.device) {
+        let mut k = Kernels::new(&g.device, kernels::Precision::F32, WeightMemory::Storage);
+        let (weight, bias) = (vec![0.0; 4 * 4 * 9], vec![0.0; 4]);
+        let err = ConvPlan::new(&g.device, &g.queue, &mut k, &[one_source_spec("c", 16, 16, 4, &weight, &bias)], &[w4(8, 4)])
+            .err()
+            .expect("refused");
+        assert!(err.to_string().contains("subgroups of at least 16 lanes"), "{err}");
+        return;
+    }
+    let cases = [
+        (w4(8, 4), WeightMemory::Storage),
+        (w4(4, 1).with_group(32).unwrap(), WeightMemory::Uniform),
+        (w4(8, 2), WeightMemory::Uniform),
+        (w4(4, 4), WeightMemory::Storage),
+        (w4(8, 1), WeightMemory::Storage),
+        (w4(4, 2), WeightMemory::Uniform),
+    ];
+    for (i, (tile, memory)) in cases.into_iter().enumerate() {
+        assert_eq!((tile.cols, tile.taps()), (4, 36));
+        check_conv_case(i, 900 + 3 * i as u64, tile, memory);
+    }
+    // One row (a deep level of a small frame), and 30 input blocks with uniform weights, more
+    // than a 64 KiB chunk holds of them: the texture has no chunk limit.
+    check_conv_tile((tensor(9, 1, 11, 930), Read::Direct), None, 8, true, 11, 1, 931, w4(8, 4), WeightMemory::Storage);
+    check_conv_tile(
+        (tensor(60, 10, 9, 932), Read::Direct),
+        Some((tensor(60, 10, 9, 933), Read::Direct)),
+        13,
+        false,
+        9,
+        10,
+        934,
+        w4(8, 4),
+        WeightMemory::Uniform,
+    );
+    // Its pooled output is the 2x2 max of its output, bit for bit (the pool pass's), with the
+    // last column of tiles half outside the level (38 = 9 x 4 + 2).
+    let (c, d) = (tensor(5, 92, 76, 950), tensor(3, 46, 38, 951));
+    let (weight, bias) = (noise(9 * 8 * 9, 952), noise(9, 953));
+    let sources = SourceAccess::for_device_type(g.device.adapter_info().device_type);
+    let (out, pooled) = gpu_conv_pooled(
+        (&c, Read::Pool),
+        Some((&d, Read::Direct)),
+        &weight,
+        &bias,
+        true,
+        38,
+        46,
+        w4(8, 4),
+        WeightMemory::Storage,
+        sources,
+        true,
+    );
+    let pooled = pooled.expect("a Winograd F(4x4) lanes tile pools its output");
+    let want = cpu::read(&out, Read::Pool, 23, 19);
+    assert!(pooled.data.iter().zip(&want.data).all(|(p, w)| p.to_bits() == w.to_bits()), "pooled values differ from the 2x2 max");
+    assert!(out.data.iter().any(|&v| v < 0.0), "the LeakyReLU's negative side is exercised");
+    assert_eq!(w4(8, 4).to_string(), "wino4lanes8x4");
+    assert_eq!(Tile::CPU_WINOGRAD4, w4(8, 4), "the CPU drivers' F(4x4) tile is one the kernel has");
+    assert_eq!(Tile::winograd4_lanes(2, 1), None);
+    assert_eq!(Tile::winograd4_lanes(16, 1), None);
+    assert_eq!(Tile::winograd4_lanes(8, 3), None);
+    assert_eq!(w4(8, 2).with_split(2), None);
 }
 
 /// A LeakyReLU conv reading `ca` channels of one source directly (`bias.len()` outputs).
@@ -625,7 +704,7 @@ fn split_k_is_capped_by_input_blocks_and_partial_memory() {
     let (weight, bias) = (vec![0.0; 12 * 20 * 9], vec![0.0; 12]);
     let spec = |width, height| one_source_spec("d1.l2.0", width, height, 20, &weight, &bias);
     let tile = Tile::new(4, 1).unwrap().with_split(16).unwrap();
-    let plan = ConvPlan::new(&g.device, &mut kernels, &[spec(64, 64), spec(8, 8)], &[tile]).unwrap();
+    let plan = ConvPlan::new(&g.device, &g.queue, &mut kernels, &[spec(64, 64), spec(8, 8)], &[tile]).unwrap();
     assert_eq!(plan.tiles().iter().map(|t| t.split).collect::<Vec<_>>(), [1, 5]);
     assert_eq!(kernels::PARTIAL_LAYERS, 4);
 }
@@ -640,7 +719,7 @@ fn four_block_tiles_shrink_to_the_conv() {
     let blocks = |memory, ca: usize, cout: usize| {
         let mut kernels = Kernels::new(&g.device, kernels::Precision::F32, memory);
         let (weight, bias) = (vec![0.0; cout * ca * 9], vec![0.0; cout]);
-        let plan = ConvPlan::new(&g.device, &mut kernels, &[one_source_spec("c", 16, 16, ca, &weight, &bias)], &[tile]).unwrap();
+        let plan = ConvPlan::new(&g.device, &g.queue, &mut kernels, &[one_source_spec("c", 16, 16, ca, &weight, &bias)], &[tile]).unwrap();
         plan.tiles()[0].blocks
     };
     assert_eq!(blocks(WeightMemory::Uniform, 64, 16), 4);
@@ -707,24 +786,26 @@ fn plans_make_each_pipeline_once() {
         one_source_spec("c", 16, 4, 8, &weight, &bias),
     ];
     let tile = Tile::new(16, 2).unwrap();
-    ConvPlan::new(&g.device, &mut kernels, &specs, &[tile]).unwrap();
+    ConvPlan::new(&g.device, &g.queue, &mut kernels, &specs, &[tile]).unwrap();
     assert_eq!(kernels.conv_pipelines(), 2);
-    ConvPlan::new(&g.device, &mut kernels, &specs, &[tile]).unwrap();
+    ConvPlan::new(&g.device, &g.queue, &mut kernels, &specs, &[tile]).unwrap();
     assert_eq!(kernels.conv_pipelines(), 2);
-    ConvPlan::new(&g.device, &mut kernels, &specs[..1], &[tile.with_split(2).unwrap()]).unwrap();
+    ConvPlan::new(&g.device, &g.queue, &mut kernels, &specs[..1], &[tile.with_split(2).unwrap()]).unwrap();
     assert_eq!(kernels.conv_pipelines(), 4, "the split conv and its reduce pass");
     // Sources chosen per conv: the first conv's variant again, the other two as storage-texture
     // readers (one new pipeline each, in the other kind's layout).
     let (sampled, storage) = (SourceAccess::Sampled, SourceAccess::Storage);
     let default = kernels.source_access();
     let mixed = [default, if default == sampled { storage } else { sampled }];
-    let plan = kernels::ConvPlan::with_sources(&g.device, &mut kernels, &specs, &[tile], &[mixed[0], mixed[1], mixed[1]]).unwrap();
+    let plan =
+        kernels::ConvPlan::with_sources(&g.device, &g.queue, &mut kernels, &specs, &[tile], &[mixed[0], mixed[1], mixed[1]]).unwrap();
     assert_eq!(plan.sources(), [mixed[0], mixed[1], mixed[1]]);
     assert_eq!(kernels.conv_pipelines(), 6);
     // Weights chosen per conv as well: the first conv in uniform chunks (its pipeline again),
     // the other two in storage (one new pipeline each, in the storage-weights layout).
     let (uniform, storage) = (WeightMemory::Uniform, WeightMemory::Storage);
-    let plan = ConvPlan::with_choices(&g.device, &mut kernels, &specs, &[tile], &[mixed[0]], &[uniform, storage, storage]).unwrap();
+    let plan =
+        ConvPlan::with_choices(&g.device, &g.queue, &mut kernels, &specs, &[tile], &[mixed[0]], &[uniform, storage, storage]).unwrap();
     assert_eq!(plan.memories(), [uniform, storage, storage]);
     assert_eq!(kernels.conv_pipelines(), 8);
 }
@@ -986,8 +1067,10 @@ fn mma_tiles_need_storage_weights() {
     let mut kernels = Kernels::new(&g.device, kernels::Precision::F32, WeightMemory::Uniform);
     let (weight, bias) = (vec![0.0; 4 * 8 * 9], vec![0.0; 4]);
     let spec = one_source_spec("d1.l1.0", 8, 8, 8, &weight, &bias);
-    let err =
-        ConvPlan::new(&g.device, &mut kernels, &[spec], &[Tile::mma(16).unwrap()]).err().expect("uniform weights are refused").to_string();
+    let err = ConvPlan::new(&g.device, &g.queue, &mut kernels, &[spec], &[Tile::mma(16).unwrap()])
+        .err()
+        .expect("uniform weights are refused")
+        .to_string();
     assert!(err.contains("mma16") && err.contains("storage"), "{err}");
 }
 
@@ -1044,7 +1127,8 @@ fn conv_too_wide_for_a_weight_chunk_is_an_error() {
     let mut kernels = Kernels::new(&g.device, kernels::Precision::F32, kernels::WeightMemory::Uniform);
     let (weight, bias) = (vec![0.0; 4 * 460 * 9], vec![0.0; 4]);
     let spec = one_source_spec("d1.l1.0", 8, 8, 460, &weight, &bias);
-    let err = ConvPlan::new(&g.device, &mut kernels, &[spec], &[Tile::default()]).err().expect("460 channels do not fit").to_string();
+    let err =
+        ConvPlan::new(&g.device, &g.queue, &mut kernels, &[spec], &[Tile::default()]).err().expect("460 channels do not fit").to_string();
     assert!(err.contains("d1.l1.0") && err.contains("460"), "{err}");
 }
 

@@ -2,7 +2,7 @@
 
 use rae_core::kernels::{
     MMA_ENABLE, MMA_PREFETCH_TEXELS, MMA_SPLIT_PIXELS, MMA_WORKGROUP_BYTES, PREP_WITHOUT_SUBGROUPS, ROWS_STUB, SHADERS, STORAGE_SOURCES,
-    STORAGE_WEIGHTS, UNIFORM_WEIGHTS, WITHOUT_SUBGROUPS, conv_module_source, lanes_module_source, mma_source, shader_source,
+    STORAGE_WEIGHTS, SourceAccess, UNIFORM_WEIGHTS, WITHOUT_SUBGROUPS, conv_module_source, lanes_module_source, mma_source, shader_source,
 };
 
 /// `src` (from `file`) with each of `rewrites` made, each of which must find its text.
@@ -16,7 +16,7 @@ fn apply(src: String, file: &str, rewrites: &[(&str, &str)]) -> String {
 #[test]
 fn every_shader_validates_with_naga() {
     assert!(SHADERS.len() >= 3);
-    // The sources as written (conv3x3_rows.wgsl and conv3x3_wino.wgsl inside conv3x3.wgsl,
+    // The sources as written (conv3x3_rows.wgsl, conv3x3_wino.wgsl and conv3x3_wino4.wgsl inside conv3x3.wgsl,
     // the only way they are used), and the rewrites kernels::Kernels::new makes (f16 storage textures, storage-buffer
     // weights, storage-texture sources; no subgroups, validated without the capability).
     // The conv kernels as modules are made: with conv_common.wgsl appended.
@@ -31,8 +31,11 @@ fn every_shader_validates_with_naga() {
     assert!(!prep_without_subgroups.contains("subgroupMax("), "no subgroup operation is left in prep");
     let rewritten = [
         ("prep (without subgroups)", prep_without_subgroups),
-        ("conv3x3 (lanes tiles)", lanes_module_source(conv)),
-        ("conv3x3 (storage sources, lanes tiles, f16)", lanes_module_source(&storage_sources).replace("rgba32float", "rgba16float")),
+        ("conv3x3 (lanes tiles)", lanes_module_source(conv, SourceAccess::Sampled)),
+        (
+            "conv3x3 (storage sources, lanes tiles, f16)",
+            lanes_module_source(&storage_sources, SourceAccess::Storage).replace("rgba32float", "rgba16float"),
+        ),
         ("conv3x3 (f16, storage weights)", conv.replace("rgba32float", "rgba16float").replace(UNIFORM_WEIGHTS, STORAGE_WEIGHTS)),
         ("conv3x3 (without subgroups)", without_subgroups),
     ];
@@ -48,7 +51,7 @@ fn every_shader_validates_with_naga() {
     ];
     let all = SHADERS
         .iter()
-        .filter(|(n, _)| !["conv3x3_rows", "conv3x3_wino", "conv3x3_mma_coop", "conv_common"].contains(n))
+        .filter(|(n, _)| !["conv3x3_rows", "conv3x3_wino", "conv3x3_wino4", "conv3x3_mma_coop", "conv_common"].contains(n))
         .map(|&(n, _)| (n, conv_module_source(n)))
         .chain(rewritten)
         .chain(mma_rewritten);
@@ -66,7 +69,7 @@ fn every_shader_validates_with_naga() {
         let entries: &[&str] = if name.starts_with("conv3x3_mma") {
             &["mma_emulated", "mma_split_emulated"]
         } else if name.contains("lanes tiles") {
-            &["main", "lanes", "winograd_lanes"]
+            &["main", "lanes", "winograd_lanes", "winograd4_lanes"]
         } else {
             &["main"]
         };

@@ -1,7 +1,7 @@
 //! Recurrence, reset, determinism, odd sizes, the caller-buffer path and input errors.
 
 use rae_core::denoiser::TUNE_TILES;
-use rae_core::kernels::{self, CPU_SHORT_TILE_MAX_PIXELS, CPU_WINOGRAD_MIN_BLOCKS, blocks, rows_per_invocation};
+use rae_core::kernels::{self, CPU_SHORT_TILE_MAX_PIXELS, CPU_WINOGRAD_MIN_BLOCKS, CPU_WINOGRAD4_MIN_PIXELS, blocks, rows_per_invocation};
 use rae_core::{Denoiser, Error, FrameInputs, GpuFrameIo, Method, Options, SourceAccess, Tile, TileChoice, WeightMemory, Weights};
 use wgpu::util::DeviceExt;
 
@@ -83,8 +83,9 @@ fn weights_chosen_by_level_give_the_frames_of_uniform_chunks() {
 #[test]
 fn cpu_tiles_by_level_and_width_follow_the_rule() {
     // Left to choose, a CPU driver with subgroups runs 4-row lanes tiles on levels of at most
-    // 8x8 pixels (the 64x64 golden's L3), Winograd lanes tiles above them for convs of 32
-    // channels and more (where 16-lane subgroups allow), and 8-row lanes tiles for the others.
+    // 8x8 pixels (the 64x64 golden's L3); where 16-lane subgroups allow, Winograd F(4x4) lanes
+    // tiles on levels of 32x32 and more (L0, L1) and F(2x2) ones between for convs of 32
+    // channels and more (L2); and 8-row lanes tiles for the others.
     // The 4- and 8-row direct tiles take the same sums in the same order, so with Winograd
     // only where it is chosen the frames stay bit for bit those of the rule's tiles; against
     // the 8-row tile everywhere they differ by Winograd's rounding alone.
@@ -108,6 +109,8 @@ fn cpu_tiles_by_level_and_width_follow_the_rule() {
         let in_blocks = blocks(n.a.channels) + n.b.map_or(0, |b| blocks(b.channels));
         let want = if w * h <= CPU_SHORT_TILE_MAX_PIXELS {
             (Method::Lanes, rows_per_invocation(h, 4))
+        } else if wino && w * h >= CPU_WINOGRAD4_MIN_PIXELS {
+            (Method::Winograd4Lanes, rows_per_invocation(h, 8).max(4))
         } else if wino && in_blocks >= CPU_WINOGRAD_MIN_BLOCKS {
             (Method::WinogradLanes, rows_per_invocation(h, 8))
         } else {
@@ -118,6 +121,7 @@ fn cpu_tiles_by_level_and_width_follow_the_rule() {
     let methods: Vec<Method> = auto.conv_tiles().iter().map(|t| t.method).collect();
     assert!(methods.contains(&Method::Lanes));
     assert_eq!(methods.contains(&Method::WinogradLanes), wino);
+    assert_eq!(methods.contains(&Method::Winograd4Lanes), wino);
     // Winograd's rounding only: the frames within 1e-5 of the largest value.
     let scale = one_tile.iter().fold(1f32, |m, v| m.max(v.abs()));
     let worst = frames.iter().zip(&one_tile).fold(0f32, |m, (a, b)| m.max((a - b).abs()));

@@ -59,10 +59,10 @@ enum Command {
         #[arg(long)]
         csv: Option<PathBuf>,
         /// Conv register tile, as `bench --tile` takes it (one): `auto` (tuned on GPUs; on CPU
-        /// drivers winolanes8x4 for convs of 32+ channels above 8x8, lanes8x2w2 for the others,
-        /// lanes4x2w2 on levels of at most 8x8), `tuned`, or a fixed tile. On lavapipe
-        /// `lanes4x2w2` compiles into an empty shader cache sooner (the sample sequence's whole
-        /// run 14.9 s against 18.8 s with `auto`) for slower frames.
+        /// drivers wino4lanes8x4 on levels of 32x32 and more, winolanes8x4 for convs of 32+
+        /// channels between those and 8x8, lanes8x2w2 for the others, lanes4x2w2 on levels of at
+        /// most 8x8), `tuned`, or a fixed tile. On lavapipe `lanes4x2w2` compiles into an empty
+        /// shader cache sooner for slower frames.
         #[arg(long, default_value = "auto")]
         tile: String,
         /// On CPU drivers, do not compile kernels on a second device while a slow first frame
@@ -120,13 +120,16 @@ enum Command {
         /// input blocks split 1 to 16 ways), the same prefixed `lanes` (weights loaded across
         /// the subgroup, devices with subgroups of 8 or more lanes; 4 blocks also in 2 columns,
         /// two columns at most 8 rows, e.g. lanes8x2w2), winoROWSxBLOCKS[gGROUPX] (Winograd
-        /// F(2x2, 3x3); rows 2, 4) or winolanesROWSxBLOCKS[gGROUPX] (Winograd with weights
-        /// across the subgroup, devices with 16-lane subgroups; rows 4, 8; blocks 1, 2, 4) for
-        /// one tile everywhere, `tuned` (each conv timed with every candidate on this device
-        /// while building; on CPU drivers with subgroups lanes8x2w2, lanes4x2w2 and, with
-        /// 16-lane subgroups, winolanes8x4), or `auto` (tuned-mma on GPUs; on CPU drivers
-        /// winolanes8x4 for convs of 32+ channels and lanes8x2w2 for the others, lanes4x2w2 on
-        /// levels of at most 8x8, or 16x4 without subgroups: what `denoise` uses). `mma16`, `mma32`, `mma48`, `mma64`: the matrix-unit kernel (f16
+        /// F(2x2, 3x3); rows 2, 4), winolanesROWSxBLOCKS[gGROUPX] (Winograd with weights
+        /// across the subgroup, devices with 16-lane subgroups; rows 4, 8; blocks 1, 2, 4) or
+        /// wino4lanesROWSxBLOCKS[gGROUPX] (Winograd F(4x4, 3x3) in 4 columns, weights from a
+        /// texture across the subgroup, the same devices; rows 4, 8; blocks 1, 2, 4) for one
+        /// tile everywhere, `tuned` (each conv timed with every candidate on this device while
+        /// building; on CPU drivers with subgroups lanes8x2w2, lanes4x2w2 and, with 16-lane
+        /// subgroups, winolanes8x4 and wino4lanes8x4), or `auto` (tuned-mma on GPUs; on CPU
+        /// drivers wino4lanes8x4 on levels of 32x32 and more, winolanes8x4 for convs of 32+
+        /// channels between those and 8x8, lanes8x2w2 for the others, lanes4x2w2 on levels of
+        /// at most 8x8, or 16x4 without subgroups: what `denoise` uses). `mma16`, `mma32`, `mma48`, `mma64`: the matrix-unit kernel (f16
         /// products summed in f32, 16 to 64 output channels per workgroup; tensor cores where
         /// wgpu's cooperative matrices have 16x16x16 f16 -> f32, emulated and slow elsewhere;
         /// storage weights and SHADER_F16); `mma16x3` to `mma64x3`: the same with every operand
@@ -212,8 +215,16 @@ fn parse_tile(s: &str) -> Result<TileChoice> {
         };
         return tile.map(TileChoice::Fixed).with_context(|| format!("tile `{s}`: matrix-unit tiles are mma16, mma32, mma48 or mma64 (output channels per workgroup), split mma16x3 to mma64x3, or split with prefetched windows mma16x3p to mma64x3p"));
     }
-    let bad = || format!("tile `{s}` is not [wino|lanes|winolanes]ROWSxBLOCKS[wCOLS][gGROUPX][kSPLIT], tuned or auto");
+    let bad = || format!("tile `{s}` is not [wino|lanes|winolanes|wino4lanes]ROWSxBLOCKS[wCOLS][gGROUPX][kSPLIT], tuned or auto");
     let (winograd, s2) = s.strip_prefix("wino").map_or((false, s), |r| (true, r));
+    let (four, s2) = s2.strip_prefix("4lanes").map_or((false, s2), |r| (winograd, r));
+    if four {
+        let (shape, group) = s2.split_once('g').map_or((s2, "8"), |(a, g)| (a, g));
+        let tile = shape.split_once('x').and_then(|(r, b)| Tile::winograd4_lanes(r.parse().ok()?, b.parse().ok()?));
+        return tile.and_then(|t| t.with_group(group.parse().ok()?)).map(TileChoice::Fixed).with_context(|| {
+            format!("tile `{s}`: Winograd F(4x4, 3x3) lanes tiles have 4 or 8 rows, 1, 2 or 4 blocks and workgroups 8, 16, 32 or 64 wide")
+        });
+    }
     let (lanes, s2) = s2.strip_prefix("lanes").map_or((false, s2), |r| (true, r));
     let (s2, split) = s2.split_once('k').map_or((s2, "1"), |(a, k)| (a, k));
     let split: u32 = split.parse().with_context(bad)?;
@@ -791,5 +802,25 @@ mod tests {
         let err = parse_tile("tuned:16x2+auto").unwrap_err().to_string();
         assert!(err.contains("`auto` in tile `tuned:16x2+auto`"), "{err}");
         assert!(parse_tile("tuned:16x2+9x9").is_err());
+    }
+
+    #[test]
+    fn winograd_tiles_parse_and_name_themselves() {
+        // The three Winograd spellings, each back from its name; shapes the kernels lack are
+        // refused with the shapes they have.
+        let four = Tile::winograd4_lanes(8, 4).unwrap().with_group(16).unwrap();
+        for (name, tile) in [
+            ("wino4x2", Tile::winograd(4, 2).unwrap()),
+            ("winolanes8x4", Tile::winograd_lanes(8, 4).unwrap()),
+            ("wino4lanes8x4g16", four),
+            ("wino4lanes4x1", Tile::winograd4_lanes(4, 1).unwrap()),
+        ] {
+            assert_eq!(parse_tile(name).unwrap(), TileChoice::Fixed(tile), "{name}");
+            assert_eq!(tile.to_string(), name);
+        }
+        for bad in ["wino4lanes16x4", "wino4lanes8x3", "wino4lanes8x4w2", "wino4lanes8"] {
+            let err = parse_tile(bad).unwrap_err().to_string();
+            assert!(err.contains(&format!("tile `{bad}`")) && err.contains("4 or 8 rows, 1, 2 or 4 blocks"), "{err}");
+        }
     }
 }

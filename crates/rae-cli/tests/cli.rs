@@ -434,6 +434,7 @@ fn bench_refuses_a_tile_the_kernel_does_not_have() {
         ("mma", "mma"),
         ("mma80x3", "mma80x3"),
         ("mma32x2", "mma32x2"),
+        ("wino4lanes16x4", "wino4lanes16x4"),
     ] {
         let out = rae().args(["bench", &fixture("weights_full.safetensors"), "--sizes", "32x32", "--tile", tile]).output().unwrap();
         assert!(!out.status.success(), "--tile {tile} must fail");

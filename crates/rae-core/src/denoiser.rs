@@ -175,9 +175,11 @@ pub const MMA_SPLIT_TILES: [Tile; 4] = [
 /// one) at 256x256 kept only these two (docs/PERF.md, session 21).
 pub const TUNE_TILES_LANES: [Tile; 2] = [Tile::CPU_LANES, Tile { rows: 4, ..Tile::CPU_LANES }];
 
-/// [`TUNE_TILES_LANES`] and [`Tile::CPU_WINOGRAD`]: what [`TileChoice::Tuned`] times on CPU
-/// drivers with subgroups of 16 lanes ([`crate::kernels::winograd_lanes_supported`]).
-pub const TUNE_TILES_LANES_WINOGRAD: [Tile; 3] = [Tile::CPU_LANES, Tile { rows: 4, ..Tile::CPU_LANES }, Tile::CPU_WINOGRAD];
+/// [`TUNE_TILES_LANES`], [`Tile::CPU_WINOGRAD`] and [`Tile::CPU_WINOGRAD4`]: what
+/// [`TileChoice::Tuned`] times on CPU drivers with subgroups of 16 lanes
+/// ([`crate::kernels::winograd_lanes_supported`]).
+pub const TUNE_TILES_LANES_WINOGRAD: [Tile; 4] =
+    [Tile::CPU_LANES, Tile { rows: 4, ..Tile::CPU_LANES }, Tile::CPU_WINOGRAD, Tile::CPU_WINOGRAD4];
 
 /// The tiles [`TileChoice::Tuned`] times on GPUs (and CPU drivers without subgroups).
 pub const TUNE_TILES: [Tile; 33] = [
@@ -432,10 +434,11 @@ impl Denoiser {
         let memory_of = |tile: Tile, spec: &ConvSpec| -> WeightMemory {
             if chosen_memory.is_some() || fixed_mma {
                 memory
-            } else if tile.method.is_mma() || tile.method == Method::WinogradLanes {
+            } else if tile.method.is_mma() || tile.method.is_winograd_lanes() {
                 // Mma tiles read only storage weights; Winograd's 16 weights per channel pair
                 // in 4 blocks fill a uniform chunk at 16 input blocks (and ran as fast from
-                // storage, docs/PERF.md session 22).
+                // storage, docs/PERF.md session 22). F(4x4) tiles read the weight texture, and
+                // the memory picks only their layout.
                 WeightMemory::Storage
             } else {
                 WeightMemory::for_conv(device_type, spec.width, spec.height)
@@ -475,7 +478,7 @@ impl Denoiser {
             _ => fixed(Tile::default()),
         };
         let memories: Vec<WeightMemory> = specs.iter().enumerate().map(|(i, s)| memory_of(per_conv(&tiles, i), s)).collect();
-        let convs = ConvPlan::with_choices(device, &mut kernels, &specs, &tiles, &conv_sources, &memories)?;
+        let convs = ConvPlan::with_choices(device, queue, &mut kernels, &specs, &tiles, &conv_sources, &memories)?;
         debug_assert_eq!(bytes, activation_bytes(&graph, pwidth, pheight, precision));
         bytes += convs.bytes();
         // Bind groups of both parities (the reset variant only changes the dynamic offset).
@@ -1166,7 +1169,7 @@ fn tune(
     let queries = device.create_query_set(&wgpu::QuerySetDescriptor { label: Some("tile tuning"), ty: wgpu::QueryType::Timestamp, count });
     let build = |kernels: &mut Kernels, tile: Tile, access: SourceAccess| -> Result<(ConvPlan, Vec<wgpu::BindGroup>)> {
         let memories: Vec<WeightMemory> = specs.iter().map(|s| memory_of(tile, s)).collect();
-        let plan = ConvPlan::with_choices(device, kernels, specs, &[tile], &[access], &memories)?;
+        let plan = ConvPlan::with_choices(device, queue, kernels, specs, &[tile], &[access], &memories)?;
         let groups =
             views.iter().enumerate().map(|(i, v)| plan.bind_group(device, kernels, i, &v.a, &v.b, &v.out, v.pooled.as_ref())).collect();
         Ok((plan, groups))

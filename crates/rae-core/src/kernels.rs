@@ -12,6 +12,7 @@ pub const SHADERS: &[(&str, &str)] = &[
     ("conv3x3", include_str!("../../../shaders/conv3x3.wgsl")),
     ("conv3x3_rows", include_str!("../../../shaders/conv3x3_rows.wgsl")),
     ("conv3x3_wino", include_str!("../../../shaders/conv3x3_wino.wgsl")),
+    ("conv3x3_wino4", include_str!("../../../shaders/conv3x3_wino4.wgsl")),
     ("conv3x3_mma", include_str!("../../../shaders/conv3x3_mma.wgsl")),
     ("conv3x3_mma_coop", include_str!("../../../shaders/conv3x3_mma_coop.wgsl")),
     ("conv_common", include_str!("../../../shaders/conv_common.wgsl")),
@@ -103,6 +104,11 @@ pub const CPU_SHORT_TILE_MAX_PIXELS: u32 = 8 * 8;
 /// its 8-channel one as fast (docs/PERF.md, session 22).
 pub const CPU_WINOGRAD_MIN_BLOCKS: u32 = 8;
 
+/// The fewest pixels of a level whose convs run [`Tile::CPU_WINOGRAD4`] on CPU drivers that
+/// run it (32 x 32): every conv there, down to one input block (the 256x256 frame's first conv,
+/// 2 input blocks, took 0.82x the time of `lanes8x2w2`'s; docs/PERF.md, session 23).
+pub const CPU_WINOGRAD4_MIN_PIXELS: u32 = 32 * 32;
+
 impl WeightMemory {
     /// The kind that suits an adapter: uniform chunks on CPU drivers, storage elsewhere.
     pub fn for_device_type(t: wgpu::DeviceType) -> Self {
@@ -179,12 +185,29 @@ pub const STORAGE_SOURCES: [(&str, &str); 2] = [
 /// driver's front end seconds per pipeline even where no call reaches it).
 pub const ROWS_STUB: &str = "fn accumulate_rows(acc0: ptr<function, Tile>, acc1: ptr<function, Tile>, acc2: ptr<function, Tile>, acc3: ptr<function, Tile>, acc4: ptr<function, Tile>, acc5: ptr<function, Tile>, acc6: ptr<function, Tile>, acc7: ptr<function, Tile>, t: Source, mode: u32, layer: u32, cb: u32, w: u32, x: i32, y0: i32) {}";
 
-/// The conv module `conv` (conv3x3.wgsl as [`Kernels`] rewrites it) as the lanes tiles run it:
-/// its [`ROWS_STUB`] replaced by conv3x3_rows.wgsl (two-column lanes tiles) and
-/// conv3x3_wino.wgsl (`winograd_lanes`).
-pub fn lanes_module_source(conv: &str) -> String {
+/// The rewrite of conv3x3_wino4.wgsl where the sources are read-only storage textures: its
+/// weight texture is read as one too (rgba32float whatever the activations' precision).
+pub const STORAGE_WEIGHT_TEXELS: [(&str, &str); 2] = [
+    ("alias WeightTexels = texture_2d<f32>;", "alias WeightTexels = texture_storage_2d<rgba32float, read>;"),
+    (
+        "textureLoad(weight_texels, vec2<u32>(i % WEIGHT_TEXELS_WIDTH, i / WEIGHT_TEXELS_WIDTH), 0)",
+        "textureLoad(weight_texels, vec2<u32>(i % WEIGHT_TEXELS_WIDTH, i / WEIGHT_TEXELS_WIDTH))",
+    ),
+];
+
+/// Texels per row of a [`ConvPlan`]'s weight texture (conv3x3_wino4.wgsl's
+/// `WEIGHT_TEXELS_WIDTH`): within every device's 2D limit, and a row holds a few input blocks.
+pub const WEIGHT_TEXELS_WIDTH: u32 = 4096;
+
+/// The conv module `conv` (conv3x3.wgsl as [`Kernels`] rewrites it for sources read as
+/// `access` says) as the lanes tiles run it: its [`ROWS_STUB`] replaced by conv3x3_rows.wgsl
+/// (two-column lanes tiles), conv3x3_wino.wgsl (`winograd_lanes`) and conv3x3_wino4.wgsl
+/// (`winograd4_lanes`, its weight texture read as the sources are, [`STORAGE_WEIGHT_TEXELS`]).
+pub fn lanes_module_source(conv: &str, access: SourceAccess) -> String {
     assert!(conv.contains(ROWS_STUB), "conv3x3.wgsl has kernels::ROWS_STUB");
-    conv.replace(ROWS_STUB, &format!("{}\n{}", shader_source("conv3x3_rows"), shader_source("conv3x3_wino")))
+    let wino4 = shader_source("conv3x3_wino4").to_string();
+    let wino4 = if access == SourceAccess::Storage { rewrite(wino4, "conv3x3_wino4.wgsl", &STORAGE_WEIGHT_TEXELS) } else { wino4 };
+    conv.replace(ROWS_STUB, &format!("{}\n{}\n{}", shader_source("conv3x3_rows"), shader_source("conv3x3_wino"), wino4))
 }
 
 /// The rewrites of conv3x3.wgsl for devices without [`wgpu::Features::SUBGROUP`] (naga refuses
@@ -316,8 +339,11 @@ pub struct ConvParams {
     pub slope: f32,
     /// vec4s between the weight chunks of consecutive groups in one binding (workgroup z).
     pub group_stride: u32,
+    /// [`Method::Winograd4Lanes`]: the weight-texture texel where the dispatch's first group's
+    /// chunk starts (0 for the others, which bind their chunk by offset).
+    pub weight_texel: u32,
     /// Padding to the uniform's 16-byte size.
-    pub _pad: [u32; 3],
+    pub _pad: [u32; 2],
 }
 
 /// Uniform block of prep.wgsl: the sizes (the model's layout is [`PrepLayout`], overrides).
@@ -430,6 +456,23 @@ fn texture_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
     }
 }
 
+/// The layout entry of a plan's weight texture (rgba32float, 2D), read as the sources are.
+fn weight_texture_entry(binding: u32, sources: SourceAccess) -> wgpu::BindGroupLayoutEntry {
+    let ty = match sources {
+        SourceAccess::Sampled => wgpu::BindingType::Texture {
+            sample_type: wgpu::TextureSampleType::Float { filterable: false },
+            view_dimension: wgpu::TextureViewDimension::D2,
+            multisampled: false,
+        },
+        SourceAccess::Storage => wgpu::BindingType::StorageTexture {
+            access: wgpu::StorageTextureAccess::ReadOnly,
+            format: wgpu::TextureFormat::Rgba32Float,
+            view_dimension: wgpu::TextureViewDimension::D2,
+        },
+    };
+    wgpu::BindGroupLayoutEntry { binding, visibility: wgpu::ShaderStages::COMPUTE, ty, count: None }
+}
+
 /// The layout entry of a conv source read as `sources` says.
 fn source_entry(binding: u32, sources: SourceAccess, format: wgpu::TextureFormat) -> wgpu::BindGroupLayoutEntry {
     match sources {
@@ -499,7 +542,7 @@ impl ConvVariant {
     /// Whether the variant runs in the module with conv3x3_rows.wgsl and conv3x3_wino.wgsl:
     /// `accumulate_rows` (two-column lanes tiles) or `winograd_lanes`.
     fn runs_rows(&self) -> bool {
-        (self.method == Method::Lanes && self.cols > 1 && !self.reduce) || self.method == Method::WinogradLanes
+        (self.method == Method::Lanes && self.cols > 1 && !self.reduce) || self.method.is_winograd_lanes()
     }
 }
 
@@ -520,6 +563,10 @@ pub enum Method {
     /// by one lane of the subgroup and broadcast to the others (subgroups of at least 16
     /// lanes, [`winograd_lanes_supported`]), for CPU drivers.
     WinogradLanes,
+    /// `winograd4_lanes` (conv3x3_wino4.wgsl): Winograd F(4x4, 3x3), 36 multiplies per 4x4
+    /// outputs and channel pair for 144, with its weights loaded across the subgroup as
+    /// [`Method::WinogradLanes`] loads them (subgroups of at least 16 lanes), for CPU drivers.
+    Winograd4Lanes,
     /// conv3x3_mma.wgsl: an implicit matrix product in 16 x 16 x 16 tiles of f16 products
     /// summed in f32, in the device's matrix units (tensor cores, [`matrix_units_supported`])
     /// or emulated where it has none ([`Tile::mma`]).
@@ -533,11 +580,13 @@ pub enum Method {
 }
 
 impl Method {
-    /// Weights per input-output channel pair: 9 taps, or 16 transformed ones for Winograd.
+    /// Weights per input-output channel pair: 9 taps, or 16 transformed ones for Winograd
+    /// F(2x2, 3x3) and 36 for F(4x4, 3x3).
     pub fn taps(self) -> u32 {
         match self {
             Method::Direct | Method::Lanes | Method::Mma | Method::MmaSplit | Method::MmaSplitPrefetch => 9,
             Method::Winograd | Method::WinogradLanes => 16,
+            Method::Winograd4Lanes => 36,
         }
     }
 
@@ -549,15 +598,24 @@ impl Method {
             Method::Winograd => "winograd",
             Method::Lanes => "lanes",
             Method::WinogradLanes => "winograd_lanes",
+            Method::Winograd4Lanes => "winograd4_lanes",
             Method::Mma => "mma",
             Method::MmaSplit | Method::MmaSplitPrefetch => "mma_split",
         }
     }
 
-    /// Whether this is Winograd F(2x2, 3x3) ([`Method::Winograd`], [`Method::WinogradLanes`]):
-    /// 2x2 output tiles, 16 transformed weights per channel pair, no split.
+    /// Whether this is Winograd ([`Method::Winograd`], [`Method::WinogradLanes`],
+    /// [`Method::Winograd4Lanes`]): transformed weights per channel pair ([`Method::taps`]),
+    /// tiles of a fixed width (2 or 4 columns), no split.
     pub fn is_winograd(self) -> bool {
-        matches!(self, Method::Winograd | Method::WinogradLanes)
+        matches!(self, Method::Winograd | Method::WinogradLanes | Method::Winograd4Lanes)
+    }
+
+    /// Whether this is Winograd with its weights across the subgroup ([`Method::WinogradLanes`],
+    /// [`Method::Winograd4Lanes`]): subgroups of at least 16 lanes, storage weights from the
+    /// Denoiser, the output pooled in the conv where the plan asks.
+    pub fn is_winograd_lanes(self) -> bool {
+        matches!(self, Method::WinogradLanes | Method::Winograd4Lanes)
     }
 
     /// Whether this is one of conv3x3_mma.wgsl's methods ([`Method::Mma`] and the split ones).
@@ -677,6 +735,7 @@ impl Kernels {
                     storage_texture_entry(4, precision.format()),
                     storage_entry(5, false),
                     storage_texture_entry(6, precision.format()),
+                    weight_texture_entry(7, access),
                 ],
             )
         };
@@ -846,7 +905,7 @@ impl Kernels {
             );
             let text = if need_main || need_rows { self.conv_text(access, memory) } else { String::new() };
             let mma = need_mma.then(|| shader_module(device, "conv3x3_mma", self.mma_text(access)));
-            let rows = need_rows.then(|| shader_module(device, "conv3x3 (lanes tiles)", lanes_module_source(&text)));
+            let rows = need_rows.then(|| shader_module(device, "conv3x3 (lanes tiles)", lanes_module_source(&text, access)));
             let main = need_main.then(|| shader_module(device, "conv3x3", text));
             let m = &mut self.modules[conv_slot(access, memory)];
             m.main = m.main.take().or(main);
@@ -914,6 +973,9 @@ impl Kernels {
                 ("LANES", if v.method == Method::Lanes { 1.0 } else { 0.0 }),
                 ("POOL_OUT", v.pool as u32 as f64),
             ]);
+            if v.runs_rows() {
+                constants.push(("WEIGHT_TEXELS_WIDTH", WEIGHT_TEXELS_WIDTH as f64));
+            }
             let module = if v.runs_rows() { modules.rows.as_ref() } else { modules.main.as_ref() }.expect("made by prepare");
             ("conv3x3", module, if v.reduce { "reduce" } else { v.method.entry_point() })
         };
@@ -993,6 +1055,16 @@ impl Tile {
     /// tolerance.
     pub const CPU_WINOGRAD: Tile = Tile { rows: 8, blocks: 4, cols: 2, group_x: WORKGROUP, method: Method::WinogradLanes, split: 1 };
 
+    /// The CPU drivers' F(4x4, 3x3) tile: two stacked 4x4 output tiles (8 rows x 4 columns) x 4
+    /// blocks, weights loaded across the subgroup from the plan's weight texture
+    /// ([`Method::Winograd4Lanes`]). It takes 144 multiply-adds per 16 outputs and input block
+    /// where [`Tile::CPU_WINOGRAD`] takes 256, and 60 texel fetches per 32 outputs x 16 channels
+    /// where that takes 40 per 16. On lavapipe (Zen 5, 512-bit vectors) the 256x256 frame's
+    /// convs on levels of 32 x 32 and more took 0.7-0.8x the time of [`Tile::CPU_WINOGRAD`]'s
+    /// and `lanes8x2w2`'s; on 16 x 16 levels, where a subgroup covers half its pixels, 1.3-1.8x
+    /// (docs/PERF.md, session 23). Its rounding is within the golden tolerance.
+    pub const CPU_WINOGRAD4: Tile = Tile { rows: 8, blocks: 4, cols: 4, group_x: WORKGROUP, method: Method::Winograd4Lanes, split: 1 };
+
     /// The tile of CPU drivers on `device`: [`Tile::CPU_LANES`] where the device has subgroups
     /// of 8 or more lanes ([`lanes_supported`]), else [`Tile::CPU`].
     pub fn cpu(device: &wgpu::Device) -> Tile {
@@ -1016,6 +1088,8 @@ impl Tile {
             tile
         } else if width * height <= CPU_SHORT_TILE_MAX_PIXELS {
             Tile { rows: 4, ..tile }
+        } else if width * height >= CPU_WINOGRAD4_MIN_PIXELS && winograd_lanes_supported(device) {
+            Tile::CPU_WINOGRAD4
         } else if in_blocks >= CPU_WINOGRAD_MIN_BLOCKS && winograd_lanes_supported(device) {
             Tile::CPU_WINOGRAD
         } else {
@@ -1058,6 +1132,20 @@ impl Tile {
             cols: 2,
             group_x: WORKGROUP,
             method: Method::WinogradLanes,
+            split: 1,
+        })
+    }
+
+    /// A Winograd F(4x4, 3x3) tile with its weights loaded across the subgroup
+    /// ([`Method::Winograd4Lanes`]): `rows` (4: one 4x4 output tile, 8: two stacked) x 4 columns
+    /// x `blocks` (1, 2 or 4), if the kernel has it.
+    pub fn winograd4_lanes(rows: u32, blocks: u32) -> Option<Self> {
+        ([4, 8].contains(&rows) && [1, 2, 4].contains(&blocks)).then_some(Tile {
+            rows,
+            blocks,
+            cols: 4,
+            group_x: WORKGROUP,
+            method: Method::Winograd4Lanes,
             split: 1,
         })
     }
@@ -1164,6 +1252,7 @@ impl std::fmt::Display for Tile {
             Method::Winograd => write!(f, "wino")?,
             Method::Lanes => write!(f, "lanes")?,
             Method::WinogradLanes => write!(f, "winolanes")?,
+            Method::Winograd4Lanes => write!(f, "wino4lanes")?,
         }
         write!(f, "{}x{}", self.rows, self.blocks)?;
         if self.cols > 1 && !self.method.is_winograd() {
@@ -1212,38 +1301,69 @@ pub fn winograd_taps(g: &[f32]) -> [f32; 16] {
     })
 }
 
+/// Winograd F(4x4, 3x3)'s weight transform G g G^T of one 3x3 kernel (row-major, `[ky][kx]`),
+/// in f64 and rounded once: the 36 weights conv3x3_wino4.wgsl's `winograd4_lanes` multiplies
+/// with, for its B and A (points 0, 1, -1, 2, -2 and infinity).
+pub fn winograd4_taps(g: &[f32]) -> [f32; 36] {
+    const G: [[f64; 3]; 6] = [
+        [1.0 / 4.0, 0.0, 0.0],
+        [-1.0 / 6.0, -1.0 / 6.0, -1.0 / 6.0],
+        [-1.0 / 6.0, 1.0 / 6.0, -1.0 / 6.0],
+        [1.0 / 24.0, 1.0 / 12.0, 1.0 / 6.0],
+        [1.0 / 24.0, -1.0 / 12.0, 1.0 / 6.0],
+        [0.0, 0.0, 1.0],
+    ];
+    std::array::from_fn(|p| {
+        let (i, j) = (p / 6, p % 6);
+        let mut u = 0.0;
+        for a in 0..3 {
+            for b in 0..3 {
+                u += G[i][a] * g[a * 3 + b] as f64 * G[j][b];
+            }
+        }
+        u as f32
+    })
+}
+
 /// The weight chunk of output blocks `ob0 .. ob0 + ob` of a conv over `cat(a, b)`, laid out as
 /// conv3x3.wgsl reads it: taps `[in block][ky*3+kx][in lane][j]` -> vec4 over block `ob0 + j`'s
 /// 4 output channels, then `ob` bias vec4s. With [`Method::Winograd`] the 9 taps of each pair
-/// are the 16 of [`winograd_taps`] (`[in block][position][in lane][j]`).
+/// are the 16 of [`winograd_taps`] (`[in block][position][in lane][j]`), with
+/// [`Method::Winograd4Lanes`] the 36 of [`winograd4_taps`].
 ///
 /// Input blocks follow the sources: source a's channels padded to a multiple of 4, then source
 /// b's, so the kernel reads each source's texture layers without a concat. Padding weights are
 /// zero, so padding channels (always written as zero) and padding outputs contribute nothing.
 pub fn pack_group(spec: &ConvSpec, ob0: usize, ob: usize, method: Method) -> Vec<[f32; 4]> {
     let (weight, bias, cout, ca, cb) = (spec.weight, spec.bias, spec.cout, spec.ca, spec.cb);
-    let winograd = method.is_winograd();
     let cin = ca + cb;
     debug_assert_eq!(weight.len(), cout * cin * 9);
     let (ba, bb) = (blocks(ca) as usize, blocks(cb) as usize);
     let channel = |ib: usize, lane: usize| input_channel(spec, ib, lane);
     let taps = method.taps() as usize;
     // The weights of one channel pair as the kernel multiplies them.
-    let pair = |o: usize, i: usize| -> [f32; 16] {
+    let pair = |o: usize, i: usize| -> [f32; 36] {
         let g = &weight[(o * cin + i) * 9..][..9];
-        if winograd { winograd_taps(g) } else { std::array::from_fn(|t| g.get(t).copied().unwrap_or(0.0)) }
+        match method {
+            Method::Winograd4Lanes => winograd4_taps(g),
+            Method::Winograd | Method::WinogradLanes => {
+                let u = winograd_taps(g);
+                std::array::from_fn(|t| u.get(t).copied().unwrap_or(0.0))
+            }
+            _ => std::array::from_fn(|t| g.get(t).copied().unwrap_or(0.0)),
+        }
     };
     let mut out = Vec::with_capacity((ba + bb) * taps * 4 * ob + ob);
     for ib in 0..ba + bb {
         // [lane][j][l] -> the pair's weights, zero for padding.
-        let pairs: Vec<[[f32; 16]; 4]> = (0..4 * ob)
+        let pairs: Vec<[[f32; 36]; 4]> = (0..4 * ob)
             .map(|k| {
                 let (lane, j) = (k / ob, k % ob);
                 std::array::from_fn(|l| {
                     let o = 4 * (ob0 + j) + l;
                     match channel(ib, lane) {
                         Some(i) if o < cout => pair(o, i),
-                        _ => [0.0; 16],
+                        _ => [0.0; 36],
                     }
                 })
             })
@@ -1370,7 +1490,7 @@ struct Group {
 
 /// Append a dispatch's two parameter blocks (normal frame, then reset frame, whose recurrent
 /// conv reads no hidden-state blocks), each at an `align`-byte offset; returns the offsets.
-fn push_params(params: &mut Vec<u8>, align: usize, s: &ConvSpec, ob0: u32, group_stride: u32) -> [u32; 2] {
+fn push_params(params: &mut Vec<u8>, align: usize, s: &ConvSpec, ob0: u32, group_stride: u32, weight_texel: u32) -> [u32; 2] {
     let (cin4_a, cin4_b) = (blocks(s.ca), blocks(s.cb));
     std::array::from_fn(|reset| {
         let p = ConvParams {
@@ -1383,7 +1503,8 @@ fn push_params(params: &mut Vec<u8>, align: usize, s: &ConvSpec, ob0: u32, group
             cout4: blocks(s.cout),
             slope: s.slope,
             group_stride,
-            _pad: [0; 3],
+            weight_texel,
+            _pad: [0; 2],
         };
         params.resize(params.len().next_multiple_of(align), 0);
         let at = params.len() as u32;
@@ -1419,6 +1540,11 @@ pub struct ConvPlan {
     partial: wgpu::Buffer,
     /// What binding 6 (the pooled output) holds for convs that do not pool: 1 x 1 x 1.
     no_pooled: wgpu::TextureView,
+    /// Binding 7: the weights of [`Method::Winograd4Lanes`] convs, [`WEIGHT_TEXELS_WIDTH`]
+    /// texels a row (1 x 1 where the plan has none).
+    weight_texels: wgpu::TextureView,
+    /// Bytes of the weight texture.
+    weight_texels_bytes: u64,
     /// Bytes of a weight binding, `[WeightMemory as usize]`: one chunk for uniform weights, the
     /// largest storage-weight conv for storage ones.
     weight_binding: [u64; 2],
@@ -1434,28 +1560,36 @@ impl ConvPlan {
     /// fit [`PARTIAL_LAYERS`] layers at the largest conv's resolution); fails when a conv is too
     /// wide for one uniform weight chunk. Every conv reads its sources as `kernels` does by
     /// default ([`Kernels::source_access`]).
-    pub fn new(device: &wgpu::Device, kernels: &mut Kernels, specs: &[ConvSpec], tiles: &[Tile]) -> crate::Result<Self> {
+    pub fn new(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        kernels: &mut Kernels,
+        specs: &[ConvSpec],
+        tiles: &[Tile],
+    ) -> crate::Result<Self> {
         let sources = kernels.sources;
-        Self::with_sources(device, kernels, specs, tiles, &[sources])
+        Self::with_sources(device, queue, kernels, specs, tiles, &[sources])
     }
 
     /// [`ConvPlan::new`] with conv `i` reading its sources as `sources[i]` says (one entry: all
     /// alike), as tuning picks them where both kinds run ([`crate::Denoiser`]).
     pub fn with_sources(
         device: &wgpu::Device,
+        queue: &wgpu::Queue,
         kernels: &mut Kernels,
         specs: &[ConvSpec],
         tiles: &[Tile],
         sources: &[SourceAccess],
     ) -> crate::Result<Self> {
         let memory = kernels.memory;
-        Self::with_choices(device, kernels, specs, tiles, sources, &[memory])
+        Self::with_choices(device, queue, kernels, specs, tiles, sources, &[memory])
     }
 
     /// [`ConvPlan::with_sources`] with conv `i` reading its weights from `memories[i]` (one
     /// entry: all alike), as [`WeightMemory::for_conv`] picks them by level on CPU drivers.
     pub fn with_choices(
         device: &wgpu::Device,
+        queue: &wgpu::Queue,
         kernels: &mut Kernels,
         specs: &[ConvSpec],
         tiles: &[Tile],
@@ -1469,7 +1603,9 @@ impl ConvPlan {
         // Tiles with weights across the lanes, on a device whose subgroups are too narrow.
         let narrow = |t: &&Tile| match t.method {
             Method::Lanes => (!lanes_supported(device)).then_some(("weights across lanes", 8)),
-            Method::WinogradLanes => (!winograd_lanes_supported(device)).then_some(("Winograd weights across lanes", 16)),
+            Method::WinogradLanes | Method::Winograd4Lanes => {
+                (!winograd_lanes_supported(device)).then_some(("Winograd weights across lanes", 16))
+            }
             _ => None,
         };
         if let Some((t, (what, lanes))) = tiles.iter().find_map(|t| narrow(&t).map(|n| (t, n))) {
@@ -1489,6 +1625,8 @@ impl ConvPlan {
         let align = limits.min_uniform_buffer_offset_alignment.max(limits.min_storage_buffer_offset_alignment) as usize;
         let mut params: Vec<u8> = Vec::new();
         let mut weights: Vec<u8> = Vec::new();
+        // Winograd4Lanes convs' weights, texel by texel (the weight texture).
+        let mut weight_texels: Vec<[f32; 4]> = Vec::new();
         // Each conv's variant, workgroups, split, groups and reduce pass, before its pipelines.
         let mut pending = Vec::with_capacity(specs.len());
         let mut used = Vec::with_capacity(specs.len());
@@ -1526,7 +1664,7 @@ impl ConvPlan {
                 let group_count = tiles16.div_ceil(nt);
                 binding = binding.max(group_count as u64 * stride as u64 * 2);
                 let mut group = Group { params: [0; 2], weights: 0, count: group_count };
-                group.params = push_params(&mut params, align, s, 0, stride);
+                group.params = push_params(&mut params, align, s, 0, stride, 0);
                 weights.resize(weights.len().next_multiple_of(align), 0);
                 group.weights = weights.len() as u32;
                 for g in 0..group_count {
@@ -1557,7 +1695,10 @@ impl ConvPlan {
                 continue;
             }
             let taps = tile.taps();
+            // Weights in the weight texture take no chunk.
+            let texels = tile.method == Method::Winograd4Lanes;
             let ob = match memory {
+                _ if texels => 4,
                 WeightMemory::Uniform => blocks_per_invocation(cin4, taps).ok_or_else(|| crate::Error::Arch {
                     origin: s.name.to_string(),
                     reason: format!(
@@ -1576,7 +1717,8 @@ impl ConvPlan {
             while ob > 1 && ob / 2 >= cout4 {
                 ob /= 2;
             }
-            let rows = rows_per_invocation(s.height, tile.rows);
+            // F(4x4, 3x3) computes whole 4x4 output tiles.
+            let rows = rows_per_invocation(s.height, tile.rows).max(if tile.method == Method::Winograd4Lanes { 4 } else { 1 });
             // Two columns only where the level is wider than one (Winograd tiles are 2 wide).
             let cols = if s.width > 1 || tile.method.is_winograd() { tile.cols } else { 1 };
             // Split (direct tiles only) no further than one input block per part, nor beyond the
@@ -1586,8 +1728,7 @@ impl ConvPlan {
             let used_tile = Tile { rows, blocks: ob, cols, group_x: tile.group_x, method: tile.method, split };
             // The conv pools its own output where each invocation holds whole 2x2 windows.
             let pool = s.pooled
-                && ((tile.method == Method::Lanes && cols == 2 && rows.is_multiple_of(2) && split == 1)
-                    || tile.method == Method::WinogradLanes);
+                && ((tile.method == Method::Lanes && cols == 2 && rows.is_multiple_of(2) && split == 1) || tile.method.is_winograd_lanes());
             let variant = ConvVariant {
                 read_a: s.read_a,
                 read_b: s.read_b,
@@ -1613,23 +1754,30 @@ impl ConvPlan {
             let stride = (cin4 * taps * 4 + 1) * ob;
             let group_count = cout4.div_ceil(ob);
             let per_dispatch = match memory {
+                _ if texels => group_count,
                 WeightMemory::Uniform => (WEIGHT_CHUNK / stride).min(group_count),
                 WeightMemory::Storage => group_count,
             };
-            if memory == WeightMemory::Storage {
+            if memory == WeightMemory::Storage && !texels {
                 binding = binding.max(per_dispatch as u64 * stride as u64 * 16);
             }
             let mut groups = Vec::new();
             for first in (0..group_count).step_by(per_dispatch as usize) {
                 let count = per_dispatch.min(group_count - first);
                 let mut group = Group { params: [0; 2], weights: 0, count };
-                group.params = push_params(&mut params, align, s, first * ob, stride);
-                weights.resize(weights.len().next_multiple_of(align), 0);
-                group.weights = weights.len() as u32;
+                group.params = push_params(&mut params, align, s, first * ob, stride, weight_texels.len() as u32);
+                if !texels {
+                    weights.resize(weights.len().next_multiple_of(align), 0);
+                    group.weights = weights.len() as u32;
+                }
                 for g in first..first + count {
                     let chunk = pack_group(s, (g * ob) as usize, ob as usize, tile.method);
                     debug_assert_eq!(chunk.len() as u32, stride);
-                    weights.extend_from_slice(bytemuck::cast_slice(&chunk));
+                    if texels {
+                        weight_texels.extend_from_slice(&chunk);
+                    } else {
+                        weights.extend_from_slice(bytemuck::cast_slice(&chunk));
+                    }
                 }
                 groups.push(group);
             }
@@ -1674,7 +1822,7 @@ impl ConvPlan {
             })
             .collect();
         // Every binding spans a whole chunk (or the largest storage conv) past its offset.
-        let weight_binding = [WEIGHT_CHUNK_BYTES, binding.next_multiple_of(16)];
+        let weight_binding = [WEIGHT_CHUNK_BYTES, binding.next_multiple_of(16).max(16)];
         let end = convs.iter().flat_map(|c| c.groups.iter().map(|g| g.weights as u64 + weight_binding[c.memory as usize])).max();
         weights.resize(end.unwrap_or(0) as usize, 0);
         params.resize(params.len().next_multiple_of(16), 0);
@@ -1688,7 +1836,40 @@ impl ConvPlan {
                 WeightMemory::Storage => wgpu::BufferUsages::STORAGE,
             })
             .fold(wgpu::BufferUsages::empty(), |a, b| a | b);
+        // The weight texture: rows of WEIGHT_TEXELS_WIDTH texels (1 x 1 when no conv reads it).
+        let (tex_w, tex_h) = if weight_texels.is_empty() {
+            (1, 1)
+        } else {
+            (WEIGHT_TEXELS_WIDTH, (weight_texels.len() as u32).div_ceil(WEIGHT_TEXELS_WIDTH))
+        };
+        if tex_h > device.limits().max_texture_dimension_2d {
+            return Err(crate::Error::UnsupportedTile {
+                tile: Method::Winograd4Lanes.entry_point().to_string(),
+                reason: format!(
+                    "its weights need a {tex_w} x {tex_h} texture; the device allows {}",
+                    device.limits().max_texture_dimension_2d
+                ),
+            });
+        }
+        weight_texels.resize((tex_w * tex_h) as usize, [0.0; 4]);
+        let weight_texture = device.create_texture_with_data(
+            queue,
+            &wgpu::TextureDescriptor {
+                label: Some("conv weight texels"),
+                size: wgpu::Extent3d { width: tex_w, height: tex_h, depth_or_array_layers: 1 },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: wgpu::TextureFormat::Rgba32Float,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::STORAGE_BINDING,
+                view_formats: &[],
+            },
+            wgpu::util::TextureDataOrder::LayerMajor,
+            bytemuck::cast_slice(&weight_texels),
+        );
         Ok(Self {
+            weight_texels: weight_texture.create_view(&Default::default()),
+            weight_texels_bytes: weight_texture.size().width as u64 * weight_texture.size().height as u64 * 16,
             params: init("conv params", &params, wgpu::BufferUsages::UNIFORM),
             weights: init("conv weights", &weights, weight_usage),
             partial: device.create_buffer(&wgpu::BufferDescriptor {
@@ -1734,7 +1915,7 @@ impl ConvPlan {
 
     /// Bytes of the weight, parameter and partial-sum buffers.
     pub fn bytes(&self) -> u64 {
-        self.params.size() + self.weights.size() + self.partial.size()
+        self.params.size() + self.weights.size() + self.partial.size() + self.weight_texels_bytes
     }
 
     /// Whether conv `i` writes its output max-pooled 2x2 too (conv3x3.wgsl's POOL_OUT), so that
@@ -1782,6 +1963,7 @@ impl ConvPlan {
                 wgpu::BindGroupEntry { binding: 4, resource: wgpu::BindingResource::TextureView(dst) },
                 wgpu::BindGroupEntry { binding: 5, resource: self.partial.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 6, resource: wgpu::BindingResource::TextureView(pooled) },
+                wgpu::BindGroupEntry { binding: 7, resource: wgpu::BindingResource::TextureView(&self.weight_texels) },
             ],
         })
     }

@@ -1,0 +1,1189 @@
+// Winograd F(4x4, 3x3) with its weights loaded across the subgroup: the entry point
+// `winograd4_lanes` (kernels::Method::Winograd4Lanes), for CPU drivers with subgroups of at
+// least 16 lanes. Appended, with conv3x3_rows.wgsl and conv3x3_wino.wgsl, to the conv module
+// that runs two-column lanes tiles; it uses their declarations (Quad, mac, lane, Column, the
+// ob<OB>_<k> broadcasts, the overrides).
+//
+// An invocation computes ROWS / 4 stacked 4x4 output tiles (ROWS = 4 or 8) of 4 columns for OB
+// output blocks (1, 2 or 4). Each input block costs 6 columns of ROWS + 2 fetched texels, their
+// transforms V = B^T d B (additions and multiplies by 2, 4, 5), and per tile and output block 36
+// products of a 6x6 weight matrix with a vec4: 144 multiply-adds per 16 outputs and input block
+// where F(2x2, 3x3) takes 256 and the direct sum 576, and 60 fetched texels per 32 outputs where
+// `winograd_lanes` fetches 40 per 16. The price is rounding: the transforms' coefficients (up to
+// 8 in A, 5 in B, 1/24 in G) lose a few more bits than F(2x2)'s (within the golden tolerance,
+// tests/engine/kernels.rs).
+//
+// Its weights are texels of the plan's weight texture (binding 7, kernels::ConvPlan), not the
+// weight buffer: on lavapipe a storage- or uniform-buffer load at a per-lane address is a loop
+// over the lanes, a texel load one vector gather, and the gathers were about 40% of this kernel's
+// time from a storage buffer (docs/PERF.md, session 23). They sit as `winograd_lanes` reads them
+// with 36 positions for 16: input block cb, position p = 6 i + c, input lane l, output block j at
+// texel w + ((cb * 36 + p) * 4 + l) * OB + j (w = params.weight_texel + group z * group_stride),
+// then OB biases; each 16 of them are loaded one per lane just before their positions'
+// products and taken from the lanes by subgroupBroadcast (conv3x3_wino.wgsl's ob1_*, ob2_*, ob4_*).
+//
+// With points 0, 1, -1, 2, -2 and infinity (Lavin and Gray, 2016):
+//   B^T = [4 0 -5 0 1 0; 0 -4 -4 1 1 0; 0 4 -4 -1 1 0; 0 -2 -1 2 1 0; 0 2 -1 -2 1 0; 0 4 0 -5 0 1]
+//   A^T = [1 1 1 1 1 0; 0 1 -1 2 -2 0; 0 1 1 4 4 0; 0 1 -1 8 -8 1]
+// and G in kernels::winograd4_taps.
+
+// The weight texture's type: sampled, or read-only storage where the sources are (Kernels
+// rewrites this alias and `weight_texel`'s load with the sources', kernels::STORAGE_SOURCES).
+alias WeightTexels = texture_2d<f32>;
+@group(0) @binding(7) var weight_texels: WeightTexels;
+// Texels per row of the weight texture (kernels::WEIGHT_TEXELS_WIDTH).
+override WEIGHT_TEXELS_WIDTH: u32 = 4096u;
+
+// Texel i of the weight texture, in rows of WEIGHT_TEXELS_WIDTH.
+fn weight_texel(i: u32) -> vec4<f32> {
+    return textureLoad(weight_texels, vec2<u32>(i % WEIGHT_TEXELS_WIDTH, i / WEIGHT_TEXELS_WIDTH), 0);
+}
+
+// Six vec4s along a row of a 6x6 tile (input row after d B, or a row of V or M).
+struct Hex {
+    c0: vec4<f32>,
+    c1: vec4<f32>,
+    c2: vec4<f32>,
+    c3: vec4<f32>,
+    c4: vec4<f32>,
+    c5: vec4<f32>,
+}
+
+// A 6x6 tile in the transformed domain (V of one input block, or M of one output block).
+struct Wino6 {
+    r0: Hex,
+    r1: Hex,
+    r2: Hex,
+    r3: Hex,
+    r4: Hex,
+    r5: Hex,
+}
+
+// Six values times B: the row (d0 .. d5) B, or a column of B^T (d B) read down the rows.
+fn hex_b(d0: vec4<f32>, d1: vec4<f32>, d2: vec4<f32>, d3: vec4<f32>, d4: vec4<f32>, d5: vec4<f32>) -> Hex {
+    let a = fma(vec4<f32>(-4.0), d2, d4);
+    let b = fma(vec4<f32>(-4.0), d1, d3);
+    let c = d4 - d2;
+    let e = 2.0 * (d3 - d1);
+    return Hex(fma(vec4<f32>(4.0), d0, fma(vec4<f32>(-5.0), d2, d4)), a + b, a - b, c + e, c - e, fma(vec4<f32>(4.0), d1, fma(vec4<f32>(-5.0), d3, d5)));
+}
+
+// V = B^T (d B) from six consecutive rows of d B.
+fn wino6_v(e0: Hex, e1: Hex, e2: Hex, e3: Hex, e4: Hex, e5: Hex) -> Wino6 {
+    let c0 = hex_b(e0.c0, e1.c0, e2.c0, e3.c0, e4.c0, e5.c0);
+    let c1 = hex_b(e0.c1, e1.c1, e2.c1, e3.c1, e4.c1, e5.c1);
+    let c2 = hex_b(e0.c2, e1.c2, e2.c2, e3.c2, e4.c2, e5.c2);
+    let c3 = hex_b(e0.c3, e1.c3, e2.c3, e3.c3, e4.c3, e5.c3);
+    let c4 = hex_b(e0.c4, e1.c4, e2.c4, e3.c4, e4.c4, e5.c4);
+    let c5 = hex_b(e0.c5, e1.c5, e2.c5, e3.c5, e4.c5, e5.c5);
+    return Wino6(
+        Hex(c0.c0, c1.c0, c2.c0, c3.c0, c4.c0, c5.c0),
+        Hex(c0.c1, c1.c1, c2.c1, c3.c1, c4.c1, c5.c1),
+        Hex(c0.c2, c1.c2, c2.c2, c3.c2, c4.c2, c5.c2),
+        Hex(c0.c3, c1.c3, c2.c3, c3.c3, c4.c3, c5.c3),
+        Hex(c0.c4, c1.c4, c2.c4, c3.c4, c4.c4, c5.c4),
+        Hex(c0.c5, c1.c5, c2.c5, c3.c5, c4.c5, c5.c5),
+    );
+}
+
+// Six values times A: a row of M times A, or a column of (M A) read down the rows.
+fn hex_a(m0: vec4<f32>, m1: vec4<f32>, m2: vec4<f32>, m3: vec4<f32>, m4: vec4<f32>, m5: vec4<f32>) -> Quad {
+    let p = m1 + m2;
+    let q = m1 - m2;
+    let u = m3 + m4;
+    let v = m3 - m4;
+    return Quad(m0 + p + u, fma(vec4<f32>(2.0), v, q), fma(vec4<f32>(4.0), u, p), fma(vec4<f32>(8.0), v, q) + m5);
+}
+
+// Y = A^T M A plus the bias, stored at (x .. x + 3, y0 .. y0 + 3) where inside the output; with
+// POOL_OUT also the max of each 2x2 window, activated, into `pooled` at (x / 2 .. x / 2 + 1,
+// y0 / 2 .. y0 / 2 + 1), as `store_pooled` pools (x and y0 are multiples of 4, and levels have
+// even sizes, so a window is whole once its top-left pixel is inside).
+fn wino4_store(m: Wino6, bias: vec4<f32>, x: u32, y0: u32, layer: u32) {
+    // Row i of M A, then the columns of A^T (M A).
+    let s0 = hex_a(m.r0.c0, m.r0.c1, m.r0.c2, m.r0.c3, m.r0.c4, m.r0.c5);
+    let s1 = hex_a(m.r1.c0, m.r1.c1, m.r1.c2, m.r1.c3, m.r1.c4, m.r1.c5);
+    let s2 = hex_a(m.r2.c0, m.r2.c1, m.r2.c2, m.r2.c3, m.r2.c4, m.r2.c5);
+    let s3 = hex_a(m.r3.c0, m.r3.c1, m.r3.c2, m.r3.c3, m.r3.c4, m.r3.c5);
+    let s4 = hex_a(m.r4.c0, m.r4.c1, m.r4.c2, m.r4.c3, m.r4.c4, m.r4.c5);
+    let s5 = hex_a(m.r5.c0, m.r5.c1, m.r5.c2, m.r5.c3, m.r5.c4, m.r5.c5);
+    // Column k of the output: o<k>.c<r> is row r.
+    let o0 = hex_a(s0.c0, s1.c0, s2.c0, s3.c0, s4.c0, s5.c0);
+    let o1 = hex_a(s0.c1, s1.c1, s2.c1, s3.c1, s4.c1, s5.c1);
+    let o2 = hex_a(s0.c2, s1.c2, s2.c2, s3.c2, s4.c2, s5.c2);
+    let o3 = hex_a(s0.c3, s1.c3, s2.c3, s3.c3, s4.c3, s5.c3);
+    let h = params.height;
+    wino4_row(x, y0, layer, bias + o0.c0, bias + o1.c0, bias + o2.c0, bias + o3.c0);
+    if y0 + 1u < h { wino4_row(x, y0 + 1u, layer, bias + o0.c1, bias + o1.c1, bias + o2.c1, bias + o3.c1); }
+    if y0 + 2u < h { wino4_row(x, y0 + 2u, layer, bias + o0.c2, bias + o1.c2, bias + o2.c2, bias + o3.c2); }
+    if y0 + 3u < h { wino4_row(x, y0 + 3u, layer, bias + o0.c3, bias + o1.c3, bias + o2.c3, bias + o3.c3); }
+    if POOL_OUT {
+        let p = vec2<u32>(x / 2u, y0 / 2u);
+        let right = x + 2u < params.width;
+        textureStore(pooled, p, layer, activate(bias + max(max(o0.c0, o1.c0), max(o0.c1, o1.c1))));
+        if right { textureStore(pooled, p + vec2<u32>(1u, 0u), layer, activate(bias + max(max(o2.c0, o3.c0), max(o2.c1, o3.c1)))); }
+        if y0 + 2u < h {
+            textureStore(pooled, p + vec2<u32>(0u, 1u), layer, activate(bias + max(max(o0.c2, o1.c2), max(o0.c3, o1.c3))));
+            if right { textureStore(pooled, p + vec2<u32>(1u, 1u), layer, activate(bias + max(max(o2.c2, o3.c2), max(o2.c3, o3.c3)))); }
+        }
+    }
+}
+
+// One output row of a 4x4 tile at (x .. x + 3, y), columns past the right edge dropped.
+fn wino4_row(x: u32, y: u32, layer: u32, a: vec4<f32>, b: vec4<f32>, c: vec4<f32>, d: vec4<f32>) {
+    let w = params.width;
+    textureStore(dst, vec2<u32>(x, y), layer, activate(a));
+    if x + 1u < w { textureStore(dst, vec2<u32>(x + 1u, y), layer, activate(b)); }
+    if x + 2u < w { textureStore(dst, vec2<u32>(x + 2u, y), layer, activate(c)); }
+    if x + 3u < w { textureStore(dst, vec2<u32>(x + 3u, y), layer, activate(d)); }
+}
+
+// Add input block `layer` of `t` at weight block `cb` to the transformed tiles m<t><j> (tile t
+// from the top, output block j) whose top-left output is (x, y0): the window's 6 columns are
+// fetched once, each of its rows transformed once, and each position's weights, taken from the
+// lanes once, go to both tiles before the next position's. The body is one unrolled basic block
+// per OB, the overrides dropping the others: 36 x 4 x 2 products of a 4x4 and a vec4 at most
+// (the 8 transformed tiles, 288 vec4s, stay in the stack between blocks).
+fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<function, Wino6>, m03: ptr<function, Wino6>, m10: ptr<function, Wino6>, m11: ptr<function, Wino6>, m12: ptr<function, Wino6>, m13: ptr<function, Wino6>, t: Source, mode: u32, layer: u32, cb: u32, w: u32, x: i32, y0: i32) {
+    let k0 = column(t, mode, x - 1, y0, layer);
+    let k1 = column(t, mode, x, y0, layer);
+    let k2 = column(t, mode, x + 1, y0, layer);
+    let k3 = column(t, mode, x + 2, y0, layer);
+    let k4 = column(t, mode, x + 3, y0, layer);
+    let k5 = column(t, mode, x + 4, y0, layer);
+    let e0 = hex_b(k0.v0, k1.v0, k2.v0, k3.v0, k4.v0, k5.v0);
+    let e1 = hex_b(k0.v1, k1.v1, k2.v1, k3.v1, k4.v1, k5.v1);
+    let e2 = hex_b(k0.v2, k1.v2, k2.v2, k3.v2, k4.v2, k5.v2);
+    let e3 = hex_b(k0.v3, k1.v3, k2.v3, k3.v3, k4.v3, k5.v3);
+    let e4 = hex_b(k0.v4, k1.v4, k2.v4, k3.v4, k4.v4, k5.v4);
+    let e5 = hex_b(k0.v5, k1.v5, k2.v5, k3.v5, k4.v5, k5.v5);
+    let v0 = wino6_v(e0, e1, e2, e3, e4, e5);
+    var v1 = v0;
+    if ROWS > 4u {
+        let e6 = hex_b(k0.v6, k1.v6, k2.v6, k3.v6, k4.v6, k5.v6);
+        let e7 = hex_b(k0.v7, k1.v7, k2.v7, k3.v7, k4.v7, k5.v7);
+        let e8 = hex_b(k0.v8, k1.v8, k2.v8, k3.v8, k4.v8, k5.v8);
+        let e9 = hex_b(k0.v9, k1.v9, k2.v9, k3.v9, k4.v9, k5.v9);
+        v1 = wino6_v(e4, e5, e6, e7, e8, e9);
+    }
+    let base = w + cb * 144u * OB;
+    // Position p = 6 i + c of each tile (Wino6's r<i>.c<c>), block by block, each gather of 16
+    // vec4s loaded just before the positions it holds.
+    if OB == 1u {
+        {
+        let g = weight_texel(base + 0u + lane);
+        { let u = ob1_0(g);
+          (*m00).r0.c0 = mac((*m00).r0.c0, u, v0.r0.c0);
+          if ROWS > 4u { (*m10).r0.c0 = mac((*m10).r0.c0, u, v1.r0.c0); } }
+        { let u = ob1_1(g);
+          (*m00).r0.c1 = mac((*m00).r0.c1, u, v0.r0.c1);
+          if ROWS > 4u { (*m10).r0.c1 = mac((*m10).r0.c1, u, v1.r0.c1); } }
+        { let u = ob1_2(g);
+          (*m00).r0.c2 = mac((*m00).r0.c2, u, v0.r0.c2);
+          if ROWS > 4u { (*m10).r0.c2 = mac((*m10).r0.c2, u, v1.r0.c2); } }
+        { let u = ob1_3(g);
+          (*m00).r0.c3 = mac((*m00).r0.c3, u, v0.r0.c3);
+          if ROWS > 4u { (*m10).r0.c3 = mac((*m10).r0.c3, u, v1.r0.c3); } }
+        }
+        {
+        let g = weight_texel(base + 16u + lane);
+        { let u = ob1_0(g);
+          (*m00).r0.c4 = mac((*m00).r0.c4, u, v0.r0.c4);
+          if ROWS > 4u { (*m10).r0.c4 = mac((*m10).r0.c4, u, v1.r0.c4); } }
+        { let u = ob1_1(g);
+          (*m00).r0.c5 = mac((*m00).r0.c5, u, v0.r0.c5);
+          if ROWS > 4u { (*m10).r0.c5 = mac((*m10).r0.c5, u, v1.r0.c5); } }
+        { let u = ob1_2(g);
+          (*m00).r1.c0 = mac((*m00).r1.c0, u, v0.r1.c0);
+          if ROWS > 4u { (*m10).r1.c0 = mac((*m10).r1.c0, u, v1.r1.c0); } }
+        { let u = ob1_3(g);
+          (*m00).r1.c1 = mac((*m00).r1.c1, u, v0.r1.c1);
+          if ROWS > 4u { (*m10).r1.c1 = mac((*m10).r1.c1, u, v1.r1.c1); } }
+        }
+        {
+        let g = weight_texel(base + 32u + lane);
+        { let u = ob1_0(g);
+          (*m00).r1.c2 = mac((*m00).r1.c2, u, v0.r1.c2);
+          if ROWS > 4u { (*m10).r1.c2 = mac((*m10).r1.c2, u, v1.r1.c2); } }
+        { let u = ob1_1(g);
+          (*m00).r1.c3 = mac((*m00).r1.c3, u, v0.r1.c3);
+          if ROWS > 4u { (*m10).r1.c3 = mac((*m10).r1.c3, u, v1.r1.c3); } }
+        { let u = ob1_2(g);
+          (*m00).r1.c4 = mac((*m00).r1.c4, u, v0.r1.c4);
+          if ROWS > 4u { (*m10).r1.c4 = mac((*m10).r1.c4, u, v1.r1.c4); } }
+        { let u = ob1_3(g);
+          (*m00).r1.c5 = mac((*m00).r1.c5, u, v0.r1.c5);
+          if ROWS > 4u { (*m10).r1.c5 = mac((*m10).r1.c5, u, v1.r1.c5); } }
+        }
+        {
+        let g = weight_texel(base + 48u + lane);
+        { let u = ob1_0(g);
+          (*m00).r2.c0 = mac((*m00).r2.c0, u, v0.r2.c0);
+          if ROWS > 4u { (*m10).r2.c0 = mac((*m10).r2.c0, u, v1.r2.c0); } }
+        { let u = ob1_1(g);
+          (*m00).r2.c1 = mac((*m00).r2.c1, u, v0.r2.c1);
+          if ROWS > 4u { (*m10).r2.c1 = mac((*m10).r2.c1, u, v1.r2.c1); } }
+        { let u = ob1_2(g);
+          (*m00).r2.c2 = mac((*m00).r2.c2, u, v0.r2.c2);
+          if ROWS > 4u { (*m10).r2.c2 = mac((*m10).r2.c2, u, v1.r2.c2); } }
+        { let u = ob1_3(g);
+          (*m00).r2.c3 = mac((*m00).r2.c3, u, v0.r2.c3);
+          if ROWS > 4u { (*m10).r2.c3 = mac((*m10).r2.c3, u, v1.r2.c3); } }
+        }
+        {
+        let g = weight_texel(base + 64u + lane);
+        { let u = ob1_0(g);
+          (*m00).r2.c4 = mac((*m00).r2.c4, u, v0.r2.c4);
+          if ROWS > 4u { (*m10).r2.c4 = mac((*m10).r2.c4, u, v1.r2.c4); } }
+        { let u = ob1_1(g);
+          (*m00).r2.c5 = mac((*m00).r2.c5, u, v0.r2.c5);
+          if ROWS > 4u { (*m10).r2.c5 = mac((*m10).r2.c5, u, v1.r2.c5); } }
+        { let u = ob1_2(g);
+          (*m00).r3.c0 = mac((*m00).r3.c0, u, v0.r3.c0);
+          if ROWS > 4u { (*m10).r3.c0 = mac((*m10).r3.c0, u, v1.r3.c0); } }
+        { let u = ob1_3(g);
+          (*m00).r3.c1 = mac((*m00).r3.c1, u, v0.r3.c1);
+          if ROWS > 4u { (*m10).r3.c1 = mac((*m10).r3.c1, u, v1.r3.c1); } }
+        }
+        {
+        let g = weight_texel(base + 80u + lane);
+        { let u = ob1_0(g);
+          (*m00).r3.c2 = mac((*m00).r3.c2, u, v0.r3.c2);
+          if ROWS > 4u { (*m10).r3.c2 = mac((*m10).r3.c2, u, v1.r3.c2); } }
+        { let u = ob1_1(g);
+          (*m00).r3.c3 = mac((*m00).r3.c3, u, v0.r3.c3);
+          if ROWS > 4u { (*m10).r3.c3 = mac((*m10).r3.c3, u, v1.r3.c3); } }
+        { let u = ob1_2(g);
+          (*m00).r3.c4 = mac((*m00).r3.c4, u, v0.r3.c4);
+          if ROWS > 4u { (*m10).r3.c4 = mac((*m10).r3.c4, u, v1.r3.c4); } }
+        { let u = ob1_3(g);
+          (*m00).r3.c5 = mac((*m00).r3.c5, u, v0.r3.c5);
+          if ROWS > 4u { (*m10).r3.c5 = mac((*m10).r3.c5, u, v1.r3.c5); } }
+        }
+        {
+        let g = weight_texel(base + 96u + lane);
+        { let u = ob1_0(g);
+          (*m00).r4.c0 = mac((*m00).r4.c0, u, v0.r4.c0);
+          if ROWS > 4u { (*m10).r4.c0 = mac((*m10).r4.c0, u, v1.r4.c0); } }
+        { let u = ob1_1(g);
+          (*m00).r4.c1 = mac((*m00).r4.c1, u, v0.r4.c1);
+          if ROWS > 4u { (*m10).r4.c1 = mac((*m10).r4.c1, u, v1.r4.c1); } }
+        { let u = ob1_2(g);
+          (*m00).r4.c2 = mac((*m00).r4.c2, u, v0.r4.c2);
+          if ROWS > 4u { (*m10).r4.c2 = mac((*m10).r4.c2, u, v1.r4.c2); } }
+        { let u = ob1_3(g);
+          (*m00).r4.c3 = mac((*m00).r4.c3, u, v0.r4.c3);
+          if ROWS > 4u { (*m10).r4.c3 = mac((*m10).r4.c3, u, v1.r4.c3); } }
+        }
+        {
+        let g = weight_texel(base + 112u + lane);
+        { let u = ob1_0(g);
+          (*m00).r4.c4 = mac((*m00).r4.c4, u, v0.r4.c4);
+          if ROWS > 4u { (*m10).r4.c4 = mac((*m10).r4.c4, u, v1.r4.c4); } }
+        { let u = ob1_1(g);
+          (*m00).r4.c5 = mac((*m00).r4.c5, u, v0.r4.c5);
+          if ROWS > 4u { (*m10).r4.c5 = mac((*m10).r4.c5, u, v1.r4.c5); } }
+        { let u = ob1_2(g);
+          (*m00).r5.c0 = mac((*m00).r5.c0, u, v0.r5.c0);
+          if ROWS > 4u { (*m10).r5.c0 = mac((*m10).r5.c0, u, v1.r5.c0); } }
+        { let u = ob1_3(g);
+          (*m00).r5.c1 = mac((*m00).r5.c1, u, v0.r5.c1);
+          if ROWS > 4u { (*m10).r5.c1 = mac((*m10).r5.c1, u, v1.r5.c1); } }
+        }
+        {
+        let g = weight_texel(base + 128u + lane);
+        { let u = ob1_0(g);
+          (*m00).r5.c2 = mac((*m00).r5.c2, u, v0.r5.c2);
+          if ROWS > 4u { (*m10).r5.c2 = mac((*m10).r5.c2, u, v1.r5.c2); } }
+        { let u = ob1_1(g);
+          (*m00).r5.c3 = mac((*m00).r5.c3, u, v0.r5.c3);
+          if ROWS > 4u { (*m10).r5.c3 = mac((*m10).r5.c3, u, v1.r5.c3); } }
+        { let u = ob1_2(g);
+          (*m00).r5.c4 = mac((*m00).r5.c4, u, v0.r5.c4);
+          if ROWS > 4u { (*m10).r5.c4 = mac((*m10).r5.c4, u, v1.r5.c4); } }
+        { let u = ob1_3(g);
+          (*m00).r5.c5 = mac((*m00).r5.c5, u, v0.r5.c5);
+          if ROWS > 4u { (*m10).r5.c5 = mac((*m10).r5.c5, u, v1.r5.c5); } }
+        }
+    } else if OB == 2u {
+        {
+        let g = weight_texel(base + 0u + lane);
+        { let u = ob2_00(g);
+          (*m00).r0.c0 = mac((*m00).r0.c0, u, v0.r0.c0);
+          if ROWS > 4u { (*m10).r0.c0 = mac((*m10).r0.c0, u, v1.r0.c0); } }
+        { let u = ob2_01(g);
+          (*m01).r0.c0 = mac((*m01).r0.c0, u, v0.r0.c0);
+          if ROWS > 4u { (*m11).r0.c0 = mac((*m11).r0.c0, u, v1.r0.c0); } }
+        { let u = ob2_10(g);
+          (*m00).r0.c1 = mac((*m00).r0.c1, u, v0.r0.c1);
+          if ROWS > 4u { (*m10).r0.c1 = mac((*m10).r0.c1, u, v1.r0.c1); } }
+        { let u = ob2_11(g);
+          (*m01).r0.c1 = mac((*m01).r0.c1, u, v0.r0.c1);
+          if ROWS > 4u { (*m11).r0.c1 = mac((*m11).r0.c1, u, v1.r0.c1); } }
+        }
+        {
+        let g = weight_texel(base + 16u + lane);
+        { let u = ob2_00(g);
+          (*m00).r0.c2 = mac((*m00).r0.c2, u, v0.r0.c2);
+          if ROWS > 4u { (*m10).r0.c2 = mac((*m10).r0.c2, u, v1.r0.c2); } }
+        { let u = ob2_01(g);
+          (*m01).r0.c2 = mac((*m01).r0.c2, u, v0.r0.c2);
+          if ROWS > 4u { (*m11).r0.c2 = mac((*m11).r0.c2, u, v1.r0.c2); } }
+        { let u = ob2_10(g);
+          (*m00).r0.c3 = mac((*m00).r0.c3, u, v0.r0.c3);
+          if ROWS > 4u { (*m10).r0.c3 = mac((*m10).r0.c3, u, v1.r0.c3); } }
+        { let u = ob2_11(g);
+          (*m01).r0.c3 = mac((*m01).r0.c3, u, v0.r0.c3);
+          if ROWS > 4u { (*m11).r0.c3 = mac((*m11).r0.c3, u, v1.r0.c3); } }
+        }
+        {
+        let g = weight_texel(base + 32u + lane);
+        { let u = ob2_00(g);
+          (*m00).r0.c4 = mac((*m00).r0.c4, u, v0.r0.c4);
+          if ROWS > 4u { (*m10).r0.c4 = mac((*m10).r0.c4, u, v1.r0.c4); } }
+        { let u = ob2_01(g);
+          (*m01).r0.c4 = mac((*m01).r0.c4, u, v0.r0.c4);
+          if ROWS > 4u { (*m11).r0.c4 = mac((*m11).r0.c4, u, v1.r0.c4); } }
+        { let u = ob2_10(g);
+          (*m00).r0.c5 = mac((*m00).r0.c5, u, v0.r0.c5);
+          if ROWS > 4u { (*m10).r0.c5 = mac((*m10).r0.c5, u, v1.r0.c5); } }
+        { let u = ob2_11(g);
+          (*m01).r0.c5 = mac((*m01).r0.c5, u, v0.r0.c5);
+          if ROWS > 4u { (*m11).r0.c5 = mac((*m11).r0.c5, u, v1.r0.c5); } }
+        }
+        {
+        let g = weight_texel(base + 48u + lane);
+        { let u = ob2_00(g);
+          (*m00).r1.c0 = mac((*m00).r1.c0, u, v0.r1.c0);
+          if ROWS > 4u { (*m10).r1.c0 = mac((*m10).r1.c0, u, v1.r1.c0); } }
+        { let u = ob2_01(g);
+          (*m01).r1.c0 = mac((*m01).r1.c0, u, v0.r1.c0);
+          if ROWS > 4u { (*m11).r1.c0 = mac((*m11).r1.c0, u, v1.r1.c0); } }
+        { let u = ob2_10(g);
+          (*m00).r1.c1 = mac((*m00).r1.c1, u, v0.r1.c1);
+          if ROWS > 4u { (*m10).r1.c1 = mac((*m10).r1.c1, u, v1.r1.c1); } }
+        { let u = ob2_11(g);
+          (*m01).r1.c1 = mac((*m01).r1.c1, u, v0.r1.c1);
+          if ROWS > 4u { (*m11).r1.c1 = mac((*m11).r1.c1, u, v1.r1.c1); } }
+        }
+        {
+        let g = weight_texel(base + 64u + lane);
+        { let u = ob2_00(g);
+          (*m00).r1.c2 = mac((*m00).r1.c2, u, v0.r1.c2);
+          if ROWS > 4u { (*m10).r1.c2 = mac((*m10).r1.c2, u, v1.r1.c2); } }
+        { let u = ob2_01(g);
+          (*m01).r1.c2 = mac((*m01).r1.c2, u, v0.r1.c2);
+          if ROWS > 4u { (*m11).r1.c2 = mac((*m11).r1.c2, u, v1.r1.c2); } }
+        { let u = ob2_10(g);
+          (*m00).r1.c3 = mac((*m00).r1.c3, u, v0.r1.c3);
+          if ROWS > 4u { (*m10).r1.c3 = mac((*m10).r1.c3, u, v1.r1.c3); } }
+        { let u = ob2_11(g);
+          (*m01).r1.c3 = mac((*m01).r1.c3, u, v0.r1.c3);
+          if ROWS > 4u { (*m11).r1.c3 = mac((*m11).r1.c3, u, v1.r1.c3); } }
+        }
+        {
+        let g = weight_texel(base + 80u + lane);
+        { let u = ob2_00(g);
+          (*m00).r1.c4 = mac((*m00).r1.c4, u, v0.r1.c4);
+          if ROWS > 4u { (*m10).r1.c4 = mac((*m10).r1.c4, u, v1.r1.c4); } }
+        { let u = ob2_01(g);
+          (*m01).r1.c4 = mac((*m01).r1.c4, u, v0.r1.c4);
+          if ROWS > 4u { (*m11).r1.c4 = mac((*m11).r1.c4, u, v1.r1.c4); } }
+        { let u = ob2_10(g);
+          (*m00).r1.c5 = mac((*m00).r1.c5, u, v0.r1.c5);
+          if ROWS > 4u { (*m10).r1.c5 = mac((*m10).r1.c5, u, v1.r1.c5); } }
+        { let u = ob2_11(g);
+          (*m01).r1.c5 = mac((*m01).r1.c5, u, v0.r1.c5);
+          if ROWS > 4u { (*m11).r1.c5 = mac((*m11).r1.c5, u, v1.r1.c5); } }
+        }
+        {
+        let g = weight_texel(base + 96u + lane);
+        { let u = ob2_00(g);
+          (*m00).r2.c0 = mac((*m00).r2.c0, u, v0.r2.c0);
+          if ROWS > 4u { (*m10).r2.c0 = mac((*m10).r2.c0, u, v1.r2.c0); } }
+        { let u = ob2_01(g);
+          (*m01).r2.c0 = mac((*m01).r2.c0, u, v0.r2.c0);
+          if ROWS > 4u { (*m11).r2.c0 = mac((*m11).r2.c0, u, v1.r2.c0); } }
+        { let u = ob2_10(g);
+          (*m00).r2.c1 = mac((*m00).r2.c1, u, v0.r2.c1);
+          if ROWS > 4u { (*m10).r2.c1 = mac((*m10).r2.c1, u, v1.r2.c1); } }
+        { let u = ob2_11(g);
+          (*m01).r2.c1 = mac((*m01).r2.c1, u, v0.r2.c1);
+          if ROWS > 4u { (*m11).r2.c1 = mac((*m11).r2.c1, u, v1.r2.c1); } }
+        }
+        {
+        let g = weight_texel(base + 112u + lane);
+        { let u = ob2_00(g);
+          (*m00).r2.c2 = mac((*m00).r2.c2, u, v0.r2.c2);
+          if ROWS > 4u { (*m10).r2.c2 = mac((*m10).r2.c2, u, v1.r2.c2); } }
+        { let u = ob2_01(g);
+          (*m01).r2.c2 = mac((*m01).r2.c2, u, v0.r2.c2);
+          if ROWS > 4u { (*m11).r2.c2 = mac((*m11).r2.c2, u, v1.r2.c2); } }
+        { let u = ob2_10(g);
+          (*m00).r2.c3 = mac((*m00).r2.c3, u, v0.r2.c3);
+          if ROWS > 4u { (*m10).r2.c3 = mac((*m10).r2.c3, u, v1.r2.c3); } }
+        { let u = ob2_11(g);
+          (*m01).r2.c3 = mac((*m01).r2.c3, u, v0.r2.c3);
+          if ROWS > 4u { (*m11).r2.c3 = mac((*m11).r2.c3, u, v1.r2.c3); } }
+        }
+        {
+        let g = weight_texel(base + 128u + lane);
+        { let u = ob2_00(g);
+          (*m00).r2.c4 = mac((*m00).r2.c4, u, v0.r2.c4);
+          if ROWS > 4u { (*m10).r2.c4 = mac((*m10).r2.c4, u, v1.r2.c4); } }
+        { let u = ob2_01(g);
+          (*m01).r2.c4 = mac((*m01).r2.c4, u, v0.r2.c4);
+          if ROWS > 4u { (*m11).r2.c4 = mac((*m11).r2.c4, u, v1.r2.c4); } }
+        { let u = ob2_10(g);
+          (*m00).r2.c5 = mac((*m00).r2.c5, u, v0.r2.c5);
+          if ROWS > 4u { (*m10).r2.c5 = mac((*m10).r2.c5, u, v1.r2.c5); } }
+        { let u = ob2_11(g);
+          (*m01).r2.c5 = mac((*m01).r2.c5, u, v0.r2.c5);
+          if ROWS > 4u { (*m11).r2.c5 = mac((*m11).r2.c5, u, v1.r2.c5); } }
+        }
+        {
+        let g = weight_texel(base + 144u + lane);
+        { let u = ob2_00(g);
+          (*m00).r3.c0 = mac((*m00).r3.c0, u, v0.r3.c0);
+          if ROWS > 4u { (*m10).r3.c0 = mac((*m10).r3.c0, u, v1.r3.c0); } }
+        { let u = ob2_01(g);
+          (*m01).r3.c0 = mac((*m01).r3.c0, u, v0.r3.c0);
+          if ROWS > 4u { (*m11).r3.c0 = mac((*m11).r3.c0, u, v1.r3.c0); } }
+        { let u = ob2_10(g);
+          (*m00).r3.c1 = mac((*m00).r3.c1, u, v0.r3.c1);
+          if ROWS > 4u { (*m10).r3.c1 = mac((*m10).r3.c1, u, v1.r3.c1); } }
+        { let u = ob2_11(g);
+          (*m01).r3.c1 = mac((*m01).r3.c1, u, v0.r3.c1);
+          if ROWS > 4u { (*m11).r3.c1 = mac((*m11).r3.c1, u, v1.r3.c1); } }
+        }
+        {
+        let g = weight_texel(base + 160u + lane);
+        { let u = ob2_00(g);
+          (*m00).r3.c2 = mac((*m00).r3.c2, u, v0.r3.c2);
+          if ROWS > 4u { (*m10).r3.c2 = mac((*m10).r3.c2, u, v1.r3.c2); } }
+        { let u = ob2_01(g);
+          (*m01).r3.c2 = mac((*m01).r3.c2, u, v0.r3.c2);
+          if ROWS > 4u { (*m11).r3.c2 = mac((*m11).r3.c2, u, v1.r3.c2); } }
+        { let u = ob2_10(g);
+          (*m00).r3.c3 = mac((*m00).r3.c3, u, v0.r3.c3);
+          if ROWS > 4u { (*m10).r3.c3 = mac((*m10).r3.c3, u, v1.r3.c3); } }
+        { let u = ob2_11(g);
+          (*m01).r3.c3 = mac((*m01).r3.c3, u, v0.r3.c3);
+          if ROWS > 4u { (*m11).r3.c3 = mac((*m11).r3.c3, u, v1.r3.c3); } }
+        }
+        {
+        let g = weight_texel(base + 176u + lane);
+        { let u = ob2_00(g);
+          (*m00).r3.c4 = mac((*m00).r3.c4, u, v0.r3.c4);
+          if ROWS > 4u { (*m10).r3.c4 = mac((*m10).r3.c4, u, v1.r3.c4); } }
+        { let u = ob2_01(g);
+          (*m01).r3.c4 = mac((*m01).r3.c4, u, v0.r3.c4);
+          if ROWS > 4u { (*m11).r3.c4 = mac((*m11).r3.c4, u, v1.r3.c4); } }
+        { let u = ob2_10(g);
+          (*m00).r3.c5 = mac((*m00).r3.c5, u, v0.r3.c5);
+          if ROWS > 4u { (*m10).r3.c5 = mac((*m10).r3.c5, u, v1.r3.c5); } }
+        { let u = ob2_11(g);
+          (*m01).r3.c5 = mac((*m01).r3.c5, u, v0.r3.c5);
+          if ROWS > 4u { (*m11).r3.c5 = mac((*m11).r3.c5, u, v1.r3.c5); } }
+        }
+        {
+        let g = weight_texel(base + 192u + lane);
+        { let u = ob2_00(g);
+          (*m00).r4.c0 = mac((*m00).r4.c0, u, v0.r4.c0);
+          if ROWS > 4u { (*m10).r4.c0 = mac((*m10).r4.c0, u, v1.r4.c0); } }
+        { let u = ob2_01(g);
+          (*m01).r4.c0 = mac((*m01).r4.c0, u, v0.r4.c0);
+          if ROWS > 4u { (*m11).r4.c0 = mac((*m11).r4.c0, u, v1.r4.c0); } }
+        { let u = ob2_10(g);
+          (*m00).r4.c1 = mac((*m00).r4.c1, u, v0.r4.c1);
+          if ROWS > 4u { (*m10).r4.c1 = mac((*m10).r4.c1, u, v1.r4.c1); } }
+        { let u = ob2_11(g);
+          (*m01).r4.c1 = mac((*m01).r4.c1, u, v0.r4.c1);
+          if ROWS > 4u { (*m11).r4.c1 = mac((*m11).r4.c1, u, v1.r4.c1); } }
+        }
+        {
+        let g = weight_texel(base + 208u + lane);
+        { let u = ob2_00(g);
+          (*m00).r4.c2 = mac((*m00).r4.c2, u, v0.r4.c2);
+          if ROWS > 4u { (*m10).r4.c2 = mac((*m10).r4.c2, u, v1.r4.c2); } }
+        { let u = ob2_01(g);
+          (*m01).r4.c2 = mac((*m01).r4.c2, u, v0.r4.c2);
+          if ROWS > 4u { (*m11).r4.c2 = mac((*m11).r4.c2, u, v1.r4.c2); } }
+        { let u = ob2_10(g);
+          (*m00).r4.c3 = mac((*m00).r4.c3, u, v0.r4.c3);
+          if ROWS > 4u { (*m10).r4.c3 = mac((*m10).r4.c3, u, v1.r4.c3); } }
+        { let u = ob2_11(g);
+          (*m01).r4.c3 = mac((*m01).r4.c3, u, v0.r4.c3);
+          if ROWS > 4u { (*m11).r4.c3 = mac((*m11).r4.c3, u, v1.r4.c3); } }
+        }
+        {
+        let g = weight_texel(base + 224u + lane);
+        { let u = ob2_00(g);
+          (*m00).r4.c4 = mac((*m00).r4.c4, u, v0.r4.c4);
+          if ROWS > 4u { (*m10).r4.c4 = mac((*m10).r4.c4, u, v1.r4.c4); } }
+        { let u = ob2_01(g);
+          (*m01).r4.c4 = mac((*m01).r4.c4, u, v0.r4.c4);
+          if ROWS > 4u { (*m11).r4.c4 = mac((*m11).r4.c4, u, v1.r4.c4); } }
+        { let u = ob2_10(g);
+          (*m00).r4.c5 = mac((*m00).r4.c5, u, v0.r4.c5);
+          if ROWS > 4u { (*m10).r4.c5 = mac((*m10).r4.c5, u, v1.r4.c5); } }
+        { let u = ob2_11(g);
+          (*m01).r4.c5 = mac((*m01).r4.c5, u, v0.r4.c5);
+          if ROWS > 4u { (*m11).r4.c5 = mac((*m11).r4.c5, u, v1.r4.c5); } }
+        }
+        {
+        let g = weight_texel(base + 240u + lane);
+        { let u = ob2_00(g);
+          (*m00).r5.c0 = mac((*m00).r5.c0, u, v0.r5.c0);
+          if ROWS > 4u { (*m10).r5.c0 = mac((*m10).r5.c0, u, v1.r5.c0); } }
+        { let u = ob2_01(g);
+          (*m01).r5.c0 = mac((*m01).r5.c0, u, v0.r5.c0);
+          if ROWS > 4u { (*m11).r5.c0 = mac((*m11).r5.c0, u, v1.r5.c0); } }
+        { let u = ob2_10(g);
+          (*m00).r5.c1 = mac((*m00).r5.c1, u, v0.r5.c1);
+          if ROWS > 4u { (*m10).r5.c1 = mac((*m10).r5.c1, u, v1.r5.c1); } }
+        { let u = ob2_11(g);
+          (*m01).r5.c1 = mac((*m01).r5.c1, u, v0.r5.c1);
+          if ROWS > 4u { (*m11).r5.c1 = mac((*m11).r5.c1, u, v1.r5.c1); } }
+        }
+        {
+        let g = weight_texel(base + 256u + lane);
+        { let u = ob2_00(g);
+          (*m00).r5.c2 = mac((*m00).r5.c2, u, v0.r5.c2);
+          if ROWS > 4u { (*m10).r5.c2 = mac((*m10).r5.c2, u, v1.r5.c2); } }
+        { let u = ob2_01(g);
+          (*m01).r5.c2 = mac((*m01).r5.c2, u, v0.r5.c2);
+          if ROWS > 4u { (*m11).r5.c2 = mac((*m11).r5.c2, u, v1.r5.c2); } }
+        { let u = ob2_10(g);
+          (*m00).r5.c3 = mac((*m00).r5.c3, u, v0.r5.c3);
+          if ROWS > 4u { (*m10).r5.c3 = mac((*m10).r5.c3, u, v1.r5.c3); } }
+        { let u = ob2_11(g);
+          (*m01).r5.c3 = mac((*m01).r5.c3, u, v0.r5.c3);
+          if ROWS > 4u { (*m11).r5.c3 = mac((*m11).r5.c3, u, v1.r5.c3); } }
+        }
+        {
+        let g = weight_texel(base + 272u + lane);
+        { let u = ob2_00(g);
+          (*m00).r5.c4 = mac((*m00).r5.c4, u, v0.r5.c4);
+          if ROWS > 4u { (*m10).r5.c4 = mac((*m10).r5.c4, u, v1.r5.c4); } }
+        { let u = ob2_01(g);
+          (*m01).r5.c4 = mac((*m01).r5.c4, u, v0.r5.c4);
+          if ROWS > 4u { (*m11).r5.c4 = mac((*m11).r5.c4, u, v1.r5.c4); } }
+        { let u = ob2_10(g);
+          (*m00).r5.c5 = mac((*m00).r5.c5, u, v0.r5.c5);
+          if ROWS > 4u { (*m10).r5.c5 = mac((*m10).r5.c5, u, v1.r5.c5); } }
+        { let u = ob2_11(g);
+          (*m01).r5.c5 = mac((*m01).r5.c5, u, v0.r5.c5);
+          if ROWS > 4u { (*m11).r5.c5 = mac((*m11).r5.c5, u, v1.r5.c5); } }
+        }
+    } else {
+        {
+        let g = weight_texel(base + 0u + lane);
+        { let u = ob4_0(g);
+          (*m00).r0.c0 = mac((*m00).r0.c0, u, v0.r0.c0);
+          if ROWS > 4u { (*m10).r0.c0 = mac((*m10).r0.c0, u, v1.r0.c0); } }
+        { let u = ob4_1(g);
+          (*m01).r0.c0 = mac((*m01).r0.c0, u, v0.r0.c0);
+          if ROWS > 4u { (*m11).r0.c0 = mac((*m11).r0.c0, u, v1.r0.c0); } }
+        { let u = ob4_2(g);
+          (*m02).r0.c0 = mac((*m02).r0.c0, u, v0.r0.c0);
+          if ROWS > 4u { (*m12).r0.c0 = mac((*m12).r0.c0, u, v1.r0.c0); } }
+        { let u = ob4_3(g);
+          (*m03).r0.c0 = mac((*m03).r0.c0, u, v0.r0.c0);
+          if ROWS > 4u { (*m13).r0.c0 = mac((*m13).r0.c0, u, v1.r0.c0); } }
+        }
+        {
+        let g = weight_texel(base + 16u + lane);
+        { let u = ob4_0(g);
+          (*m00).r0.c1 = mac((*m00).r0.c1, u, v0.r0.c1);
+          if ROWS > 4u { (*m10).r0.c1 = mac((*m10).r0.c1, u, v1.r0.c1); } }
+        { let u = ob4_1(g);
+          (*m01).r0.c1 = mac((*m01).r0.c1, u, v0.r0.c1);
+          if ROWS > 4u { (*m11).r0.c1 = mac((*m11).r0.c1, u, v1.r0.c1); } }
+        { let u = ob4_2(g);
+          (*m02).r0.c1 = mac((*m02).r0.c1, u, v0.r0.c1);
+          if ROWS > 4u { (*m12).r0.c1 = mac((*m12).r0.c1, u, v1.r0.c1); } }
+        { let u = ob4_3(g);
+          (*m03).r0.c1 = mac((*m03).r0.c1, u, v0.r0.c1);
+          if ROWS > 4u { (*m13).r0.c1 = mac((*m13).r0.c1, u, v1.r0.c1); } }
+        }
+        {
+        let g = weight_texel(base + 32u + lane);
+        { let u = ob4_0(g);
+          (*m00).r0.c2 = mac((*m00).r0.c2, u, v0.r0.c2);
+          if ROWS > 4u { (*m10).r0.c2 = mac((*m10).r0.c2, u, v1.r0.c2); } }
+        { let u = ob4_1(g);
+          (*m01).r0.c2 = mac((*m01).r0.c2, u, v0.r0.c2);
+          if ROWS > 4u { (*m11).r0.c2 = mac((*m11).r0.c2, u, v1.r0.c2); } }
+        { let u = ob4_2(g);
+          (*m02).r0.c2 = mac((*m02).r0.c2, u, v0.r0.c2);
+          if ROWS > 4u { (*m12).r0.c2 = mac((*m12).r0.c2, u, v1.r0.c2); } }
+        { let u = ob4_3(g);
+          (*m03).r0.c2 = mac((*m03).r0.c2, u, v0.r0.c2);
+          if ROWS > 4u { (*m13).r0.c2 = mac((*m13).r0.c2, u, v1.r0.c2); } }
+        }
+        {
+        let g = weight_texel(base + 48u + lane);
+        { let u = ob4_0(g);
+          (*m00).r0.c3 = mac((*m00).r0.c3, u, v0.r0.c3);
+          if ROWS > 4u { (*m10).r0.c3 = mac((*m10).r0.c3, u, v1.r0.c3); } }
+        { let u = ob4_1(g);
+          (*m01).r0.c3 = mac((*m01).r0.c3, u, v0.r0.c3);
+          if ROWS > 4u { (*m11).r0.c3 = mac((*m11).r0.c3, u, v1.r0.c3); } }
+        { let u = ob4_2(g);
+          (*m02).r0.c3 = mac((*m02).r0.c3, u, v0.r0.c3);
+          if ROWS > 4u { (*m12).r0.c3 = mac((*m12).r0.c3, u, v1.r0.c3); } }
+        { let u = ob4_3(g);
+          (*m03).r0.c3 = mac((*m03).r0.c3, u, v0.r0.c3);
+          if ROWS > 4u { (*m13).r0.c3 = mac((*m13).r0.c3, u, v1.r0.c3); } }
+        }
+        {
+        let g = weight_texel(base + 64u + lane);
+        { let u = ob4_0(g);
+          (*m00).r0.c4 = mac((*m00).r0.c4, u, v0.r0.c4);
+          if ROWS > 4u { (*m10).r0.c4 = mac((*m10).r0.c4, u, v1.r0.c4); } }
+        { let u = ob4_1(g);
+          (*m01).r0.c4 = mac((*m01).r0.c4, u, v0.r0.c4);
+          if ROWS > 4u { (*m11).r0.c4 = mac((*m11).r0.c4, u, v1.r0.c4); } }
+        { let u = ob4_2(g);
+          (*m02).r0.c4 = mac((*m02).r0.c4, u, v0.r0.c4);
+          if ROWS > 4u { (*m12).r0.c4 = mac((*m12).r0.c4, u, v1.r0.c4); } }
+        { let u = ob4_3(g);
+          (*m03).r0.c4 = mac((*m03).r0.c4, u, v0.r0.c4);
+          if ROWS > 4u { (*m13).r0.c4 = mac((*m13).r0.c4, u, v1.r0.c4); } }
+        }
+        {
+        let g = weight_texel(base + 80u + lane);
+        { let u = ob4_0(g);
+          (*m00).r0.c5 = mac((*m00).r0.c5, u, v0.r0.c5);
+          if ROWS > 4u { (*m10).r0.c5 = mac((*m10).r0.c5, u, v1.r0.c5); } }
+        { let u = ob4_1(g);
+          (*m01).r0.c5 = mac((*m01).r0.c5, u, v0.r0.c5);
+          if ROWS > 4u { (*m11).r0.c5 = mac((*m11).r0.c5, u, v1.r0.c5); } }
+        { let u = ob4_2(g);
+          (*m02).r0.c5 = mac((*m02).r0.c5, u, v0.r0.c5);
+          if ROWS > 4u { (*m12).r0.c5 = mac((*m12).r0.c5, u, v1.r0.c5); } }
+        { let u = ob4_3(g);
+          (*m03).r0.c5 = mac((*m03).r0.c5, u, v0.r0.c5);
+          if ROWS > 4u { (*m13).r0.c5 = mac((*m13).r0.c5, u, v1.r0.c5); } }
+        }
+        {
+        let g = weight_texel(base + 96u + lane);
+        { let u = ob4_0(g);
+          (*m00).r1.c0 = mac((*m00).r1.c0, u, v0.r1.c0);
+          if ROWS > 4u { (*m10).r1.c0 = mac((*m10).r1.c0, u, v1.r1.c0); } }
+        { let u = ob4_1(g);
+          (*m01).r1.c0 = mac((*m01).r1.c0, u, v0.r1.c0);
+          if ROWS > 4u { (*m11).r1.c0 = mac((*m11).r1.c0, u, v1.r1.c0); } }
+        { let u = ob4_2(g);
+          (*m02).r1.c0 = mac((*m02).r1.c0, u, v0.r1.c0);
+          if ROWS > 4u { (*m12).r1.c0 = mac((*m12).r1.c0, u, v1.r1.c0); } }
+        { let u = ob4_3(g);
+          (*m03).r1.c0 = mac((*m03).r1.c0, u, v0.r1.c0);
+          if ROWS > 4u { (*m13).r1.c0 = mac((*m13).r1.c0, u, v1.r1.c0); } }
+        }
+        {
+        let g = weight_texel(base + 112u + lane);
+        { let u = ob4_0(g);
+          (*m00).r1.c1 = mac((*m00).r1.c1, u, v0.r1.c1);
+          if ROWS > 4u { (*m10).r1.c1 = mac((*m10).r1.c1, u, v1.r1.c1); } }
+        { let u = ob4_1(g);
+          (*m01).r1.c1 = mac((*m01).r1.c1, u, v0.r1.c1);
+          if ROWS > 4u { (*m11).r1.c1 = mac((*m11).r1.c1, u, v1.r1.c1); } }
+        { let u = ob4_2(g);
+          (*m02).r1.c1 = mac((*m02).r1.c1, u, v0.r1.c1);
+          if ROWS > 4u { (*m12).r1.c1 = mac((*m12).r1.c1, u, v1.r1.c1); } }
+        { let u = ob4_3(g);
+          (*m03).r1.c1 = mac((*m03).r1.c1, u, v0.r1.c1);
+          if ROWS > 4u { (*m13).r1.c1 = mac((*m13).r1.c1, u, v1.r1.c1); } }
+        }
+        {
+        let g = weight_texel(base + 128u + lane);
+        { let u = ob4_0(g);
+          (*m00).r1.c2 = mac((*m00).r1.c2, u, v0.r1.c2);
+          if ROWS > 4u { (*m10).r1.c2 = mac((*m10).r1.c2, u, v1.r1.c2); } }
+        { let u = ob4_1(g);
+          (*m01).r1.c2 = mac((*m01).r1.c2, u, v0.r1.c2);
+          if ROWS > 4u { (*m11).r1.c2 = mac((*m11).r1.c2, u, v1.r1.c2); } }
+        { let u = ob4_2(g);
+          (*m02).r1.c2 = mac((*m02).r1.c2, u, v0.r1.c2);
+          if ROWS > 4u { (*m12).r1.c2 = mac((*m12).r1.c2, u, v1.r1.c2); } }
+        { let u = ob4_3(g);
+          (*m03).r1.c2 = mac((*m03).r1.c2, u, v0.r1.c2);
+          if ROWS > 4u { (*m13).r1.c2 = mac((*m13).r1.c2, u, v1.r1.c2); } }
+        }
+        {
+        let g = weight_texel(base + 144u + lane);
+        { let u = ob4_0(g);
+          (*m00).r1.c3 = mac((*m00).r1.c3, u, v0.r1.c3);
+          if ROWS > 4u { (*m10).r1.c3 = mac((*m10).r1.c3, u, v1.r1.c3); } }
+        { let u = ob4_1(g);
+          (*m01).r1.c3 = mac((*m01).r1.c3, u, v0.r1.c3);
+          if ROWS > 4u { (*m11).r1.c3 = mac((*m11).r1.c3, u, v1.r1.c3); } }
+        { let u = ob4_2(g);
+          (*m02).r1.c3 = mac((*m02).r1.c3, u, v0.r1.c3);
+          if ROWS > 4u { (*m12).r1.c3 = mac((*m12).r1.c3, u, v1.r1.c3); } }
+        { let u = ob4_3(g);
+          (*m03).r1.c3 = mac((*m03).r1.c3, u, v0.r1.c3);
+          if ROWS > 4u { (*m13).r1.c3 = mac((*m13).r1.c3, u, v1.r1.c3); } }
+        }
+        {
+        let g = weight_texel(base + 160u + lane);
+        { let u = ob4_0(g);
+          (*m00).r1.c4 = mac((*m00).r1.c4, u, v0.r1.c4);
+          if ROWS > 4u { (*m10).r1.c4 = mac((*m10).r1.c4, u, v1.r1.c4); } }
+        { let u = ob4_1(g);
+          (*m01).r1.c4 = mac((*m01).r1.c4, u, v0.r1.c4);
+          if ROWS > 4u { (*m11).r1.c4 = mac((*m11).r1.c4, u, v1.r1.c4); } }
+        { let u = ob4_2(g);
+          (*m02).r1.c4 = mac((*m02).r1.c4, u, v0.r1.c4);
+          if ROWS > 4u { (*m12).r1.c4 = mac((*m12).r1.c4, u, v1.r1.c4); } }
+        { let u = ob4_3(g);
+          (*m03).r1.c4 = mac((*m03).r1.c4, u, v0.r1.c4);
+          if ROWS > 4u { (*m13).r1.c4 = mac((*m13).r1.c4, u, v1.r1.c4); } }
+        }
+        {
+        let g = weight_texel(base + 176u + lane);
+        { let u = ob4_0(g);
+          (*m00).r1.c5 = mac((*m00).r1.c5, u, v0.r1.c5);
+          if ROWS > 4u { (*m10).r1.c5 = mac((*m10).r1.c5, u, v1.r1.c5); } }
+        { let u = ob4_1(g);
+          (*m01).r1.c5 = mac((*m01).r1.c5, u, v0.r1.c5);
+          if ROWS > 4u { (*m11).r1.c5 = mac((*m11).r1.c5, u, v1.r1.c5); } }
+        { let u = ob4_2(g);
+          (*m02).r1.c5 = mac((*m02).r1.c5, u, v0.r1.c5);
+          if ROWS > 4u { (*m12).r1.c5 = mac((*m12).r1.c5, u, v1.r1.c5); } }
+        { let u = ob4_3(g);
+          (*m03).r1.c5 = mac((*m03).r1.c5, u, v0.r1.c5);
+          if ROWS > 4u { (*m13).r1.c5 = mac((*m13).r1.c5, u, v1.r1.c5); } }
+        }
+        {
+        let g = weight_texel(base + 192u + lane);
+        { let u = ob4_0(g);
+          (*m00).r2.c0 = mac((*m00).r2.c0, u, v0.r2.c0);
+          if ROWS > 4u { (*m10).r2.c0 = mac((*m10).r2.c0, u, v1.r2.c0); } }
+        { let u = ob4_1(g);
+          (*m01).r2.c0 = mac((*m01).r2.c0, u, v0.r2.c0);
+          if ROWS > 4u { (*m11).r2.c0 = mac((*m11).r2.c0, u, v1.r2.c0); } }
+        { let u = ob4_2(g);
+          (*m02).r2.c0 = mac((*m02).r2.c0, u, v0.r2.c0);
+          if ROWS > 4u { (*m12).r2.c0 = mac((*m12).r2.c0, u, v1.r2.c0); } }
+        { let u = ob4_3(g);
+          (*m03).r2.c0 = mac((*m03).r2.c0, u, v0.r2.c0);
+          if ROWS > 4u { (*m13).r2.c0 = mac((*m13).r2.c0, u, v1.r2.c0); } }
+        }
+        {
+        let g = weight_texel(base + 208u + lane);
+        { let u = ob4_0(g);
+          (*m00).r2.c1 = mac((*m00).r2.c1, u, v0.r2.c1);
+          if ROWS > 4u { (*m10).r2.c1 = mac((*m10).r2.c1, u, v1.r2.c1); } }
+        { let u = ob4_1(g);
+          (*m01).r2.c1 = mac((*m01).r2.c1, u, v0.r2.c1);
+          if ROWS > 4u { (*m11).r2.c1 = mac((*m11).r2.c1, u, v1.r2.c1); } }
+        { let u = ob4_2(g);
+          (*m02).r2.c1 = mac((*m02).r2.c1, u, v0.r2.c1);
+          if ROWS > 4u { (*m12).r2.c1 = mac((*m12).r2.c1, u, v1.r2.c1); } }
+        { let u = ob4_3(g);
+          (*m03).r2.c1 = mac((*m03).r2.c1, u, v0.r2.c1);
+          if ROWS > 4u { (*m13).r2.c1 = mac((*m13).r2.c1, u, v1.r2.c1); } }
+        }
+        {
+        let g = weight_texel(base + 224u + lane);
+        { let u = ob4_0(g);
+          (*m00).r2.c2 = mac((*m00).r2.c2, u, v0.r2.c2);
+          if ROWS > 4u { (*m10).r2.c2 = mac((*m10).r2.c2, u, v1.r2.c2); } }
+        { let u = ob4_1(g);
+          (*m01).r2.c2 = mac((*m01).r2.c2, u, v0.r2.c2);
+          if ROWS > 4u { (*m11).r2.c2 = mac((*m11).r2.c2, u, v1.r2.c2); } }
+        { let u = ob4_2(g);
+          (*m02).r2.c2 = mac((*m02).r2.c2, u, v0.r2.c2);
+          if ROWS > 4u { (*m12).r2.c2 = mac((*m12).r2.c2, u, v1.r2.c2); } }
+        { let u = ob4_3(g);
+          (*m03).r2.c2 = mac((*m03).r2.c2, u, v0.r2.c2);
+          if ROWS > 4u { (*m13).r2.c2 = mac((*m13).r2.c2, u, v1.r2.c2); } }
+        }
+        {
+        let g = weight_texel(base + 240u + lane);
+        { let u = ob4_0(g);
+          (*m00).r2.c3 = mac((*m00).r2.c3, u, v0.r2.c3);
+          if ROWS > 4u { (*m10).r2.c3 = mac((*m10).r2.c3, u, v1.r2.c3); } }
+        { let u = ob4_1(g);
+          (*m01).r2.c3 = mac((*m01).r2.c3, u, v0.r2.c3);
+          if ROWS > 4u { (*m11).r2.c3 = mac((*m11).r2.c3, u, v1.r2.c3); } }
+        { let u = ob4_2(g);
+          (*m02).r2.c3 = mac((*m02).r2.c3, u, v0.r2.c3);
+          if ROWS > 4u { (*m12).r2.c3 = mac((*m12).r2.c3, u, v1.r2.c3); } }
+        { let u = ob4_3(g);
+          (*m03).r2.c3 = mac((*m03).r2.c3, u, v0.r2.c3);
+          if ROWS > 4u { (*m13).r2.c3 = mac((*m13).r2.c3, u, v1.r2.c3); } }
+        }
+        {
+        let g = weight_texel(base + 256u + lane);
+        { let u = ob4_0(g);
+          (*m00).r2.c4 = mac((*m00).r2.c4, u, v0.r2.c4);
+          if ROWS > 4u { (*m10).r2.c4 = mac((*m10).r2.c4, u, v1.r2.c4); } }
+        { let u = ob4_1(g);
+          (*m01).r2.c4 = mac((*m01).r2.c4, u, v0.r2.c4);
+          if ROWS > 4u { (*m11).r2.c4 = mac((*m11).r2.c4, u, v1.r2.c4); } }
+        { let u = ob4_2(g);
+          (*m02).r2.c4 = mac((*m02).r2.c4, u, v0.r2.c4);
+          if ROWS > 4u { (*m12).r2.c4 = mac((*m12).r2.c4, u, v1.r2.c4); } }
+        { let u = ob4_3(g);
+          (*m03).r2.c4 = mac((*m03).r2.c4, u, v0.r2.c4);
+          if ROWS > 4u { (*m13).r2.c4 = mac((*m13).r2.c4, u, v1.r2.c4); } }
+        }
+        {
+        let g = weight_texel(base + 272u + lane);
+        { let u = ob4_0(g);
+          (*m00).r2.c5 = mac((*m00).r2.c5, u, v0.r2.c5);
+          if ROWS > 4u { (*m10).r2.c5 = mac((*m10).r2.c5, u, v1.r2.c5); } }
+        { let u = ob4_1(g);
+          (*m01).r2.c5 = mac((*m01).r2.c5, u, v0.r2.c5);
+          if ROWS > 4u { (*m11).r2.c5 = mac((*m11).r2.c5, u, v1.r2.c5); } }
+        { let u = ob4_2(g);
+          (*m02).r2.c5 = mac((*m02).r2.c5, u, v0.r2.c5);
+          if ROWS > 4u { (*m12).r2.c5 = mac((*m12).r2.c5, u, v1.r2.c5); } }
+        { let u = ob4_3(g);
+          (*m03).r2.c5 = mac((*m03).r2.c5, u, v0.r2.c5);
+          if ROWS > 4u { (*m13).r2.c5 = mac((*m13).r2.c5, u, v1.r2.c5); } }
+        }
+        {
+        let g = weight_texel(base + 288u + lane);
+        { let u = ob4_0(g);
+          (*m00).r3.c0 = mac((*m00).r3.c0, u, v0.r3.c0);
+          if ROWS > 4u { (*m10).r3.c0 = mac((*m10).r3.c0, u, v1.r3.c0); } }
+        { let u = ob4_1(g);
+          (*m01).r3.c0 = mac((*m01).r3.c0, u, v0.r3.c0);
+          if ROWS > 4u { (*m11).r3.c0 = mac((*m11).r3.c0, u, v1.r3.c0); } }
+        { let u = ob4_2(g);
+          (*m02).r3.c0 = mac((*m02).r3.c0, u, v0.r3.c0);
+          if ROWS > 4u { (*m12).r3.c0 = mac((*m12).r3.c0, u, v1.r3.c0); } }
+        { let u = ob4_3(g);
+          (*m03).r3.c0 = mac((*m03).r3.c0, u, v0.r3.c0);
+          if ROWS > 4u { (*m13).r3.c0 = mac((*m13).r3.c0, u, v1.r3.c0); } }
+        }
+        {
+        let g = weight_texel(base + 304u + lane);
+        { let u = ob4_0(g);
+          (*m00).r3.c1 = mac((*m00).r3.c1, u, v0.r3.c1);
+          if ROWS > 4u { (*m10).r3.c1 = mac((*m10).r3.c1, u, v1.r3.c1); } }
+        { let u = ob4_1(g);
+          (*m01).r3.c1 = mac((*m01).r3.c1, u, v0.r3.c1);
+          if ROWS > 4u { (*m11).r3.c1 = mac((*m11).r3.c1, u, v1.r3.c1); } }
+        { let u = ob4_2(g);
+          (*m02).r3.c1 = mac((*m02).r3.c1, u, v0.r3.c1);
+          if ROWS > 4u { (*m12).r3.c1 = mac((*m12).r3.c1, u, v1.r3.c1); } }
+        { let u = ob4_3(g);
+          (*m03).r3.c1 = mac((*m03).r3.c1, u, v0.r3.c1);
+          if ROWS > 4u { (*m13).r3.c1 = mac((*m13).r3.c1, u, v1.r3.c1); } }
+        }
+        {
+        let g = weight_texel(base + 320u + lane);
+        { let u = ob4_0(g);
+          (*m00).r3.c2 = mac((*m00).r3.c2, u, v0.r3.c2);
+          if ROWS > 4u { (*m10).r3.c2 = mac((*m10).r3.c2, u, v1.r3.c2); } }
+        { let u = ob4_1(g);
+          (*m01).r3.c2 = mac((*m01).r3.c2, u, v0.r3.c2);
+          if ROWS > 4u { (*m11).r3.c2 = mac((*m11).r3.c2, u, v1.r3.c2); } }
+        { let u = ob4_2(g);
+          (*m02).r3.c2 = mac((*m02).r3.c2, u, v0.r3.c2);
+          if ROWS > 4u { (*m12).r3.c2 = mac((*m12).r3.c2, u, v1.r3.c2); } }
+        { let u = ob4_3(g);
+          (*m03).r3.c2 = mac((*m03).r3.c2, u, v0.r3.c2);
+          if ROWS > 4u { (*m13).r3.c2 = mac((*m13).r3.c2, u, v1.r3.c2); } }
+        }
+        {
+        let g = weight_texel(base + 336u + lane);
+        { let u = ob4_0(g);
+          (*m00).r3.c3 = mac((*m00).r3.c3, u, v0.r3.c3);
+          if ROWS > 4u { (*m10).r3.c3 = mac((*m10).r3.c3, u, v1.r3.c3); } }
+        { let u = ob4_1(g);
+          (*m01).r3.c3 = mac((*m01).r3.c3, u, v0.r3.c3);
+          if ROWS > 4u { (*m11).r3.c3 = mac((*m11).r3.c3, u, v1.r3.c3); } }
+        { let u = ob4_2(g);
+          (*m02).r3.c3 = mac((*m02).r3.c3, u, v0.r3.c3);
+          if ROWS > 4u { (*m12).r3.c3 = mac((*m12).r3.c3, u, v1.r3.c3); } }
+        { let u = ob4_3(g);
+          (*m03).r3.c3 = mac((*m03).r3.c3, u, v0.r3.c3);
+          if ROWS > 4u { (*m13).r3.c3 = mac((*m13).r3.c3, u, v1.r3.c3); } }
+        }
+        {
+        let g = weight_texel(base + 352u + lane);
+        { let u = ob4_0(g);
+          (*m00).r3.c4 = mac((*m00).r3.c4, u, v0.r3.c4);
+          if ROWS > 4u { (*m10).r3.c4 = mac((*m10).r3.c4, u, v1.r3.c4); } }
+        { let u = ob4_1(g);
+          (*m01).r3.c4 = mac((*m01).r3.c4, u, v0.r3.c4);
+          if ROWS > 4u { (*m11).r3.c4 = mac((*m11).r3.c4, u, v1.r3.c4); } }
+        { let u = ob4_2(g);
+          (*m02).r3.c4 = mac((*m02).r3.c4, u, v0.r3.c4);
+          if ROWS > 4u { (*m12).r3.c4 = mac((*m12).r3.c4, u, v1.r3.c4); } }
+        { let u = ob4_3(g);
+          (*m03).r3.c4 = mac((*m03).r3.c4, u, v0.r3.c4);
+          if ROWS > 4u { (*m13).r3.c4 = mac((*m13).r3.c4, u, v1.r3.c4); } }
+        }
+        {
+        let g = weight_texel(base + 368u + lane);
+        { let u = ob4_0(g);
+          (*m00).r3.c5 = mac((*m00).r3.c5, u, v0.r3.c5);
+          if ROWS > 4u { (*m10).r3.c5 = mac((*m10).r3.c5, u, v1.r3.c5); } }
+        { let u = ob4_1(g);
+          (*m01).r3.c5 = mac((*m01).r3.c5, u, v0.r3.c5);
+          if ROWS > 4u { (*m11).r3.c5 = mac((*m11).r3.c5, u, v1.r3.c5); } }
+        { let u = ob4_2(g);
+          (*m02).r3.c5 = mac((*m02).r3.c5, u, v0.r3.c5);
+          if ROWS > 4u { (*m12).r3.c5 = mac((*m12).r3.c5, u, v1.r3.c5); } }
+        { let u = ob4_3(g);
+          (*m03).r3.c5 = mac((*m03).r3.c5, u, v0.r3.c5);
+          if ROWS > 4u { (*m13).r3.c5 = mac((*m13).r3.c5, u, v1.r3.c5); } }
+        }
+        {
+        let g = weight_texel(base + 384u + lane);
+        { let u = ob4_0(g);
+          (*m00).r4.c0 = mac((*m00).r4.c0, u, v0.r4.c0);
+          if ROWS > 4u { (*m10).r4.c0 = mac((*m10).r4.c0, u, v1.r4.c0); } }
+        { let u = ob4_1(g);
+          (*m01).r4.c0 = mac((*m01).r4.c0, u, v0.r4.c0);
+          if ROWS > 4u { (*m11).r4.c0 = mac((*m11).r4.c0, u, v1.r4.c0); } }
+        { let u = ob4_2(g);
+          (*m02).r4.c0 = mac((*m02).r4.c0, u, v0.r4.c0);
+          if ROWS > 4u { (*m12).r4.c0 = mac((*m12).r4.c0, u, v1.r4.c0); } }
+        { let u = ob4_3(g);
+          (*m03).r4.c0 = mac((*m03).r4.c0, u, v0.r4.c0);
+          if ROWS > 4u { (*m13).r4.c0 = mac((*m13).r4.c0, u, v1.r4.c0); } }
+        }
+        {
+        let g = weight_texel(base + 400u + lane);
+        { let u = ob4_0(g);
+          (*m00).r4.c1 = mac((*m00).r4.c1, u, v0.r4.c1);
+          if ROWS > 4u { (*m10).r4.c1 = mac((*m10).r4.c1, u, v1.r4.c1); } }
+        { let u = ob4_1(g);
+          (*m01).r4.c1 = mac((*m01).r4.c1, u, v0.r4.c1);
+          if ROWS > 4u { (*m11).r4.c1 = mac((*m11).r4.c1, u, v1.r4.c1); } }
+        { let u = ob4_2(g);
+          (*m02).r4.c1 = mac((*m02).r4.c1, u, v0.r4.c1);
+          if ROWS > 4u { (*m12).r4.c1 = mac((*m12).r4.c1, u, v1.r4.c1); } }
+        { let u = ob4_3(g);
+          (*m03).r4.c1 = mac((*m03).r4.c1, u, v0.r4.c1);
+          if ROWS > 4u { (*m13).r4.c1 = mac((*m13).r4.c1, u, v1.r4.c1); } }
+        }
+        {
+        let g = weight_texel(base + 416u + lane);
+        { let u = ob4_0(g);
+          (*m00).r4.c2 = mac((*m00).r4.c2, u, v0.r4.c2);
+          if ROWS > 4u { (*m10).r4.c2 = mac((*m10).r4.c2, u, v1.r4.c2); } }
+        { let u = ob4_1(g);
+          (*m01).r4.c2 = mac((*m01).r4.c2, u, v0.r4.c2);
+          if ROWS > 4u { (*m11).r4.c2 = mac((*m11).r4.c2, u, v1.r4.c2); } }
+        { let u = ob4_2(g);
+          (*m02).r4.c2 = mac((*m02).r4.c2, u, v0.r4.c2);
+          if ROWS > 4u { (*m12).r4.c2 = mac((*m12).r4.c2, u, v1.r4.c2); } }
+        { let u = ob4_3(g);
+          (*m03).r4.c2 = mac((*m03).r4.c2, u, v0.r4.c2);
+          if ROWS > 4u { (*m13).r4.c2 = mac((*m13).r4.c2, u, v1.r4.c2); } }
+        }
+        {
+        let g = weight_texel(base + 432u + lane);
+        { let u = ob4_0(g);
+          (*m00).r4.c3 = mac((*m00).r4.c3, u, v0.r4.c3);
+          if ROWS > 4u { (*m10).r4.c3 = mac((*m10).r4.c3, u, v1.r4.c3); } }
+        { let u = ob4_1(g);
+          (*m01).r4.c3 = mac((*m01).r4.c3, u, v0.r4.c3);
+          if ROWS > 4u { (*m11).r4.c3 = mac((*m11).r4.c3, u, v1.r4.c3); } }
+        { let u = ob4_2(g);
+          (*m02).r4.c3 = mac((*m02).r4.c3, u, v0.r4.c3);
+          if ROWS > 4u { (*m12).r4.c3 = mac((*m12).r4.c3, u, v1.r4.c3); } }
+        { let u = ob4_3(g);
+          (*m03).r4.c3 = mac((*m03).r4.c3, u, v0.r4.c3);
+          if ROWS > 4u { (*m13).r4.c3 = mac((*m13).r4.c3, u, v1.r4.c3); } }
+        }
+        {
+        let g = weight_texel(base + 448u + lane);
+        { let u = ob4_0(g);
+          (*m00).r4.c4 = mac((*m00).r4.c4, u, v0.r4.c4);
+          if ROWS > 4u { (*m10).r4.c4 = mac((*m10).r4.c4, u, v1.r4.c4); } }
+        { let u = ob4_1(g);
+          (*m01).r4.c4 = mac((*m01).r4.c4, u, v0.r4.c4);
+          if ROWS > 4u { (*m11).r4.c4 = mac((*m11).r4.c4, u, v1.r4.c4); } }
+        { let u = ob4_2(g);
+          (*m02).r4.c4 = mac((*m02).r4.c4, u, v0.r4.c4);
+          if ROWS > 4u { (*m12).r4.c4 = mac((*m12).r4.c4, u, v1.r4.c4); } }
+        { let u = ob4_3(g);
+          (*m03).r4.c4 = mac((*m03).r4.c4, u, v0.r4.c4);
+          if ROWS > 4u { (*m13).r4.c4 = mac((*m13).r4.c4, u, v1.r4.c4); } }
+        }
+        {
+        let g = weight_texel(base + 464u + lane);
+        { let u = ob4_0(g);
+          (*m00).r4.c5 = mac((*m00).r4.c5, u, v0.r4.c5);
+          if ROWS > 4u { (*m10).r4.c5 = mac((*m10).r4.c5, u, v1.r4.c5); } }
+        { let u = ob4_1(g);
+          (*m01).r4.c5 = mac((*m01).r4.c5, u, v0.r4.c5);
+          if ROWS > 4u { (*m11).r4.c5 = mac((*m11).r4.c5, u, v1.r4.c5); } }
+        { let u = ob4_2(g);
+          (*m02).r4.c5 = mac((*m02).r4.c5, u, v0.r4.c5);
+          if ROWS > 4u { (*m12).r4.c5 = mac((*m12).r4.c5, u, v1.r4.c5); } }
+        { let u = ob4_3(g);
+          (*m03).r4.c5 = mac((*m03).r4.c5, u, v0.r4.c5);
+          if ROWS > 4u { (*m13).r4.c5 = mac((*m13).r4.c5, u, v1.r4.c5); } }
+        }
+        {
+        let g = weight_texel(base + 480u + lane);
+        { let u = ob4_0(g);
+          (*m00).r5.c0 = mac((*m00).r5.c0, u, v0.r5.c0);
+          if ROWS > 4u { (*m10).r5.c0 = mac((*m10).r5.c0, u, v1.r5.c0); } }
+        { let u = ob4_1(g);
+          (*m01).r5.c0 = mac((*m01).r5.c0, u, v0.r5.c0);
+          if ROWS > 4u { (*m11).r5.c0 = mac((*m11).r5.c0, u, v1.r5.c0); } }
+        { let u = ob4_2(g);
+          (*m02).r5.c0 = mac((*m02).r5.c0, u, v0.r5.c0);
+          if ROWS > 4u { (*m12).r5.c0 = mac((*m12).r5.c0, u, v1.r5.c0); } }
+        { let u = ob4_3(g);
+          (*m03).r5.c0 = mac((*m03).r5.c0, u, v0.r5.c0);
+          if ROWS > 4u { (*m13).r5.c0 = mac((*m13).r5.c0, u, v1.r5.c0); } }
+        }
+        {
+        let g = weight_texel(base + 496u + lane);
+        { let u = ob4_0(g);
+          (*m00).r5.c1 = mac((*m00).r5.c1, u, v0.r5.c1);
+          if ROWS > 4u { (*m10).r5.c1 = mac((*m10).r5.c1, u, v1.r5.c1); } }
+        { let u = ob4_1(g);
+          (*m01).r5.c1 = mac((*m01).r5.c1, u, v0.r5.c1);
+          if ROWS > 4u { (*m11).r5.c1 = mac((*m11).r5.c1, u, v1.r5.c1); } }
+        { let u = ob4_2(g);
+          (*m02).r5.c1 = mac((*m02).r5.c1, u, v0.r5.c1);
+          if ROWS > 4u { (*m12).r5.c1 = mac((*m12).r5.c1, u, v1.r5.c1); } }
+        { let u = ob4_3(g);
+          (*m03).r5.c1 = mac((*m03).r5.c1, u, v0.r5.c1);
+          if ROWS > 4u { (*m13).r5.c1 = mac((*m13).r5.c1, u, v1.r5.c1); } }
+        }
+        {
+        let g = weight_texel(base + 512u + lane);
+        { let u = ob4_0(g);
+          (*m00).r5.c2 = mac((*m00).r5.c2, u, v0.r5.c2);
+          if ROWS > 4u { (*m10).r5.c2 = mac((*m10).r5.c2, u, v1.r5.c2); } }
+        { let u = ob4_1(g);
+          (*m01).r5.c2 = mac((*m01).r5.c2, u, v0.r5.c2);
+          if ROWS > 4u { (*m11).r5.c2 = mac((*m11).r5.c2, u, v1.r5.c2); } }
+        { let u = ob4_2(g);
+          (*m02).r5.c2 = mac((*m02).r5.c2, u, v0.r5.c2);
+          if ROWS > 4u { (*m12).r5.c2 = mac((*m12).r5.c2, u, v1.r5.c2); } }
+        { let u = ob4_3(g);
+          (*m03).r5.c2 = mac((*m03).r5.c2, u, v0.r5.c2);
+          if ROWS > 4u { (*m13).r5.c2 = mac((*m13).r5.c2, u, v1.r5.c2); } }
+        }
+        {
+        let g = weight_texel(base + 528u + lane);
+        { let u = ob4_0(g);
+          (*m00).r5.c3 = mac((*m00).r5.c3, u, v0.r5.c3);
+          if ROWS > 4u { (*m10).r5.c3 = mac((*m10).r5.c3, u, v1.r5.c3); } }
+        { let u = ob4_1(g);
+          (*m01).r5.c3 = mac((*m01).r5.c3, u, v0.r5.c3);
+          if ROWS > 4u { (*m11).r5.c3 = mac((*m11).r5.c3, u, v1.r5.c3); } }
+        { let u = ob4_2(g);
+          (*m02).r5.c3 = mac((*m02).r5.c3, u, v0.r5.c3);
+          if ROWS > 4u { (*m12).r5.c3 = mac((*m12).r5.c3, u, v1.r5.c3); } }
+        { let u = ob4_3(g);
+          (*m03).r5.c3 = mac((*m03).r5.c3, u, v0.r5.c3);
+          if ROWS > 4u { (*m13).r5.c3 = mac((*m13).r5.c3, u, v1.r5.c3); } }
+        }
+        {
+        let g = weight_texel(base + 544u + lane);
+        { let u = ob4_0(g);
+          (*m00).r5.c4 = mac((*m00).r5.c4, u, v0.r5.c4);
+          if ROWS > 4u { (*m10).r5.c4 = mac((*m10).r5.c4, u, v1.r5.c4); } }
+        { let u = ob4_1(g);
+          (*m01).r5.c4 = mac((*m01).r5.c4, u, v0.r5.c4);
+          if ROWS > 4u { (*m11).r5.c4 = mac((*m11).r5.c4, u, v1.r5.c4); } }
+        { let u = ob4_2(g);
+          (*m02).r5.c4 = mac((*m02).r5.c4, u, v0.r5.c4);
+          if ROWS > 4u { (*m12).r5.c4 = mac((*m12).r5.c4, u, v1.r5.c4); } }
+        { let u = ob4_3(g);
+          (*m03).r5.c4 = mac((*m03).r5.c4, u, v0.r5.c4);
+          if ROWS > 4u { (*m13).r5.c4 = mac((*m13).r5.c4, u, v1.r5.c4); } }
+        }
+        {
+        let g = weight_texel(base + 560u + lane);
+        { let u = ob4_0(g);
+          (*m00).r5.c5 = mac((*m00).r5.c5, u, v0.r5.c5);
+          if ROWS > 4u { (*m10).r5.c5 = mac((*m10).r5.c5, u, v1.r5.c5); } }
+        { let u = ob4_1(g);
+          (*m01).r5.c5 = mac((*m01).r5.c5, u, v0.r5.c5);
+          if ROWS > 4u { (*m11).r5.c5 = mac((*m11).r5.c5, u, v1.r5.c5); } }
+        { let u = ob4_2(g);
+          (*m02).r5.c5 = mac((*m02).r5.c5, u, v0.r5.c5);
+          if ROWS > 4u { (*m12).r5.c5 = mac((*m12).r5.c5, u, v1.r5.c5); } }
+        { let u = ob4_3(g);
+          (*m03).r5.c5 = mac((*m03).r5.c5, u, v0.r5.c5);
+          if ROWS > 4u { (*m13).r5.c5 = mac((*m13).r5.c5, u, v1.r5.c5); } }
+        }
+    }
+}
+
+// `winograd4_lanes`: F(4x4, 3x3) tiles in one-dimensional workgroups of WG_X x WG_Y invocations
+// (subgroup builtins need them), each WG_X invocations of a row 4 columns apart.
+@compute @workgroup_size(64, 1, 1)
+fn winograd4_lanes(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_id) l: vec3<u32>, @builtin(subgroup_invocation_id) sg: u32) {
+    lane = sg;
+    let x = (wg.x * WG_X + l.x % WG_X) * 4u;
+    let y0 = (wg.y * WG_Y + l.x / WG_X) * ROWS;
+    let ob0 = params.ob0 + wg.z * OB;
+    let w = params.weight_texel + wg.z * params.group_stride;
+    if ob0 >= params.cout4 {
+        return;
+    }
+    // Lanes past the edge load weights for the others (a broadcast from an inactive lane is
+    // undefined) and store nothing.
+    let inside = x < params.width && y0 < params.height;
+    if !subgroupAny(inside) {
+        return;
+    }
+    let z = Hex(vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0));
+    var m00 = Wino6(z, z, z, z, z, z);
+    var m01 = m00;
+    var m02 = m00;
+    var m03 = m00;
+    var m10 = m00;
+    var m11 = m00;
+    var m12 = m00;
+    var m13 = m00;
+    let xi = i32(x);
+    let yi = i32(y0);
+    for (var c = 0u; c < params.cin4_a; c++) {
+        wino4_step(&m00, &m01, &m02, &m03, &m10, &m11, &m12, &m13, src_a, MODE_A, c, c, w, xi, yi);
+    }
+    if SOURCE_B {
+        for (var c = 0u; c < params.cin4_b; c++) {
+            wino4_step(&m00, &m01, &m02, &m03, &m10, &m11, &m12, &m13, src_b, MODE_B, c, params.cin4_a + c, w, xi, yi);
+        }
+    }
+    if !inside {
+        return;
+    }
+    let bias_at = w + params.cin4_total * 144u * OB;
+    let second = OB > 1u && ob0 + 1u < params.cout4;
+    let third = OB > 2u && ob0 + 2u < params.cout4;
+    let fourth = OB > 2u && ob0 + 3u < params.cout4;
+    // Tile t's outputs at rows y0 + 4t .. y0 + 4t + 3 (wino4_store drops rows past the bottom).
+    let b0 = weight_texel(bias_at);
+    var b1 = b0;
+    var b2 = b0;
+    var b3 = b0;
+    if OB > 1u {
+        b1 = weight_texel(bias_at + 1u);
+    }
+    if OB > 2u {
+        b2 = weight_texel(bias_at + 2u);
+        b3 = weight_texel(bias_at + 3u);
+    }
+    wino4_store(m00, b0, x, y0, ob0);
+    if second { wino4_store(m01, b1, x, y0, ob0 + 1u); }
+    if third { wino4_store(m02, b2, x, y0, ob0 + 2u); }
+    if fourth { wino4_store(m03, b3, x, y0, ob0 + 3u); }
+    if ROWS > 4u && y0 + 4u < params.height {
+        wino4_store(m10, b0, x, y0 + 4u, ob0);
+        if second { wino4_store(m11, b1, x, y0 + 4u, ob0 + 1u); }
+        if third { wino4_store(m12, b2, x, y0 + 4u, ob0 + 2u); }
+        if fourth { wino4_store(m13, b3, x, y0 + 4u, ob0 + 3u); }
+    }
+}
