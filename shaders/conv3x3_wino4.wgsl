@@ -138,19 +138,41 @@ fn wino4_row(x: u32, y: u32, layer: u32, a: vec4<f32>, b: vec4<f32>, c: vec4<f32
     if x + 3u < w { textureStore(dst, vec2<u32>(x + 3u, y), layer, activate(d)); }
 }
 
-// Add input block `layer` of `t` at weight block `cb` to the transformed tiles m<t><j> (tile t
-// from the top, output block j) whose top-left output is (x, y0): the window's 6 columns are
-// fetched once, each of its rows transformed once, and each position's weights, taken from the
-// lanes once, go to both tiles before the next position's. The body is one unrolled basic block
-// per OB, the overrides dropping the others: 36 x 4 x 2 products of a 4x4 and a vec4 at most
-// (the 8 transformed tiles, 288 vec4s, stay in the stack between blocks).
-fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<function, Wino6>, m03: ptr<function, Wino6>, m10: ptr<function, Wino6>, m11: ptr<function, Wino6>, m12: ptr<function, Wino6>, m13: ptr<function, Wino6>, t: Source, mode: u32, layer: u32, cb: u32, w: u32, x: i32, y0: i32) {
-    let k0 = column(t, mode, x - 1, y0, layer);
-    let k1 = column(t, mode, x, y0, layer);
-    let k2 = column(t, mode, x + 1, y0, layer);
-    let k3 = column(t, mode, x + 2, y0, layer);
-    let k4 = column(t, mode, x + 3, y0, layer);
-    let k5 = column(t, mode, x + 4, y0, layer);
+// The 6 columns of an input window, x - 1 .. x + 4.
+struct Window6 {
+    k0: Column,
+    k1: Column,
+    k2: Column,
+    k3: Column,
+    k4: Column,
+    k5: Column,
+}
+
+fn window6(t: Source, mode: u32, layer: u32, x: i32, y0: i32) -> Window6 {
+    return Window6(column(t, mode, x - 1, y0, layer), column(t, mode, x, y0, layer), column(t, mode, x + 1, y0, layer), column(t, mode, x + 2, y0, layer), column(t, mode, x + 3, y0, layer), column(t, mode, x + 4, y0, layer));
+}
+
+// Add input block `cb` of cat(a, b) (source a's block cb, or source b's block cb - cin4_a) to
+// the transformed tiles m<t><j> (tile t from the top, output block j) whose top-left output is
+// (x, y0): the window's 6 columns are fetched once, each of its rows transformed once, and
+// each position's weights, taken from the lanes once, go to both tiles before the next
+// position's. The body is one unrolled basic block per OB, the overrides dropping the others:
+// 36 x 4 x 2 products of a 4x4 and a vec4 at most (the 8 transformed tiles, 288 vec4s, stay in
+// the stack between blocks). It is the kernel's only copy of that body: one loop runs over
+// both sources' blocks, the window alone chosen per source, so LLVM compiles the body once.
+fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<function, Wino6>, m03: ptr<function, Wino6>, m10: ptr<function, Wino6>, m11: ptr<function, Wino6>, m12: ptr<function, Wino6>, m13: ptr<function, Wino6>, cb: u32, w: u32, x: i32, y0: i32) {
+    var k: Window6;
+    if !SOURCE_B || cb < params.cin4_a {
+        k = window6(src_a, MODE_A, cb, x, y0);
+    } else {
+        k = window6(src_b, MODE_B, cb - params.cin4_a, x, y0);
+    }
+    let k0 = k.k0;
+    let k1 = k.k1;
+    let k2 = k.k2;
+    let k3 = k.k3;
+    let k4 = k.k4;
+    let k5 = k.k5;
     let e0 = hex_b(k0.v0, k1.v0, k2.v0, k3.v0, k4.v0, k5.v0);
     let e1 = hex_b(k0.v1, k1.v1, k2.v1, k3.v1, k4.v1, k5.v1);
     let e2 = hex_b(k0.v2, k1.v2, k2.v2, k3.v2, k4.v2, k5.v2);
@@ -1149,13 +1171,10 @@ fn winograd4_lanes(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocati
     var m13 = m00;
     let xi = i32(x);
     let yi = i32(y0);
-    for (var c = 0u; c < params.cin4_a; c++) {
-        wino4_step(&m00, &m01, &m02, &m03, &m10, &m11, &m12, &m13, src_a, MODE_A, c, c, w, xi, yi);
-    }
-    if SOURCE_B {
-        for (var c = 0u; c < params.cin4_b; c++) {
-            wino4_step(&m00, &m01, &m02, &m03, &m10, &m11, &m12, &m13, src_b, MODE_B, c, params.cin4_a + c, w, xi, yi);
-        }
+    // Source a's blocks, then b's (none on a reset frame's hidden state: cin4_b = 0).
+    let blocks = params.cin4_a + select(0u, params.cin4_b, SOURCE_B);
+    for (var c = 0u; c < blocks; c++) {
+        wino4_step(&m00, &m01, &m02, &m03, &m10, &m11, &m12, &m13, c, w, xi, yi);
     }
     if !inside {
         return;
