@@ -10,10 +10,14 @@
 // weight matrix with a vec4: 256 multiply-adds per 4 outputs and input block where the direct
 // sum takes 576. On lavapipe a texel fetch is about half of the time (each is ~100 instructions
 // of per-lane addressing, loads and transposes), so the CPU tile takes OB = 4: each fetched
-// texel feeds 16 output channels of 4 stacked tiles (kernels::Tile::CPU_WINOGRAD). Weights sit as conv3x3.wgsl's `winograd` reads them (input block cb, position
-// p, input lane l, output block j at w + ((cb * 16 + p) * 4 + l) * OB + j); one input block's
-// 64 x OB vec4s are loaded 16 at a time, lane k loading the k-th (`WinoGather`), and each
-// position's matrix is taken from the lanes by subgroupBroadcast. The sums run in `winograd`'s
+// texel feeds 16 output channels of 4 stacked tiles (kernels::Tile::CPU_WINOGRAD). Weights are
+// texels of the plan's weight texture (conv3x3_wino4.wgsl's `weight_texel`: on lavapipe a
+// buffer load at a per-lane address is a loop over the lanes, a texel load one gather), laid
+// out as conv3x3.wgsl's `winograd` reads them from its buffer (input block cb, position p,
+// input lane l, output block j at w + ((cb * 16 + p) * 4 + l) * OB + j, w =
+// params.weight_texel + group z * group_stride); one input block's 64 x OB vec4s are loaded
+// 16 at a time, lane k loading the k-th (`WinoGather`), and each position's matrix is taken
+// from the lanes by subgroupBroadcast. The sums run in `winograd`'s
 // order, so a tile's outputs are bit for bit those of `winograd` with the same OB.
 
 // One input block's transformed weights spread over the lanes: vec4 16 i + k in lane k of g<i>
@@ -27,25 +31,25 @@ struct WinoGather {
 
 fn wino_gather(base: u32) -> WinoGather {
     var s: WinoGather;
-    s.g0 = weights[base + lane];
-    s.g1 = weights[base + 16u + lane];
-    s.g2 = weights[base + 32u + lane];
-    s.g3 = weights[base + 48u + lane];
+    s.g0 = weight_texel(base + lane);
+    s.g1 = weight_texel(base + 16u + lane);
+    s.g2 = weight_texel(base + 32u + lane);
+    s.g3 = weight_texel(base + 48u + lane);
     if OB > 1u {
-        s.g4 = weights[base + 64u + lane];
-        s.g5 = weights[base + 80u + lane];
-        s.g6 = weights[base + 96u + lane];
-        s.g7 = weights[base + 112u + lane];
+        s.g4 = weight_texel(base + 64u + lane);
+        s.g5 = weight_texel(base + 80u + lane);
+        s.g6 = weight_texel(base + 96u + lane);
+        s.g7 = weight_texel(base + 112u + lane);
     }
     if OB > 2u {
-        s.g8 = weights[base + 128u + lane];
-        s.g9 = weights[base + 144u + lane];
-        s.g10 = weights[base + 160u + lane];
-        s.g11 = weights[base + 176u + lane];
-        s.g12 = weights[base + 192u + lane];
-        s.g13 = weights[base + 208u + lane];
-        s.g14 = weights[base + 224u + lane];
-        s.g15 = weights[base + 240u + lane];
+        s.g8 = weight_texel(base + 128u + lane);
+        s.g9 = weight_texel(base + 144u + lane);
+        s.g10 = weight_texel(base + 160u + lane);
+        s.g11 = weight_texel(base + 176u + lane);
+        s.g12 = weight_texel(base + 192u + lane);
+        s.g13 = weight_texel(base + 208u + lane);
+        s.g14 = weight_texel(base + 224u + lane);
+        s.g15 = weight_texel(base + 240u + lane);
     }
     return s;
 }
@@ -477,7 +481,7 @@ fn winograd_lanes(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocatio
     let x = (wg.x * WG_X + l.x % WG_X) * 2u;
     let y0 = (wg.y * WG_Y + l.x / WG_X) * ROWS;
     let ob0 = params.ob0 + wg.z * OB;
-    let w = wg.z * params.group_stride;
+    let w = params.weight_texel + wg.z * params.group_stride;
     if ob0 >= params.cout4 {
         return;
     }
@@ -519,16 +523,16 @@ fn winograd_lanes(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocatio
     }
     let bias_at = w + params.cin4_total * 64u * OB;
     let second = OB > 1u && ob0 + 1u < params.cout4;
-    let b0 = weights[bias_at];
+    let b0 = weight_texel(bias_at);
     var b1 = b0;
     var b2 = b0;
     var b3 = b0;
     if OB > 1u {
-        b1 = weights[bias_at + 1u];
+        b1 = weight_texel(bias_at + 1u);
     }
     if OB > 2u {
-        b2 = weights[bias_at + 2u];
-        b3 = weights[bias_at + 3u];
+        b2 = weight_texel(bias_at + 2u);
+        b3 = weight_texel(bias_at + 3u);
     }
     let third = OB > 2u && ob0 + 2u < params.cout4;
     let fourth = OB > 2u && ob0 + 3u < params.cout4;

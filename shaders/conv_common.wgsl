@@ -30,7 +30,7 @@ struct Params {
     cout4: u32,       // output blocks of the conv
     slope: f32,       // LeakyReLU negative slope
     group_stride: u32,// vec4s from one group's weights to the next (group z at z * group_stride)
-    weight_texel: u32,// winograd4_lanes: the weight texel of group z = 0 (conv3x3_wino4.wgsl)
+    weight_texel: u32,// winograd_lanes, winograd4_lanes: the weight texel of group z = 0 (conv3x3_wino4.wgsl)
 }
 
 // The conv's bindings but its weights (binding 3, declared by each kernel).

@@ -435,10 +435,9 @@ impl Denoiser {
             if chosen_memory.is_some() || fixed_mma {
                 memory
             } else if tile.method.is_mma() || tile.method.is_winograd_lanes() {
-                // Mma tiles read only storage weights; Winograd's 16 weights per channel pair
-                // in 4 blocks fill a uniform chunk at 16 input blocks (and ran as fast from
-                // storage, docs/PERF.md session 22). F(4x4) tiles read the weight texture, and
-                // the memory picks only their layout.
+                // Mma tiles read only storage weights. Winograd lanes tiles read the plan's
+                // weight texture, and the memory picks only their bind-group layout: storage,
+                // which needs no 64 KiB chunk beside it.
                 WeightMemory::Storage
             } else {
                 WeightMemory::for_conv(device_type, spec.width, spec.height)

@@ -339,8 +339,8 @@ pub struct ConvParams {
     pub slope: f32,
     /// vec4s between the weight chunks of consecutive groups in one binding (workgroup z).
     pub group_stride: u32,
-    /// [`Method::Winograd4Lanes`]: the weight-texture texel where the dispatch's first group's
-    /// chunk starts (0 for the others, which bind their chunk by offset).
+    /// Winograd lanes tiles ([`Method::is_winograd_lanes`]): the weight-texture texel where the
+    /// dispatch's first group's chunk starts (0 for the others, which bind their chunk by offset).
     pub weight_texel: u32,
     /// Padding to the uniform's 16-byte size.
     pub _pad: [u32; 2],
@@ -560,8 +560,8 @@ pub enum Method {
     /// otherwise a lane-by-lane gather.
     Lanes,
     /// `winograd_lanes` (conv3x3_wino.wgsl): [`Method::Winograd`] with each weight vec4 loaded
-    /// by one lane of the subgroup and broadcast to the others (subgroups of at least 16
-    /// lanes, [`winograd_lanes_supported`]), for CPU drivers.
+    /// by one lane of the subgroup, from the plan's weight texture, and broadcast to the others
+    /// (subgroups of at least 16 lanes, [`winograd_lanes_supported`]), for CPU drivers.
     WinogradLanes,
     /// `winograd4_lanes` (conv3x3_wino4.wgsl): Winograd F(4x4, 3x3), 36 multiplies per 4x4
     /// outputs and channel pair for 144, with its weights loaded across the subgroup as
@@ -612,8 +612,9 @@ impl Method {
     }
 
     /// Whether this is Winograd with its weights across the subgroup ([`Method::WinogradLanes`],
-    /// [`Method::Winograd4Lanes`]): subgroups of at least 16 lanes, storage weights from the
-    /// Denoiser, the output pooled in the conv where the plan asks.
+    /// [`Method::Winograd4Lanes`]): subgroups of at least 16 lanes, weights from the plan's
+    /// weight texture (binding 7, whatever the weight memory), the output pooled in the conv
+    /// where the plan asks.
     pub fn is_winograd_lanes(self) -> bool {
         matches!(self, Method::WinogradLanes | Method::Winograd4Lanes)
     }
@@ -1049,10 +1050,10 @@ impl Tile {
     /// It takes 256 multiply-adds per 4 outputs and input block where [`Tile::CPU_LANES`] takes
     /// 576, and 40 texel fetches per 16 outputs x 16 channels where that takes 40 per 16 x 8.
     /// On lavapipe (Zen 5, 512-bit vectors) the 256x256 frame's big convs of 32 input channels
-    /// and more took about 0.8x the time of `lanes8x2w2` (docs/PERF.md, session 22). Four blocks of 16 weights
-    /// per channel pair fit a 64 KiB uniform chunk only up to 15 input blocks, so the Denoiser
-    /// gives these convs storage weights. The rounding is Winograd's: within the golden
-    /// tolerance.
+    /// and more took about 0.8x the time of `lanes8x2w2` (docs/PERF.md, session 22). Its weights
+    /// are texels of the plan's weight texture since session 23 (a 64 KiB uniform chunk held
+    /// four blocks of 16 weights per channel pair only up to 15 input blocks). The rounding is
+    /// Winograd's: within the golden tolerance.
     pub const CPU_WINOGRAD: Tile = Tile { rows: 8, blocks: 4, cols: 2, group_x: WORKGROUP, method: Method::WinogradLanes, split: 1 };
 
     /// The CPU drivers' F(4x4, 3x3) tile: two stacked 4x4 output tiles (8 rows x 4 columns) x 4
@@ -1540,8 +1541,8 @@ pub struct ConvPlan {
     partial: wgpu::Buffer,
     /// What binding 6 (the pooled output) holds for convs that do not pool: 1 x 1 x 1.
     no_pooled: wgpu::TextureView,
-    /// Binding 7: the weights of [`Method::Winograd4Lanes`] convs, [`WEIGHT_TEXELS_WIDTH`]
-    /// texels a row (1 x 1 where the plan has none).
+    /// Binding 7: the weights of Winograd lanes convs ([`Method::is_winograd_lanes`]),
+    /// [`WEIGHT_TEXELS_WIDTH`] texels a row (1 x 1 where the plan has none).
     weight_texels: wgpu::TextureView,
     /// Bytes of the weight texture.
     weight_texels_bytes: u64,
@@ -1625,7 +1626,7 @@ impl ConvPlan {
         let align = limits.min_uniform_buffer_offset_alignment.max(limits.min_storage_buffer_offset_alignment) as usize;
         let mut params: Vec<u8> = Vec::new();
         let mut weights: Vec<u8> = Vec::new();
-        // Winograd4Lanes convs' weights, texel by texel (the weight texture).
+        // Winograd lanes convs' weights, texel by texel (the weight texture).
         let mut weight_texels: Vec<[f32; 4]> = Vec::new();
         // Each conv's variant, workgroups, split, groups and reduce pass, before its pipelines.
         let mut pending = Vec::with_capacity(specs.len());
@@ -1696,7 +1697,7 @@ impl ConvPlan {
             }
             let taps = tile.taps();
             // Weights in the weight texture take no chunk.
-            let texels = tile.method == Method::Winograd4Lanes;
+            let texels = tile.method.is_winograd_lanes();
             let ob = match memory {
                 _ if texels => 4,
                 WeightMemory::Uniform => blocks_per_invocation(cin4, taps).ok_or_else(|| crate::Error::Arch {
