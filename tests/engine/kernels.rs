@@ -499,13 +499,7 @@ fn conv_winograd_lanes_tiles_match_cpu_and_the_winograd_tiles() {
     let g = gpu();
     let wl = |rows, blocks| Tile::winograd_lanes(rows, blocks).expect("a Winograd lanes tile");
     if !kernels::winograd_lanes_supported(&g.device) {
-        // Refused, with the reason, where the device has no subgroups of 16 lanes.
-        let mut k = Kernels::new(&g.device, kernels::Precision::F32, WeightMemory::Uniform);
-        let (weight, bias) = (vec![0.0; 4 * 4 * 9], vec![0.0; 4]);
-        let err = ConvPlan::new(&g.device, &g.queue, &mut k, &[one_source_spec("c", 16, 16, 4, &weight, &bias)], &[wl(8, 2)])
-            .err()
-            .expect("refused");
-        assert!(err.to_string().contains("subgroups of at least 16 lanes"), "{err}");
+        refused_without_16_lanes(wl(8, 2));
         return;
     }
     let cases = [
@@ -533,26 +527,7 @@ fn conv_winograd_lanes_tiles_match_cpu_and_the_winograd_tiles() {
     assert_eq!(run(wl(4, 2)), wino, "winolanes4x2 against wino4x2");
     assert_eq!(run(wl(8, 1)), run(Tile::winograd(2, 1).unwrap()), "winolanes8x1 against wino2x1");
     // Its pooled output is the 2x2 max of its output, bit for bit (the pool pass's).
-    let (c, d) = (tensor(5, 92, 76, 850), tensor(3, 46, 38, 851));
-    let (weight, bias) = (noise(9 * 8 * 9, 852), noise(9, 853));
-    let sources = SourceAccess::for_device_type(g.device.adapter_info().device_type);
-    let (out, pooled) = gpu_conv_pooled(
-        (&c, Read::Pool),
-        Some((&d, Read::Direct)),
-        &weight,
-        &bias,
-        true,
-        38,
-        46,
-        wl(8, 4),
-        WeightMemory::Storage,
-        sources,
-        true,
-    );
-    let pooled = pooled.expect("a Winograd lanes tile pools its output");
-    let want = cpu::read(&out, Read::Pool, 23, 19);
-    assert!(pooled.data.iter().zip(&want.data).all(|(p, w)| p.to_bits() == w.to_bits()), "pooled values differ from the 2x2 max");
-    assert!(out.data.iter().any(|&v| v < 0.0), "the LeakyReLU's negative side is exercised");
+    pools_as_the_pool_pass(wl(8, 4), 850);
     assert_eq!(wl(8, 2).to_string(), "winolanes8x2");
     assert_eq!(Tile::CPU_WINOGRAD, wl(8, 4), "the CPU drivers' Winograd tile is one the kernel has");
     assert_eq!(Tile::winograd_lanes(2, 1), None);
@@ -570,12 +545,7 @@ fn conv_winograd4_lanes_tiles_match_cpu_and_pool_their_output() {
     let g = gpu();
     let w4 = |rows, blocks| Tile::winograd4_lanes(rows, blocks).expect("a Winograd F(4x4) lanes tile");
     if !kernels::winograd_lanes_supported(&g.device) {
-        let mut k = Kernels::new(&g.device, kernels::Precision::F32, WeightMemory::Storage);
-        let (weight, bias) = (vec![0.0; 4 * 4 * 9], vec![0.0; 4]);
-        let err = ConvPlan::new(&g.device, &g.queue, &mut k, &[one_source_spec("c", 16, 16, 4, &weight, &bias)], &[w4(8, 4)])
-            .err()
-            .expect("refused");
-        assert!(err.to_string().contains("subgroups of at least 16 lanes"), "{err}");
+        refused_without_16_lanes(w4(8, 4));
         return;
     }
     let cases = [
@@ -604,10 +574,34 @@ fn conv_winograd4_lanes_tiles_match_cpu_and_pool_their_output() {
         w4(8, 4),
         WeightMemory::Uniform,
     );
-    // Its pooled output is the 2x2 max of its output, bit for bit (the pool pass's), with the
-    // last column of tiles half outside the level (38 = 9 x 4 + 2).
-    let (c, d) = (tensor(5, 92, 76, 950), tensor(3, 46, 38, 951));
-    let (weight, bias) = (noise(9 * 8 * 9, 952), noise(9, 953));
+    // Its pooled output is the 2x2 max of its output, bit for bit, with the last column of tiles
+    // half outside the level.
+    pools_as_the_pool_pass(w4(8, 4), 950);
+    assert_eq!(w4(8, 4).to_string(), "wino4lanes8x4");
+    assert_eq!(Tile::CPU_WINOGRAD4, w4(8, 4), "the CPU drivers' F(4x4) tile is one the kernel has");
+    assert_eq!(Tile::winograd4_lanes(2, 1), None);
+    assert_eq!(Tile::winograd4_lanes(16, 1), None);
+    assert_eq!(Tile::winograd4_lanes(8, 3), None);
+    assert_eq!(w4(8, 2).with_split(2), None);
+}
+
+/// `tile` on a device without 16-lane subgroups: refused, with the reason.
+fn refused_without_16_lanes(tile: Tile) {
+    let g = gpu();
+    let mut k = Kernels::new(&g.device, kernels::Precision::F32, WeightMemory::Storage);
+    let (weight, bias) = (vec![0.0; 4 * 4 * 9], vec![0.0; 4]);
+    let err =
+        ConvPlan::new(&g.device, &g.queue, &mut k, &[one_source_spec("c", 16, 16, 4, &weight, &bias)], &[tile]).err().expect("refused");
+    assert!(err.to_string().contains("subgroups of at least 16 lanes"), "{err}");
+}
+
+/// A conv with `tile` (one that pools its own output) reading a pooled and a direct source on a
+/// 38 x 46 level (38 = 9 x 4 + 2: a 4-column tile half outside) into 9 LeakyReLU outputs: its
+/// pooled output is the 2x2 max of its output, bit for bit (the pool pass's).
+fn pools_as_the_pool_pass(tile: Tile, seed: u64) {
+    let g = gpu();
+    let (c, d) = (tensor(5, 92, 76, seed), tensor(3, 46, 38, seed + 1));
+    let (weight, bias) = (noise(9 * 8 * 9, seed + 2), noise(9, seed + 3));
     let sources = SourceAccess::for_device_type(g.device.adapter_info().device_type);
     let (out, pooled) = gpu_conv_pooled(
         (&c, Read::Pool),
@@ -617,21 +611,15 @@ fn conv_winograd4_lanes_tiles_match_cpu_and_pool_their_output() {
         true,
         38,
         46,
-        w4(8, 4),
+        tile,
         WeightMemory::Storage,
         sources,
         true,
     );
-    let pooled = pooled.expect("a Winograd F(4x4) lanes tile pools its output");
+    let pooled = pooled.unwrap_or_else(|| panic!("{tile} pools its output"));
     let want = cpu::read(&out, Read::Pool, 23, 19);
-    assert!(pooled.data.iter().zip(&want.data).all(|(p, w)| p.to_bits() == w.to_bits()), "pooled values differ from the 2x2 max");
+    assert!(pooled.data.iter().zip(&want.data).all(|(p, w)| p.to_bits() == w.to_bits()), "{tile}: pooled values differ from the 2x2 max");
     assert!(out.data.iter().any(|&v| v < 0.0), "the LeakyReLU's negative side is exercised");
-    assert_eq!(w4(8, 4).to_string(), "wino4lanes8x4");
-    assert_eq!(Tile::CPU_WINOGRAD4, w4(8, 4), "the CPU drivers' F(4x4) tile is one the kernel has");
-    assert_eq!(Tile::winograd4_lanes(2, 1), None);
-    assert_eq!(Tile::winograd4_lanes(16, 1), None);
-    assert_eq!(Tile::winograd4_lanes(8, 3), None);
-    assert_eq!(w4(8, 2).with_split(2), None);
 }
 
 /// A LeakyReLU conv reading `ca` channels of one source directly (`bias.len()` outputs).
@@ -827,6 +815,39 @@ fn winograd_weight_transform_reproduces_the_direct_convolution() {
             let wino: f64 = (0..16).map(|p| at[y][p / 4] * u[p] as f64 * v(p / 4, p % 4) * at[x][p % 4]).sum();
             let direct: f64 = (0..9).map(|t| g[t] as f64 * d[(y + t / 3) * 4 + x + t % 3]).sum();
             assert!((wino - direct).abs() < 1e-6 * (1.0 + direct.abs()), "output ({x}, {y}): {wino} vs {direct}");
+        }
+    }
+}
+
+#[test]
+fn winograd4_weight_transform_reproduces_the_direct_convolution() {
+    // The same for F(4x4, 3x3): a 6x6 patch, the kernel's B^T and A^T (conv3x3_wino4.wgsl),
+    // 4x4 outputs. The transformed weights are rounded to f32 and A^T has 8s, so it holds to 1e-5.
+    let g: Vec<f32> = noise(9, 310);
+    let d: Vec<f64> = noise(36, 311).iter().map(|&v| v as f64).collect();
+    let u = kernels::winograd4_taps(&g);
+    let bt = [
+        [4.0, 0.0, -5.0, 0.0, 1.0, 0.0],
+        [0.0, -4.0, -4.0, 1.0, 1.0, 0.0],
+        [0.0, 4.0, -4.0, -1.0, 1.0, 0.0],
+        [0.0, -2.0, -1.0, 2.0, 1.0, 0.0],
+        [0.0, 2.0, -1.0, -2.0, 1.0, 0.0],
+        [0.0, 4.0, 0.0, -5.0, 0.0, 1.0],
+    ];
+    let at = [
+        [1.0, 1.0, 1.0, 1.0, 1.0, 0.0],
+        [0.0, 1.0, -1.0, 2.0, -2.0, 0.0],
+        [0.0, 1.0, 1.0, 4.0, 4.0, 0.0],
+        [0.0, 1.0, -1.0, 8.0, -8.0, 1.0],
+    ];
+    let v = |i: usize, j: usize| -> f64 {
+        (0..6).flat_map(|r| (0..6).map(move |c| (r, c))).map(|(r, c)| bt[i][r] * d[r * 6 + c] * bt[j][c]).sum()
+    };
+    for y in 0..4 {
+        for x in 0..4 {
+            let wino: f64 = (0..36).map(|p| at[y][p / 6] * u[p] as f64 * v(p / 6, p % 6) * at[x][p % 6]).sum();
+            let direct: f64 = (0..9).map(|t| g[t] as f64 * d[(y + t / 3) * 6 + x + t % 3]).sum();
+            assert!((wino - direct).abs() < 1e-5 * (1.0 + direct.abs()), "output ({x}, {y}): {wino} vs {direct}");
         }
     }
 }

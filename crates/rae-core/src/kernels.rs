@@ -1290,12 +1290,19 @@ pub fn blocks_per_invocation(cin4: u32, taps: u32) -> Option<u32> {
 /// in f64 and rounded once: the 16 weights conv3x3.wgsl's `winograd` multiplies with.
 pub fn winograd_taps(g: &[f32]) -> [f32; 16] {
     const G: [[f64; 3]; 4] = [[1.0, 0.0, 0.0], [0.5, 0.5, 0.5], [0.5, -0.5, 0.5], [0.0, 0.0, 1.0]];
+    weight_transform(&G, g)
+}
+
+/// G g G^T of one 3x3 kernel `g` for the N x 3 matrix `m` = G, in f64 and rounded once,
+/// row-major (position p = N i + j).
+fn weight_transform<const N: usize, const NN: usize>(m: &[[f64; 3]; N], g: &[f32]) -> [f32; NN] {
+    debug_assert_eq!(N * N, NN);
     std::array::from_fn(|p| {
-        let (i, j) = (p / 4, p % 4);
+        let (i, j) = (p / N, p % N);
         let mut u = 0.0;
         for a in 0..3 {
             for b in 0..3 {
-                u += G[i][a] * g[a * 3 + b] as f64 * G[j][b];
+                u += m[i][a] * g[a * 3 + b] as f64 * m[j][b];
             }
         }
         u as f32
@@ -1314,16 +1321,7 @@ pub fn winograd4_taps(g: &[f32]) -> [f32; 36] {
         [1.0 / 24.0, -1.0 / 12.0, 1.0 / 6.0],
         [0.0, 0.0, 1.0],
     ];
-    std::array::from_fn(|p| {
-        let (i, j) = (p / 6, p % 6);
-        let mut u = 0.0;
-        for a in 0..3 {
-            for b in 0..3 {
-                u += G[i][a] * g[a * 3 + b] as f64 * G[j][b];
-            }
-        }
-        u as f32
-    })
+    weight_transform(&G, g)
 }
 
 /// The weight chunk of output blocks `ob0 .. ob0 + ob` of a conv over `cat(a, b)`, laid out as
