@@ -523,17 +523,11 @@ fn winograd_lanes(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocatio
     }
     let bias_at = w + params.cin4_total * 64u * OB;
     let second = OB > 1u && ob0 + 1u < params.cout4;
-    let b0 = weight_texel(bias_at);
-    var b1 = b0;
-    var b2 = b0;
-    var b3 = b0;
-    if OB > 1u {
-        b1 = weight_texel(bias_at + 1u);
-    }
-    if OB > 2u {
-        b2 = weight_texel(bias_at + 2u);
-        b3 = weight_texel(bias_at + 3u);
-    }
+    let b = texel_biases(bias_at);
+    let b0 = b.c0;
+    let b1 = b.c1;
+    let b2 = b.c2;
+    let b3 = b.c3;
     let third = OB > 2u && ob0 + 2u < params.cout4;
     let fourth = OB > 2u && ob0 + 3u < params.cout4;
     // Tile t's outputs at rows y0 + 2t, y0 + 2t + 1 (wino_store drops a row past the bottom).

@@ -39,6 +39,21 @@ fn weight_texel(i: u32) -> vec4<f32> {
     return textureLoad(weight_texels, vec2<u32>(i % WEIGHT_TEXELS_WIDTH, i / WEIGHT_TEXELS_WIDTH), 0);
 }
 
+// The OB biases of a Winograd lanes group from texel `at` on (block j in c<j>; the blocks past
+// OB repeat block 0's).
+fn texel_biases(at: u32) -> Quad {
+    let b0 = weight_texel(at);
+    var b = Quad(b0, b0, b0, b0);
+    if OB > 1u {
+        b.c1 = weight_texel(at + 1u);
+    }
+    if OB > 2u {
+        b.c2 = weight_texel(at + 2u);
+        b.c3 = weight_texel(at + 3u);
+    }
+    return b;
+}
+
 // Six vec4s along a row of a 6x6 tile (input row after d B, or a row of V or M).
 struct Hex {
     c0: vec4<f32>,
@@ -1184,17 +1199,11 @@ fn winograd4_lanes(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocati
     let third = OB > 2u && ob0 + 2u < params.cout4;
     let fourth = OB > 2u && ob0 + 3u < params.cout4;
     // Tile t's outputs at rows y0 + 4t .. y0 + 4t + 3 (wino4_store drops rows past the bottom).
-    let b0 = weight_texel(bias_at);
-    var b1 = b0;
-    var b2 = b0;
-    var b3 = b0;
-    if OB > 1u {
-        b1 = weight_texel(bias_at + 1u);
-    }
-    if OB > 2u {
-        b2 = weight_texel(bias_at + 2u);
-        b3 = weight_texel(bias_at + 3u);
-    }
+    let b = texel_biases(bias_at);
+    let b0 = b.c0;
+    let b1 = b.c1;
+    let b2 = b.c2;
+    let b3 = b.c3;
     wino4_store(m00, b0, x, y0, ob0);
     if second { wino4_store(m01, b1, x, y0, ob0 + 1u); }
     if third { wino4_store(m02, b2, x, y0, ob0 + 2u); }

@@ -1061,9 +1061,9 @@ impl Tile {
     /// ([`Method::Winograd4Lanes`]). It takes 144 multiply-adds per 16 outputs and input block
     /// where [`Tile::CPU_WINOGRAD`] takes 256, and 60 texel fetches per 32 outputs x 16 channels
     /// where that takes 40 per 16. On lavapipe (Zen 5, 512-bit vectors) the 256x256 frame's
-    /// convs on levels of 32 x 32 and more took 0.7-0.8x the time of [`Tile::CPU_WINOGRAD`]'s
-    /// and `lanes8x2w2`'s; on 16 x 16 levels, where a subgroup covers half its pixels, 1.3-1.8x
-    /// (docs/PERF.md, session 23). Its rounding is within the golden tolerance.
+    /// convs on levels of 32 x 32 and more took 0.6-0.9x the time of [`Tile::CPU_WINOGRAD`]'s
+    /// (storage weights) and `lanes8x2w2`'s; on 16 x 16 levels, where a subgroup covers half its
+    /// pixels, 1.3-1.7x (docs/PERF.md, session 23). Its rounding is within the golden tolerance.
     pub const CPU_WINOGRAD4: Tile = Tile { rows: 8, blocks: 4, cols: 4, group_x: WORKGROUP, method: Method::Winograd4Lanes, split: 1 };
 
     /// The tile of CPU drivers on `device`: [`Tile::CPU_LANES`] where the device has subgroups
