@@ -46,11 +46,20 @@ override SPLIT: u32 = 1u;
 // load lane-uniform only when its offset is a constant or push constant, so `tap` costs one
 // lane-by-lane gather per vec4; here a gather fetches 8 vec4s and each broadcast is a shuffle.
 override LANES: bool = false;
-// The conv's output is also written max-pooled 2x2 into `pooled` (two-column lanes tiles with an
-// even number of rows, unsplit: each invocation holds whole 2x2 windows; kernels::ConvPlan
-// decides). It replaces pool.wgsl's pass after an encoder block's last conv, whose four loads a
-// pooled texel and dispatch cost more on lavapipe than one more store here.
+// The conv's output may also be written max-pooled 2x2 into `pooled` (two-column lanes tiles with
+// an even number of rows, unsplit, and the Winograd lanes tiles: each invocation holds whole 2x2
+// windows; kernels::ConvPlan decides). It replaces pool.wgsl's pass after an encoder block's
+// last conv, whose four loads a pooled texel and dispatch cost more on lavapipe than one more
+// store here. POOL_OUT compiles the pooled store in, params.pool_out asks for it per conv (see
+// `pools`).
 override POOL_OUT: bool = false;
+
+// Whether this conv writes its pooled output: compiled in (POOL_OUT) and asked for
+// (params.pool_out). The tiles that can pool compile it in wherever they run, so a conv that
+// pools and one that does not share a pipeline (kernels::ConvVariant::pool).
+fn pools() -> bool {
+    return POOL_OUT && params.pool_out != 0u;
+}
 
 // Weights of group z, from w = z * group_stride: taps at w + ((in block * 9 + tap) * 4 + in lane)
 // * OB + j, a vec4 over the 4 output channels of block ob0 + z * OB + j; then the bias of block j
@@ -59,7 +68,7 @@ override POOL_OUT: bool = false;
 // Partial sums when SPLIT > 1: part p of output block l at ((p * cout4 + l) * height + y) * width
 // + x (kernels::ConvPlan sizes one buffer for its largest split conv; convs run one at a time).
 @group(0) @binding(5) var<storage, read_write> partial: array<vec4<f32>>;
-// POOL_OUT: the output max-pooled 2x2, at half the resolution (a 1x1 stand-in otherwise).
+// `pools`: the output max-pooled 2x2, at half the resolution (a 1x1 stand-in otherwise).
 @group(0) @binding(6) var pooled: texture_storage_2d_array<rgba32float, write>;
 // The part of the input blocks this invocation sums (SPLIT > 1).
 var<private> part: u32;
@@ -246,7 +255,7 @@ fn accumulate(acc0: ptr<function, Tile>, acc1: ptr<function, Tile>, acc2: ptr<fu
 // has; kernels::Kernels::new swaps it (kernels::ROWS_STUB, the line below) for
 // conv3x3_rows.wgsl's in the module that runs such tiles: that body is unrolled, and a front
 // end that inlines it before dropping the dead branch spends seconds on every pipeline.
-fn accumulate_rows(acc0: ptr<function, Tile>, acc1: ptr<function, Tile>, acc2: ptr<function, Tile>, acc3: ptr<function, Tile>, acc4: ptr<function, Tile>, acc5: ptr<function, Tile>, acc6: ptr<function, Tile>, acc7: ptr<function, Tile>, t: Source, mode: u32, layer: u32, cb: u32, w: u32, x: i32, y0: i32) {}
+fn accumulate_rows(acc0: ptr<function, Tile>, acc1: ptr<function, Tile>, acc2: ptr<function, Tile>, acc3: ptr<function, Tile>, acc4: ptr<function, Tile>, acc5: ptr<function, Tile>, acc6: ptr<function, Tile>, acc7: ptr<function, Tile>, cb: u32, w: u32, x: i32, y0: i32) {}
 
 // One output: activated into dst, or (SPLIT > 1) this part's raw sum into `partial`.
 fn put(x: u32, y: u32, layer: u32, v: vec4<f32>) {
@@ -278,7 +287,7 @@ fn store(acc: Tile, x: u32, y0: u32, layer: u32) {
     if ROWS > 15u && y0 + 15u < h { put(x, y0 + 15u, layer, acc.r15); }
 }
 
-// POOL_OUT: one block's two columns `a` and `b` of rows y0 .. y0 + ROWS at columns x, x + 1,
+// `pools`: one block's two columns `a` and `b` of rows y0 .. y0 + ROWS at columns x, x + 1,
 // max-pooled into `pooled` at (x / 2, y0 / 2 + k). The max is taken before the activation and the
 // clamp: both are non-decreasing, so it is pool.wgsl's max of the stored values (and rounding
 // to f16 at the store is too). x and y0 are even and levels have even sizes (a multiple of 32
@@ -379,19 +388,19 @@ fn conv(gid: vec3<u32>) {
     let per = (total + SPLIT - 1u) / SPLIT;
     let k0 = part * per;
     let k1 = min(k0 + per, total);
-    // Source a: input blocks 0 .. cin4_a; then source b: blocks cin4_a .. cin4_a + cin4_b.
-    for (var c = k0; c < min(k1, params.cin4_a); c++) {
-        if LANES && TW > 1u {
-            accumulate_rows(&acc0, &acc1, &acc2, &acc3, &acc4, &acc5, &acc6, &acc7, src_a, MODE_A, c, c, w, xi, yi);
-        } else {
+    // Source a: input blocks 0 .. cin4_a; then source b: blocks cin4_a .. cin4_a + cin4_b. The
+    // two-column lanes tiles take both in one loop (its body compiled once; `accumulate_rows`
+    // picks the window's source per block), the others in two.
+    if LANES && TW > 1u {
+        for (var c = k0; c < k1; c++) {
+            accumulate_rows(&acc0, &acc1, &acc2, &acc3, &acc4, &acc5, &acc6, &acc7, c, w, xi, yi);
+        }
+    } else {
+        for (var c = k0; c < min(k1, params.cin4_a); c++) {
             accumulate(&acc0, &acc1, &acc2, &acc3, src_a, MODE_A, c, c, w, xi, yi);
         }
-    }
-    if SOURCE_B {
-        for (var c = max(k0, params.cin4_a); c < k1; c++) {
-            if LANES && TW > 1u {
-                accumulate_rows(&acc0, &acc1, &acc2, &acc3, &acc4, &acc5, &acc6, &acc7, src_b, MODE_B, c - params.cin4_a, c, w, xi, yi);
-            } else {
+        if SOURCE_B {
+            for (var c = max(k0, params.cin4_a); c < k1; c++) {
                 accumulate(&acc0, &acc1, &acc2, &acc3, src_b, MODE_B, c - params.cin4_a, c, w, xi, yi);
             }
         }
@@ -419,7 +428,7 @@ fn conv(gid: vec3<u32>) {
                 if ob0 + 2u < params.cout4 { store(acc6, x + 1u, y0, ob0 + 2u); }
                 if ob0 + 3u < params.cout4 { store(acc7, x + 1u, y0, ob0 + 3u); }
             }
-            if POOL_OUT {
+            if pools() {
                 store_pooled(acc0, acc4, x, y0, ob0);
                 if second {
                     store_pooled(acc1, acc5, x, y0, ob0 + 1u);
@@ -556,7 +565,7 @@ fn wino_accumulate(m0: ptr<function, Wino>, m1: ptr<function, Wino>, m2: ptr<fun
 }
 
 // Y = A^T M A (A^T = [1 1 1 0; 0 1 -1 -1]) plus the bias, stored at (x .. x + 1, y0 .. y0 + 1)
-// where inside the output; with POOL_OUT (winograd_lanes only) also their max, activated, into
+// where inside the output; where it `pools` (winograd_lanes only) also their max, activated, into
 // `pooled` at (x / 2, y0 / 2), as `store_pooled` pools (x and y0 are even there, and levels have
 // even sizes, so a tile inside is a whole 2x2 window).
 fn wino_store(m: Wino, bias: vec4<f32>, x: u32, y0: u32, layer: u32) {
@@ -580,7 +589,7 @@ fn wino_store(m: Wino, bias: vec4<f32>, x: u32, y0: u32, layer: u32) {
         textureStore(dst, vec2<u32>(x, y0 + 1u), layer, activate(o10));
         if right { textureStore(dst, vec2<u32>(x + 1u, y0 + 1u), layer, activate(o11)); }
     }
-    if POOL_OUT {
+    if pools() {
         textureStore(pooled, vec2<u32>(x / 2u, y0 / 2u), layer, activate(max(max(o00, o01), max(o10, o11))));
     }
 }

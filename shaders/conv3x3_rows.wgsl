@@ -33,6 +33,29 @@ fn column(t: Source, mode: u32, x: i32, y0: i32, layer: u32) -> Column {
     return c;
 }
 
+// The 4 columns of an input window, x - 1 .. x + 2.
+struct Window4 {
+    k0: Column,
+    k1: Column,
+    k2: Column,
+    k3: Column,
+}
+
+// Input block `cb` of cat(a, b) in the window of columns x - 1 .. x + 2: source a's block cb, or
+// source b's block cb - cin4_a. The branch is uniform; it is the only part of a lanes step that
+// depends on the source, so the step's body is compiled once for both (conv_common.wgsl's
+// SOURCE_B).
+fn window4(cb: u32, x: i32, y0: i32) -> Window4 {
+    var k: Window4;
+    if !SOURCE_B || cb < params.cin4_a {
+        k = Window4(column(src_a, MODE_A, x - 1, y0, cb), column(src_a, MODE_A, x, y0, cb), column(src_a, MODE_A, x + 1, y0, cb), column(src_a, MODE_A, x + 2, y0, cb));
+    } else {
+        let l = cb - params.cin4_a;
+        k = Window4(column(src_b, MODE_B, x - 1, y0, l), column(src_b, MODE_B, x, y0, l), column(src_b, MODE_B, x + 1, y0, l), column(src_b, MODE_B, x + 2, y0, l));
+    }
+    return k;
+}
+
 // The nine taps of one output block, m<kx><ky>.
 struct Taps {
     m00: mat4x4<f32>, m01: mat4x4<f32>, m02: mat4x4<f32>,
@@ -161,7 +184,7 @@ fn taps_4_3(s: Spread) -> Taps {
     return Taps(lanes_4_3(s.a00, s.b00), lanes_4_3(s.a01, s.b01), lanes_4_3(s.a02, s.b02), lanes_4_3(s.a10, s.b10), lanes_4_3(s.a11, s.b11), lanes_4_3(s.a12, s.b12), lanes_4_3(s.a20, s.b20), lanes_4_3(s.a21, s.b21), lanes_4_3(s.a22, s.b22));
 }
 
-// Add input block `layer` of `t` at weight block `cb` to a two-column lanes tile (weights
+// Add input block `cb` of cat(a, b) (`window4`) to a two-column lanes tile (weights
 // across the subgroup) whose top-left output is (x, y0), two rows at a time: the input columns
 // x - 1 .. x + 2 are fetched first, then each pair of rows of each block takes all its
 // products in both columns in one pass (`rows2`), its accumulators loaded and stored once per
@@ -180,11 +203,12 @@ fn taps_4_3(s: Spread) -> Taps {
 // `accumulate`'s column loop but took 3x as long to compile cold; the column loop with two
 // rows at a time gained nothing. Two columns share each fetched column and weight twice, so a
 // 4- or 8-row tile is the fast shape, and a short tile keeps the compile near the loop's.
-fn accumulate_rows(acc0: ptr<function, Tile>, acc1: ptr<function, Tile>, acc2: ptr<function, Tile>, acc3: ptr<function, Tile>, acc4: ptr<function, Tile>, acc5: ptr<function, Tile>, acc6: ptr<function, Tile>, acc7: ptr<function, Tile>, t: Source, mode: u32, layer: u32, cb: u32, w: u32, x: i32, y0: i32) {
-    let k0 = column(t, mode, x - 1, y0, layer);
-    let k1 = column(t, mode, x, y0, layer);
-    let k2 = column(t, mode, x + 1, y0, layer);
-    let k3 = column(t, mode, x + 2, y0, layer);
+fn accumulate_rows(acc0: ptr<function, Tile>, acc1: ptr<function, Tile>, acc2: ptr<function, Tile>, acc3: ptr<function, Tile>, acc4: ptr<function, Tile>, acc5: ptr<function, Tile>, acc6: ptr<function, Tile>, acc7: ptr<function, Tile>, cb: u32, w: u32, x: i32, y0: i32) {
+    let k = window4(cb, x, y0);
+    let k0 = k.k0;
+    let k1 = k.k1;
+    let k2 = k.k2;
+    let k3 = k.k3;
     let s = spread(w + cb * 36u * OB);
     // Column 0 from input columns 0..2, column 1 from 1..3, block by block, both columns in
     // one pass (TW is 2 wherever this runs).

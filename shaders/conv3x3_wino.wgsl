@@ -100,17 +100,18 @@ fn wino_row_of(d0: vec4<f32>, d1: vec4<f32>, d2: vec4<f32>, d3: vec4<f32>) -> Qu
     return Quad(d0 - d2, d1 + d2, d2 - d1, d1 - d3);
 }
 
-// Add input block `layer` of `t` at weight block `cb` to the transformed tiles m<t><j> (tile t
+// Add input block `cb` of cat(a, b) (conv3x3_rows.wgsl's `window4`) to the transformed tiles m<t><j> (tile t
 // from the top, output block j) whose top-left output is (x, y0): the window's columns are
 // fetched once, each of its rows transformed once, and each position's weights, taken from the
 // lanes once, go to every tile before the next position's. The body is one unrolled basic
 // block per (OB, ROWS), the overrides dropping the others: 4 x 4 x 16 products of a 4x4 and a
 // vec4 at most (the 16 transformed tiles, 1,024 vec4s, stay in the stack between blocks).
-fn wino_step(m00: ptr<function, Wino>, m01: ptr<function, Wino>, m02: ptr<function, Wino>, m03: ptr<function, Wino>, m10: ptr<function, Wino>, m11: ptr<function, Wino>, m12: ptr<function, Wino>, m13: ptr<function, Wino>, m20: ptr<function, Wino>, m21: ptr<function, Wino>, m22: ptr<function, Wino>, m23: ptr<function, Wino>, m30: ptr<function, Wino>, m31: ptr<function, Wino>, m32: ptr<function, Wino>, m33: ptr<function, Wino>, t: Source, mode: u32, layer: u32, cb: u32, w: u32, x: i32, y0: i32) {
-    let k0 = column(t, mode, x - 1, y0, layer);
-    let k1 = column(t, mode, x, y0, layer);
-    let k2 = column(t, mode, x + 1, y0, layer);
-    let k3 = column(t, mode, x + 2, y0, layer);
+fn wino_step(m00: ptr<function, Wino>, m01: ptr<function, Wino>, m02: ptr<function, Wino>, m03: ptr<function, Wino>, m10: ptr<function, Wino>, m11: ptr<function, Wino>, m12: ptr<function, Wino>, m13: ptr<function, Wino>, m20: ptr<function, Wino>, m21: ptr<function, Wino>, m22: ptr<function, Wino>, m23: ptr<function, Wino>, m30: ptr<function, Wino>, m31: ptr<function, Wino>, m32: ptr<function, Wino>, m33: ptr<function, Wino>, cb: u32, w: u32, x: i32, y0: i32) {
+    let k = window4(cb, x, y0);
+    let k0 = k.k0;
+    let k1 = k.k1;
+    let k2 = k.k2;
+    let k3 = k.k3;
     let e0 = wino_row_of(k0.v0, k1.v0, k2.v0, k3.v0);
     let e1 = wino_row_of(k0.v1, k1.v1, k2.v1, k3.v1);
     let e2 = wino_row_of(k0.v2, k1.v2, k2.v2, k3.v2);
@@ -510,13 +511,10 @@ fn winograd_lanes(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocatio
     var m33 = m00;
     let xi = i32(x);
     let yi = i32(y0);
-    for (var c = 0u; c < params.cin4_a; c++) {
-        wino_step(&m00, &m01, &m02, &m03, &m10, &m11, &m12, &m13, &m20, &m21, &m22, &m23, &m30, &m31, &m32, &m33, src_a, MODE_A, c, c, w, xi, yi);
-    }
-    if SOURCE_B {
-        for (var c = 0u; c < params.cin4_b; c++) {
-            wino_step(&m00, &m01, &m02, &m03, &m10, &m11, &m12, &m13, &m20, &m21, &m22, &m23, &m30, &m31, &m32, &m33, src_b, MODE_B, c, params.cin4_a + c, w, xi, yi);
-        }
+    // Source a's blocks, then b's, in one loop (none of b on a reset frame's hidden state).
+    let blocks = params.cin4_a + select(0u, params.cin4_b, SOURCE_B);
+    for (var c = 0u; c < blocks; c++) {
+        wino_step(&m00, &m01, &m02, &m03, &m10, &m11, &m12, &m13, &m20, &m21, &m22, &m23, &m30, &m31, &m32, &m33, c, w, xi, yi);
     }
     if !inside {
         return;

@@ -111,7 +111,7 @@ fn hex_a(m0: vec4<f32>, m1: vec4<f32>, m2: vec4<f32>, m3: vec4<f32>, m4: vec4<f3
 }
 
 // Y = A^T M A plus the bias, stored at (x .. x + 3, y0 .. y0 + 3) where inside the output; with
-// POOL_OUT also the max of each 2x2 window, activated, into `pooled` at (x / 2 .. x / 2 + 1,
+// `pools` also the max of each 2x2 window, activated, into `pooled` at (x / 2 .. x / 2 + 1,
 // y0 / 2 .. y0 / 2 + 1), as `store_pooled` pools (x and y0 are multiples of 4, and levels have
 // even sizes, so a window is whole once its top-left pixel is inside).
 fn wino4_store(m: Wino6, bias: vec4<f32>, x: u32, y0: u32, layer: u32) {
@@ -132,7 +132,7 @@ fn wino4_store(m: Wino6, bias: vec4<f32>, x: u32, y0: u32, layer: u32) {
     if y0 + 1u < h { wino4_row(x, y0 + 1u, layer, bias + o0.c1, bias + o1.c1, bias + o2.c1, bias + o3.c1); }
     if y0 + 2u < h { wino4_row(x, y0 + 2u, layer, bias + o0.c2, bias + o1.c2, bias + o2.c2, bias + o3.c2); }
     if y0 + 3u < h { wino4_row(x, y0 + 3u, layer, bias + o0.c3, bias + o1.c3, bias + o2.c3, bias + o3.c3); }
-    if POOL_OUT {
+    if pools() {
         let p = vec2<u32>(x / 2u, y0 / 2u);
         let right = x + 2u < params.width;
         textureStore(pooled, p, layer, activate(bias + max(max(o0.c0, o1.c0), max(o0.c1, o1.c1))));

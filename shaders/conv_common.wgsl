@@ -14,7 +14,9 @@ override LEAKY: bool = true;
 // The conv reads a source b (a concatenation). Half the convs read one source: without the
 // second input-block loop their kernels carry half the multiply-add code, which lavapipe
 // compiles with LLVM at the first dispatch (the sample's cold first frame 0.84x of the time
-// with the loop everywhere); run time is unchanged (docs/PERF.md, session 8).
+// with the loop everywhere; docs/PERF.md, session 8). The lanes kernels run one loop over
+// cat(a, b) and choose only the window's source per block; there SOURCE_B drops that choice
+// (one-source convs sharing the two-source pipelines made frames 1.04x as long, session 24).
 override SOURCE_B: bool = true;
 // Largest magnitude stored: f32::MAX for f32 activations, 65504 for f16 (no infinities).
 override STORE_MAX: f32 = 3.4028234e38;
@@ -31,6 +33,7 @@ struct Params {
     slope: f32,       // LeakyReLU negative slope
     group_stride: u32,// vec4s from one group's weights to the next (group z at z * group_stride)
     weight_texel: u32,// winograd_lanes, winograd4_lanes: the weight texel of group z = 0 (conv3x3_wino4.wgsl)
+    pool_out: u32,    // 1: the conv writes its output max-pooled too (conv3x3.wgsl's `pools`)
 }
 
 // The conv's bindings but its weights (binding 3, declared by each kernel).

@@ -799,6 +799,32 @@ fn plans_make_each_pipeline_once() {
 }
 
 #[test]
+fn convs_that_pool_share_the_pipeline_of_those_that_do_not() {
+    // A tile that can pool its output has the pooled store in every conv's pipeline, and each
+    // conv's parameters ask for it or not: a pooling conv and a plain one of the same shape make
+    // one pipeline. (Each then gives the CPU's output: the sweeps above run plain convs on these
+    // tiles, whose pooled binding is their own output, so a stray pooled store would show.)
+    let g = gpu();
+    let tiles = [Tile::CPU_LANES, Tile::CPU_WINOGRAD, Tile::CPU_WINOGRAD4];
+    let (weight, bias) = (noise(8 * 8 * 9, 960), noise(8, 961));
+    for tile in tiles {
+        let supported = match tile.method {
+            kernels::Method::Lanes => kernels::lanes_supported(&g.device),
+            _ => kernels::winograd_lanes_supported(&g.device),
+        };
+        if !supported {
+            continue;
+        }
+        let mut kernels = Kernels::new(&g.device, kernels::Precision::F32, WeightMemory::Storage);
+        let plain = one_source_spec("plain", 32, 32, 8, &weight, &bias);
+        let pooled = ConvSpec { name: "pooled", pooled: true, ..one_source_spec("pooled", 32, 32, 8, &weight, &bias) };
+        let plan = ConvPlan::new(&g.device, &g.queue, &mut kernels, &[pooled, plain], &[tile]).unwrap();
+        assert!(plan.pools(0) && !plan.pools(1), "{tile}: the first conv pools, the second does not");
+        assert_eq!(kernels.conv_pipelines(), 1, "{tile}: one pipeline for both");
+    }
+}
+
+#[test]
 fn winograd_weight_transform_reproduces_the_direct_convolution() {
     // G g G^T on the host: for a 4x4 input patch d, A^T [(G g G^T) * (B^T d B)] A
     // equals the 2x2 direct correlation of d with g.

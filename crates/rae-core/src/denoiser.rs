@@ -365,7 +365,6 @@ impl Denoiser {
         let (assign, slots) = graph.allocate_temps();
         let slot_views: Vec<wgpu::TextureView> = slots.iter().map(|&(level, c)| make("temp", level, c).1).collect();
         let pooled_views: Vec<wgpu::TextureView> = graph.pools.iter().map(|p| make("pooled", p.level, p.channels).1).collect();
-        let (_, dummy_view) = texture(device, "unused source", 1, 1, 1, format);
         let view = |v: Value, parity: usize| -> &wgpu::TextureView {
             match v {
                 Value::Input => &input_view,
@@ -419,7 +418,7 @@ impl Denoiser {
             .enumerate()
             .map(|(i, n)| NodeViews {
                 a: view(n.a.value, 0).clone(),
-                b: n.b.map_or(&dummy_view, |b| view(b.value, 0)).clone(),
+                b: view(n.b.map_or(n.a.value, |b| b.value), 0).clone(),
                 out: view(n.out, 0).clone(),
                 pooled: pooled_by(i).cloned(),
             })
@@ -487,7 +486,8 @@ impl Denoiser {
                 .iter()
                 .enumerate()
                 .map(|(i, node)| {
-                    let src_b = node.b.map_or(&dummy_view, |b| view(b.value, parity));
+                    // A one-source conv binds its source a as b too (never read: its cin4_b is 0).
+                    let src_b = view(node.b.map_or(node.a.value, |b| b.value), parity);
                     convs.bind_group(device, &kernels, i, view(node.a.value, parity), src_b, view(node.out, parity), pooled_by(i))
                 })
                 .collect()

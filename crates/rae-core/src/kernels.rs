@@ -183,7 +183,7 @@ pub const STORAGE_SOURCES: [(&str, &str); 2] = [
 /// conv3x3.wgsl's empty `accumulate_rows`, which the conv module that runs two-column lanes
 /// tiles has replaced by conv3x3_rows.wgsl (and no other module: its unrolled body costs the
 /// driver's front end seconds per pipeline even where no call reaches it).
-pub const ROWS_STUB: &str = "fn accumulate_rows(acc0: ptr<function, Tile>, acc1: ptr<function, Tile>, acc2: ptr<function, Tile>, acc3: ptr<function, Tile>, acc4: ptr<function, Tile>, acc5: ptr<function, Tile>, acc6: ptr<function, Tile>, acc7: ptr<function, Tile>, t: Source, mode: u32, layer: u32, cb: u32, w: u32, x: i32, y0: i32) {}";
+pub const ROWS_STUB: &str = "fn accumulate_rows(acc0: ptr<function, Tile>, acc1: ptr<function, Tile>, acc2: ptr<function, Tile>, acc3: ptr<function, Tile>, acc4: ptr<function, Tile>, acc5: ptr<function, Tile>, acc6: ptr<function, Tile>, acc7: ptr<function, Tile>, cb: u32, w: u32, x: i32, y0: i32) {}";
 
 /// The rewrite of conv3x3_wino4.wgsl where the sources are read-only storage textures: its
 /// weight texture is read as one too (rgba32float whatever the activations' precision).
@@ -342,8 +342,11 @@ pub struct ConvParams {
     /// Winograd lanes tiles ([`Method::is_winograd_lanes`]): the weight-texture texel where the
     /// dispatch's first group's chunk starts (0 for the others, which bind their chunk by offset).
     pub weight_texel: u32,
+    /// 1 where the conv writes its output max-pooled too (conv3x3.wgsl's `pools`, where its
+    /// pipeline has the pooled store: [`ConvVariant::pool`]); 0 else.
+    pub pool_out: u32,
     /// Padding to the uniform's 16-byte size.
-    pub _pad: [u32; 2],
+    pub _pad: u32,
 }
 
 /// Uniform block of prep.wgsl: the sizes (the model's layout is [`PrepLayout`], overrides).
@@ -510,7 +513,7 @@ pub struct ConvVariant {
     pub read_a: Read,
     /// Read mode of source b (Direct when there is none).
     pub read_b: Read,
-    /// The conv has a source b (a one-source kernel compiles without its loop).
+    /// The conv has a source b (a one-source kernel compiles without its fetches).
     pub source_b: bool,
     /// LeakyReLU or linear.
     pub leaky: bool,
@@ -530,8 +533,16 @@ pub struct ConvVariant {
     pub reduce: bool,
     /// How the conv reads its sources (the module and bind-group layout it is made with).
     pub sources: SourceAccess,
-    /// The conv also writes its output max-pooled 2x2 (conv3x3.wgsl's POOL_OUT;
-    /// [`ConvPlan::pools`]).
+    /// The pipeline has the pooled store (conv3x3.wgsl's POOL_OUT): every conv whose tile can
+    /// pool its output, whether it does is its parameters' `pool_out` ([`ConvPlan::pools`]).
+    ///
+    /// So a conv that pools and one that does not share a pipeline. Lavapipe compiles a
+    /// pipeline with LLVM at its first dispatch, once per pipeline and static state of the
+    /// textures bound (format, array or not, power-of-two sizes; a conv that does not pool binds
+    /// its output at the pooled binding for that, [`ConvPlan::bind_group`]): 6 to 7 s for an
+    /// F(4x4) one on this project's machine. The sample's first frame into an empty shader cache
+    /// compiles 11 conv pipelines instead of 14 (docs/PERF.md, session 24); the pooled store
+    /// costs a uniform branch per store where it is not taken.
     pub pool: bool,
     /// Where it reads its weights (the module and bind-group layout it is made with; Mma tiles
     /// read storage weights).
@@ -1489,7 +1500,7 @@ struct Group {
 
 /// Append a dispatch's two parameter blocks (normal frame, then reset frame, whose recurrent
 /// conv reads no hidden-state blocks), each at an `align`-byte offset; returns the offsets.
-fn push_params(params: &mut Vec<u8>, align: usize, s: &ConvSpec, ob0: u32, group_stride: u32, weight_texel: u32) -> [u32; 2] {
+fn push_params(params: &mut Vec<u8>, align: usize, s: &ConvSpec, ob0: u32, group_stride: u32, weight_texel: u32, pool: bool) -> [u32; 2] {
     let (cin4_a, cin4_b) = (blocks(s.ca), blocks(s.cb));
     std::array::from_fn(|reset| {
         let p = ConvParams {
@@ -1503,7 +1514,8 @@ fn push_params(params: &mut Vec<u8>, align: usize, s: &ConvSpec, ob0: u32, group
             slope: s.slope,
             group_stride,
             weight_texel,
-            _pad: [0; 2],
+            pool_out: pool as u32,
+            _pad: 0,
         };
         params.resize(params.len().next_multiple_of(align), 0);
         let at = params.len() as u32;
@@ -1537,8 +1549,6 @@ pub struct ConvPlan {
     weights: wgpu::Buffer,
     /// Split-K's partial sums (16 bytes when no conv is split).
     partial: wgpu::Buffer,
-    /// What binding 6 (the pooled output) holds for convs that do not pool: 1 x 1 x 1.
-    no_pooled: wgpu::TextureView,
     /// Binding 7: the weights of Winograd lanes convs ([`Method::is_winograd_lanes`]),
     /// [`WEIGHT_TEXELS_WIDTH`] texels a row (1 x 1 where the plan has none).
     weight_texels: wgpu::TextureView,
@@ -1663,7 +1673,7 @@ impl ConvPlan {
                 let group_count = tiles16.div_ceil(nt);
                 binding = binding.max(group_count as u64 * stride as u64 * 2);
                 let mut group = Group { params: [0; 2], weights: 0, count: group_count };
-                group.params = push_params(&mut params, align, s, 0, stride, 0);
+                group.params = push_params(&mut params, align, s, 0, stride, 0, false);
                 weights.resize(weights.len().next_multiple_of(align), 0);
                 group.weights = weights.len() as u32;
                 for g in 0..group_count {
@@ -1689,7 +1699,7 @@ impl ConvPlan {
                 };
                 // Workgroups of 4 rows (conv3x3_mma.wgsl's ROWS) x 64 or 32 pixels (16 MT).
                 let pixels = if split { MMA_SPLIT_PIXELS } else { MMA_PIXELS };
-                pending.push((variant, (s.width.div_ceil(pixels), s.height.div_ceil(4)), 1, vec![group], None));
+                pending.push((variant, false, (s.width.div_ceil(pixels), s.height.div_ceil(4)), 1, vec![group], None));
                 used.push(Tile { blocks: 4 * nt, ..tile });
                 continue;
             }
@@ -1725,9 +1735,11 @@ impl ConvPlan {
             let part_bytes = cout4 as u64 * s.width as u64 * s.height as u64 * 16;
             let split = if !tile.method.is_winograd() { tile.split.min(cin4).min((partial_budget / part_bytes) as u32).max(1) } else { 1 };
             let used_tile = Tile { rows, blocks: ob, cols, group_x: tile.group_x, method: tile.method, split };
-            // The conv pools its own output where each invocation holds whole 2x2 windows.
-            let pool = s.pooled
-                && ((tile.method == Method::Lanes && cols == 2 && rows.is_multiple_of(2) && split == 1) || tile.method.is_winograd_lanes());
+            // The conv pools its own output where each invocation holds whole 2x2 windows (its
+            // pipeline has the pooled store wherever it can, ConvVariant::pool).
+            let can_pool =
+                (tile.method == Method::Lanes && cols == 2 && rows.is_multiple_of(2) && split == 1) || tile.method.is_winograd_lanes();
+            let pool = s.pooled && can_pool;
             let variant = ConvVariant {
                 read_a: s.read_a,
                 read_b: s.read_b,
@@ -1741,7 +1753,7 @@ impl ConvPlan {
                 split,
                 reduce: false,
                 sources: access,
-                pool,
+                pool: can_pool,
                 memory,
             };
             // Split-K's partial sums: one buffer for the largest split conv, which every split
@@ -1764,7 +1776,7 @@ impl ConvPlan {
             for first in (0..group_count).step_by(per_dispatch as usize) {
                 let count = per_dispatch.min(group_count - first);
                 let mut group = Group { params: [0; 2], weights: 0, count };
-                group.params = push_params(&mut params, align, s, first * ob, stride, weight_texels.len() as u32);
+                group.params = push_params(&mut params, align, s, first * ob, stride, weight_texels.len() as u32, pool);
                 if !texels {
                     weights.resize(weights.len().next_multiple_of(align), 0);
                     group.weights = weights.len() as u32;
@@ -1797,6 +1809,7 @@ impl ConvPlan {
             let reduce = (split > 1).then_some((reduce_variant, [s.width.div_ceil(8), s.height.div_ceil(8), cout4]));
             pending.push((
                 variant,
+                pool,
                 (s.width.div_ceil(cols).div_ceil(tile.group_x), s.height.div_ceil(rows).div_ceil(tile.group_y())),
                 split,
                 groups,
@@ -1805,15 +1818,15 @@ impl ConvPlan {
             used.push(used_tile);
         }
         // Every pipeline the plan needs, made side by side, then the convs' dispatches.
-        let variants: Vec<ConvVariant> = pending.iter().flat_map(|p| std::iter::once(p.0).chain(p.4.map(|r| r.0))).collect();
+        let variants: Vec<ConvVariant> = pending.iter().flat_map(|p| std::iter::once(p.0).chain(p.5.map(|r| r.0))).collect();
         kernels.prepare(device, &variants);
         let convs: Vec<Planned> = pending
             .into_iter()
-            .map(|(variant, workgroups, split, groups, reduce)| Planned {
+            .map(|(variant, pool, workgroups, split, groups, reduce)| Planned {
                 pipeline: kernels.conv(device, variant),
                 sources: variant.sources,
                 memory: variant.memory,
-                pool: variant.pool,
+                pool,
                 workgroups,
                 split,
                 groups,
@@ -1877,18 +1890,6 @@ impl ConvPlan {
                 usage: wgpu::BufferUsages::STORAGE,
                 mapped_at_creation: false,
             }),
-            no_pooled: device
-                .create_texture(&wgpu::TextureDescriptor {
-                    label: Some("no pooled output"),
-                    size: wgpu::Extent3d { width: 1, height: 1, depth_or_array_layers: 1 },
-                    mip_level_count: 1,
-                    sample_count: 1,
-                    dimension: wgpu::TextureDimension::D2,
-                    format: kernels.precision.format(),
-                    usage: wgpu::TextureUsages::STORAGE_BINDING,
-                    view_formats: &[],
-                })
-                .create_view(&wgpu::TextureViewDescriptor { dimension: Some(wgpu::TextureViewDimension::D2Array), ..Default::default() }),
             weight_binding,
             sources: convs.iter().map(|c| c.sources).collect(),
             memories: convs.iter().map(|c| c.memory).collect(),
@@ -1944,10 +1945,13 @@ impl ConvPlan {
         dst: &wgpu::TextureView,
         pooled: Option<&wgpu::TextureView>,
     ) -> wgpu::BindGroup {
+        // A conv that does not pool binds its output at binding 6 too (never written there: its
+        // `pools` is false), so its pipeline's textures have the static state of a pooling
+        // conv's and lavapipe compiles the pipeline once for both ([`ConvVariant::pool`]).
         let pooled = if self.pools(i) {
             pooled.unwrap_or_else(|| panic!("conv {i} pools its output: its bind group needs the pooled value"))
         } else {
-            &self.no_pooled
+            dst
         };
         let buffer =
             |buffer, size| wgpu::BindingResource::Buffer(wgpu::BufferBinding { buffer, offset: 0, size: wgpu::BufferSize::new(size) });
