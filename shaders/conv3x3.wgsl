@@ -68,7 +68,8 @@ fn pools() -> bool {
 // Partial sums when SPLIT > 1: part p of output block l at ((p * cout4 + l) * height + y) * width
 // + x (kernels::ConvPlan sizes one buffer for its largest split conv; convs run one at a time).
 @group(0) @binding(5) var<storage, read_write> partial: array<vec4<f32>>;
-// `pools`: the output max-pooled 2x2, at half the resolution (a 1x1 stand-in otherwise).
+// `pools`: the output max-pooled 2x2, at half the resolution (else the conv's own output, never
+// written here: kernels::ConvPlan::bind_group).
 @group(0) @binding(6) var pooled: texture_storage_2d_array<rgba32float, write>;
 // The part of the input blocks this invocation sums (SPLIT > 1).
 var<private> part: u32;

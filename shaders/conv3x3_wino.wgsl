@@ -100,12 +100,13 @@ fn wino_row_of(d0: vec4<f32>, d1: vec4<f32>, d2: vec4<f32>, d3: vec4<f32>) -> Qu
     return Quad(d0 - d2, d1 + d2, d2 - d1, d1 - d3);
 }
 
-// Add input block `cb` of cat(a, b) (conv3x3_rows.wgsl's `window4`) to the transformed tiles m<t><j> (tile t
-// from the top, output block j) whose top-left output is (x, y0): the window's columns are
-// fetched once, each of its rows transformed once, and each position's weights, taken from the
-// lanes once, go to every tile before the next position's. The body is one unrolled basic
-// block per (OB, ROWS), the overrides dropping the others: 4 x 4 x 16 products of a 4x4 and a
-// vec4 at most (the 16 transformed tiles, 1,024 vec4s, stay in the stack between blocks).
+// Add input block `cb` of cat(a, b) (conv3x3_rows.wgsl's `window4`) to the transformed tiles
+// m<t><j> (tile t from the top, output block j) whose top-left output is (x, y0): the window's
+// columns are fetched once, each of its rows transformed once, and each position's weights,
+// taken from the lanes once, go to every tile before the next position's. The body is one
+// unrolled basic block per (OB, ROWS), the overrides dropping the others: 4 x 4 x 16 products
+// of a 4x4 and a vec4 at most (the 16 transformed tiles, 1,024 vec4s, stay in the stack between
+// blocks). One loop runs it over both sources' blocks, so LLVM compiles it once.
 fn wino_step(m00: ptr<function, Wino>, m01: ptr<function, Wino>, m02: ptr<function, Wino>, m03: ptr<function, Wino>, m10: ptr<function, Wino>, m11: ptr<function, Wino>, m12: ptr<function, Wino>, m13: ptr<function, Wino>, m20: ptr<function, Wino>, m21: ptr<function, Wino>, m22: ptr<function, Wino>, m23: ptr<function, Wino>, m30: ptr<function, Wino>, m31: ptr<function, Wino>, m32: ptr<function, Wino>, m33: ptr<function, Wino>, cb: u32, w: u32, x: i32, y0: i32) {
     let k = window4(cb, x, y0);
     let k0 = k.k0;

@@ -1918,10 +1918,11 @@ impl ConvPlan {
         self.params.size() + self.weights.size() + self.partial.size() + self.weight_texels_bytes
     }
 
-    /// Whether conv `i` writes its output max-pooled 2x2 too (conv3x3.wgsl's POOL_OUT), so that
-    /// the pool pass after it is not run: a conv whose [`ConvSpec::pooled`] is set, with a
-    /// two-column lanes tile of an even number of rows, unsplit (the CPU tile). Its bind group
-    /// takes the pooled value ([`ConvPlan::bind_group`]).
+    /// Whether conv `i` writes its output max-pooled 2x2 too (conv3x3.wgsl's `pools`), so that
+    /// the pool pass after it is not run: a conv whose [`ConvSpec::pooled`] is set, with a tile
+    /// that can pool ([`ConvVariant::pool`]: two-column lanes tiles of an even number of rows,
+    /// unsplit, and the Winograd lanes tiles). Its bind group takes the pooled value
+    /// ([`ConvPlan::bind_group`]).
     pub fn pools(&self, i: usize) -> bool {
         self.convs[i].pool
     }
@@ -1932,8 +1933,9 @@ impl ConvPlan {
     }
 
     /// A bind group of conv `i` over the given textures (offsets are supplied per dispatch), in
-    /// the layout of its source access and weight memory. `pooled` is the value its output max-pools into, where
-    /// it has one; a conv that [pools](ConvPlan::pools) needs it.
+    /// the layout of its source access and weight memory. `pooled` is the value its output
+    /// max-pools into, where it has one; a conv that [pools](ConvPlan::pools) needs it, and one
+    /// that does not binds `dst` there instead.
     #[allow(clippy::too_many_arguments)]
     pub fn bind_group(
         &self,
