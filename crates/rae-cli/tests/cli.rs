@@ -6,6 +6,12 @@ fn rae() -> Command {
     Command::new(env!("CARGO_BIN_EXE_rae-cli"))
 }
 
+/// `bench`'s reference tile on lavapipe (rae-cli's `reference_tile`: `Tile::CPU_LANES` on CPU
+/// drivers with subgroups of 8 or more lanes, as lavapipe has with AVX2 or AVX-512). Its
+/// pipelines are compiled by every bench run for the error's reference frames, so tests that
+/// need a fixed tile take it and add no compiling (bench_interleave checks the name).
+const REFERENCE_TILE: &str = "lanes8x2w2";
+
 fn fixture(name: &str) -> String {
     format!("{}/../../tests/fixtures/{name}", env!("CARGO_MANIFEST_DIR"))
 }
@@ -97,10 +103,17 @@ fn per_buffer_sequence(dir: &Path, frames: u32) {
 
 /// `rae-cli denoise` on `input` with the fixture weights. Without the compile helper: the tests
 /// run two at a time on two cores, where a helper finds no idle core and only adds compiling
-/// (a_cold_first_frame_gets_a_compile_helper_and_the_same_frames tests it).
+/// (a_cold_first_frame_gets_a_compile_helper_and_the_same_frames tests it). With
+/// [`REFERENCE_TILE`] unless `extra` names a tile: these tests are about files, and `auto`'s
+/// F(4x4) pipelines, which per_buffer_sequence_is_denoised_with_error_report and the bench
+/// tests run, take tens of seconds each to compile; two tests that miss the shader cache at
+/// once both compile.
 fn denoise(input: &Path, extra: &[&str]) -> (bool, String, String) {
     let mut cmd = rae();
     cmd.arg("denoise").arg(input).args(["--weights", &fixture("weights_full.safetensors"), "--no-compile-helper"]).args(extra);
+    if !extra.contains(&"--tile") {
+        cmd.args(["--tile", REFERENCE_TILE]);
+    }
     let out = cmd.output().unwrap();
     (out.status.success(), String::from_utf8_lossy(&out.stdout).into(), String::from_utf8_lossy(&out.stderr).into())
 }
@@ -124,7 +137,7 @@ fn per_buffer_sequence_is_denoised_with_error_report() {
     let seq = seq_dir(&tmp);
     per_buffer_sequence(&seq, 3);
     let before = listing(&seq);
-    let (ok, out, err) = denoise(&seq, &["--png"]);
+    let (ok, out, err) = denoise(&seq, &["--png", "--tile", "auto"]);
     assert!(ok, "{out}{err}");
     assert!(out.contains("per-buffer files") && out.contains("relMSE") && out.contains("temporal error"), "{out}");
     let written = listing(&tmp.path().join("seq-denoised"));
@@ -137,7 +150,7 @@ fn per_buffer_sequence_is_denoised_with_error_report() {
     // A second run goes to a new folder beside the input; --csv writes one row per frame whose
     // errors are the ones printed.
     let csv = tmp.path().join("times.csv");
-    let (ok, out2, err) = denoise(&seq, &["--csv", csv.to_str().unwrap()]);
+    let (ok, out2, err) = denoise(&seq, &["--csv", csv.to_str().unwrap(), "--tile", "auto"]);
     assert!(ok, "{out2}{err}");
     assert!(tmp.path().join("seq-denoised-2/denoised_0002.exr").exists());
     let text = std::fs::read_to_string(&csv).unwrap();
@@ -169,7 +182,9 @@ fn a_cold_first_frame_gets_a_compile_helper_and_the_same_frames() {
     // Into an empty shader cache the first frame compiles for seconds (lavapipe compiles at a
     // pipeline's first dispatch), so a second device starts compiling from the other end and
     // says so; its dispatches must not touch the frames. A run without it, on the cache the
-    // first one filled, gives the same pixels.
+    // first one filled, gives the same pixels. One fixed tile, bench's reference tile on CPU
+    // drivers: into this test's own empty cache the test took 40 s with it and 103 s with
+    // `auto`, whose F(4x4) pipelines take tens of seconds each (docs/PERF.md, session 26).
     let tmp = tempfile::tempdir().unwrap();
     let seq = seq_dir(&tmp);
     per_buffer_sequence(&seq, 2);
@@ -179,7 +194,7 @@ fn a_cold_first_frame_gets_a_compile_helper_and_the_same_frames() {
             .env("MESA_SHADER_CACHE_DIR", &cache)
             .arg("denoise")
             .arg(&seq)
-            .args(["--weights", &fixture("weights_full.safetensors"), "-o"])
+            .args(["--weights", &fixture("weights_full.safetensors"), "--tile", REFERENCE_TILE, "-o"])
             .arg(tmp.path().join(out))
             .args(extra)
             .output()
@@ -385,7 +400,7 @@ fn weights_that_do_not_fit_are_an_error() {
     let out = rae()
         .arg("denoise")
         .arg(&seq)
-        .args(["--weights", &fixture("weights_color_tiny.safetensors"), "--no-compile-helper"])
+        .args(["--weights", &fixture("weights_color_tiny.safetensors"), "--no-compile-helper", "--tile", REFERENCE_TILE])
         .output()
         .unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
@@ -396,7 +411,7 @@ fn the_shipped_model_that_fits_is_chosen() {
     // The model with the most inputs among those whose buffers the sequence has.
     let tmp = tempfile::tempdir().unwrap();
     let chosen = |dir: &Path| -> String {
-        let out = rae().arg("denoise").arg(dir).arg("--no-compile-helper").output().unwrap();
+        let out = rae().arg("denoise").arg(dir).args(["--no-compile-helper", "--tile", REFERENCE_TILE]).output().unwrap();
         let text = String::from_utf8_lossy(&out.stdout).to_string();
         assert!(out.status.success(), "{text}{}", String::from_utf8_lossy(&out.stderr));
         text
@@ -499,31 +514,38 @@ fn bench_reports_each_combinations_error_and_skips_what_it_cannot_run() {
     // (with 16-lane subgroups) replaces by Winograd's on the 32-channel convs above 8x8, off
     // by Winograd's rounding; the matrix-unit kernel (emulated on lavapipe) rounds its operands
     // to f16, off by more, and its split tiles by far less; with uniform weights they cannot
-    // run, which is a row saying so, not a failed run.
-    let out = rae()
-        .args([
-            "bench",
-            &fixture("weights_full.safetensors"),
-            "--sizes",
-            "32x32",
-            "--frames",
-            "1",
-            "--precision",
-            "f32",
-            "--tile",
-            "auto,mma16,mma16x3",
-            "--weights-memory",
-            "storage,uniform",
-        ])
-        .output()
-        .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    let text = String::from_utf8(out.stdout).unwrap();
-    let header = text.lines().find(|l| l.trim_start().starts_with("size ")).expect("a header");
-    assert!(header.ends_with(" err"), "err is the last column: {header}");
-    let rows: Vec<Vec<&str>> =
-        text.lines().map(|l| l.split_whitespace().collect::<Vec<_>>()).filter(|f| f.first() == Some(&"32x32")).collect();
-    assert_eq!(rows.len(), 6, "{text}");
+    // run, which is a row saying so, not a failed run. The uniform rows come from a second run
+    // without `auto`: `auto` with uniform weights everywhere is a plan of its own to compile
+    // (about 30 s here) that tells nothing about the skipping.
+    let bench = |tiles: &str, memories: &str| {
+        let out = rae()
+            .args([
+                "bench",
+                &fixture("weights_full.safetensors"),
+                "--sizes",
+                "32x32",
+                "--frames",
+                "1",
+                "--precision",
+                "f32",
+                "--tile",
+                tiles,
+                "--weights-memory",
+                memories,
+            ])
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let text = String::from_utf8(out.stdout).unwrap();
+        let header = text.lines().find(|l| l.trim_start().starts_with("size ")).expect("a header");
+        assert!(header.ends_with(" err"), "err is the last column: {header}");
+        let rows: Vec<String> = text.lines().filter(|l| l.split_whitespace().next() == Some("32x32")).map(str::to_string).collect();
+        (text, rows)
+    };
+    let (text, rows) = bench("auto,mma16,mma16x3", "storage");
+    assert!(text.contains(&format!("with the {REFERENCE_TILE} tile")), "bench's reference tile is REFERENCE_TILE: {text}");
+    let rows: Vec<Vec<&str>> = rows.iter().map(|l| l.split_whitespace().collect()).collect();
+    assert_eq!(rows.len(), 3, "{text}");
     let value = |row: &[&str]| -> f64 { row.last().unwrap().parse().unwrap_or_else(|_| panic!("err of {row:?}")) };
     assert_eq!((rows[0][2], rows[0][3]), ("auto", "storage"), "{text}");
     assert!(value(&rows[0]) < 1e-5, "{text}");
@@ -531,16 +553,20 @@ fn bench_reports_each_combinations_error_and_skips_what_it_cannot_run() {
     assert!((1e-6..1e-2).contains(&value(&rows[1])), "{text}");
     assert_eq!((rows[2][2], rows[2][3]), ("mma16x3", "storage"), "{text}");
     assert!(value(&rows[2]) < value(&rows[1]) / 10.0, "split operands: {text}");
-    assert_eq!(rows[3][2], "auto", "{text}");
-    for row in &rows[4..] {
-        assert!(row[2].starts_with("mma16") && row.contains(&"unsupported:") && row.join(" ").contains("storage buffer"), "{text}");
+    let (text, rows) = bench("mma16,mma16x3", "uniform");
+    assert_eq!(rows.len(), 2, "{text}");
+    for row in &rows {
+        let f: Vec<&str> = row.split_whitespace().collect();
+        assert!(f[2].starts_with("mma16") && f[3] == "uniform" && f.contains(&"unsupported:") && row.contains("storage buffer"), "{text}");
     }
 }
 
 #[test]
 fn bench_interleave_prints_a_row_per_combination_against_the_first() {
-    // Three combinations timed round-robin, the first its own reference (the CPU tile under
-    // two names: lavapipe compiles each distinct pipeline for seconds).
+    // Three combinations timed round-robin, the first its own reference: bench's reference
+    // tile twice, whose pipelines the other bench runs compile for their error's reference
+    // frames, and the 2x1 tile bench_times_sampled_and_storage_sources compiles (lavapipe
+    // compiles each distinct pipeline for seconds, `auto`'s F(4x4) ones for tens).
     let out = rae()
         .args([
             "bench",
@@ -552,7 +578,7 @@ fn bench_interleave_prints_a_row_per_combination_against_the_first() {
             "--precision",
             "f32",
             "--tile",
-            "16x4,auto,16x4",
+            &format!("{REFERENCE_TILE},2x1,{REFERENCE_TILE}"),
             "--interleave",
         ])
         .output()
@@ -561,7 +587,7 @@ fn bench_interleave_prints_a_row_per_combination_against_the_first() {
     let text = String::from_utf8(out.stdout).unwrap();
     let rows: Vec<Vec<&str>> =
         text.lines().map(|l| l.split_whitespace().collect::<Vec<_>>()).filter(|f| f.first() == Some(&"32x32")).collect();
-    assert_eq!(rows.iter().map(|f| f[2]).collect::<Vec<_>>(), ["16x4", "auto", "16x4"], "{text}");
+    assert_eq!(rows.iter().map(|f| f[2]).collect::<Vec<_>>(), [REFERENCE_TILE, "2x1", REFERENCE_TILE], "{text}");
     assert_eq!(rows[0][7], "1.000", "{text}");
     for f in &rows {
         let (median, fastest, ratio): (f64, f64, f64) = (f[5].parse().unwrap(), f[6].parse().unwrap(), f[7].parse().unwrap());
