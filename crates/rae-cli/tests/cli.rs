@@ -9,7 +9,7 @@ fn rae() -> Command {
 /// `bench`'s reference tile on lavapipe (rae-cli's `reference_tile`: `Tile::CPU_LANES` on CPU
 /// drivers with subgroups of 8 or more lanes, as lavapipe has with AVX2 or AVX-512). Its
 /// pipelines are compiled by every bench run for the error's reference frames, so tests that
-/// need a fixed tile take it and add no compiling (bench_interleave checks the name).
+/// need a fixed tile take it and add no compiling (bench_reports checks the name).
 const REFERENCE_TILE: &str = "lanes8x2w2";
 
 fn fixture(name: &str) -> String {
@@ -106,7 +106,7 @@ fn per_buffer_sequence(dir: &Path, frames: u32) {
 /// (a_cold_first_frame_gets_a_compile_helper_and_the_same_frames tests it). With
 /// [`REFERENCE_TILE`] unless `extra` names a tile: these tests are about files, and `auto`'s
 /// F(4x4) pipelines, which per_buffer_sequence_is_denoised_with_error_report and the bench
-/// tests run, take tens of seconds each to compile; two tests that miss the shader cache at
+/// tests run, take 10-20 s each to compile; two tests that miss the shader cache at
 /// once both compile.
 fn denoise(input: &Path, extra: &[&str]) -> (bool, String, String) {
     let mut cmd = rae();
@@ -183,8 +183,8 @@ fn a_cold_first_frame_gets_a_compile_helper_and_the_same_frames() {
     // pipeline's first dispatch), so a second device starts compiling from the other end and
     // says so; its dispatches must not touch the frames. A run without it, on the cache the
     // first one filled, gives the same pixels. One fixed tile, bench's reference tile on CPU
-    // drivers: into this test's own empty cache the test took 40 s with it and 103 s with
-    // `auto`, whose F(4x4) pipelines take tens of seconds each (docs/PERF.md, session 26).
+    // drivers: into this test's own empty cache the test took 39 s with it and 103 s with
+    // `auto`, whose F(4x4) pipelines take 10-20 s each (docs/PERF.md, session 26).
     let tmp = tempfile::tempdir().unwrap();
     let seq = seq_dir(&tmp);
     per_buffer_sequence(&seq, 2);
@@ -516,7 +516,7 @@ fn bench_reports_each_combinations_error_and_skips_what_it_cannot_run() {
     // to f16, off by more, and its split tiles by far less; with uniform weights they cannot
     // run, which is a row saying so, not a failed run. The uniform rows come from a second run
     // without `auto`: `auto` with uniform weights everywhere is a plan of its own to compile
-    // (about 30 s here) that tells nothing about the skipping.
+    // (31 s of compiling here) that tells nothing about the skipping.
     let bench = |tiles: &str, memories: &str| {
         let out = rae()
             .args([
@@ -566,7 +566,7 @@ fn bench_interleave_prints_a_row_per_combination_against_the_first() {
     // Three combinations timed round-robin, the first its own reference: bench's reference
     // tile twice, whose pipelines the other bench runs compile for their error's reference
     // frames, and the 2x1 tile bench_times_sampled_and_storage_sources compiles (lavapipe
-    // compiles each distinct pipeline for seconds, `auto`'s F(4x4) ones for tens).
+    // compiles each distinct pipeline for seconds, `auto`'s F(4x4) ones for 10-20).
     let out = rae()
         .args([
             "bench",
