@@ -475,29 +475,23 @@ fn bench_and_info_refuse_a_bad_size_before_opening_a_device() {
     }
 }
 
+/// `rae-cli bench` of the full fixture network at 32x32 in f32 with `frames` timed frames and
+/// `extra` arguments: its table, after asserting that it ran.
+fn bench_32x32(frames: &str, extra: &[&str]) -> String {
+    let out = rae()
+        .args(["bench", &fixture("weights_full.safetensors"), "--sizes", "32x32", "--frames", frames, "--precision", "f32"])
+        .args(extra)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    String::from_utf8(out.stdout).unwrap()
+}
+
 #[test]
 fn bench_times_sampled_and_storage_sources() {
     // The sources column says what each denoiser was built with; `auto` is storage textures on
     // lavapipe (sampled on GPUs). A small tile: each source kind is its own compile.
-    let out = rae()
-        .args([
-            "bench",
-            &fixture("weights_full.safetensors"),
-            "--sizes",
-            "32x32",
-            "--frames",
-            "1",
-            "--precision",
-            "f32",
-            "--tile",
-            "2x1",
-            "--sources",
-            "sampled,storage,auto",
-        ])
-        .output()
-        .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    let text = String::from_utf8(out.stdout).unwrap();
+    let text = bench_32x32("1", &["--tile", "2x1", "--sources", "sampled,storage,auto"]);
     let header: Vec<&str> = text.lines().find(|l| l.trim_start().starts_with("size ")).expect("a header").split_whitespace().collect();
     let col = header.iter().position(|&h| h == "sources").expect("a sources column");
     let rows: Vec<Vec<&str>> =
@@ -518,25 +512,7 @@ fn bench_reports_each_combinations_error_and_skips_what_it_cannot_run() {
     // without `auto`: `auto` with uniform weights everywhere is a plan of its own to compile
     // (31 s of compiling here) that tells nothing about the skipping.
     let bench = |tiles: &str, memories: &str| {
-        let out = rae()
-            .args([
-                "bench",
-                &fixture("weights_full.safetensors"),
-                "--sizes",
-                "32x32",
-                "--frames",
-                "1",
-                "--precision",
-                "f32",
-                "--tile",
-                tiles,
-                "--weights-memory",
-                memories,
-            ])
-            .output()
-            .unwrap();
-        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-        let text = String::from_utf8(out.stdout).unwrap();
+        let text = bench_32x32("1", &["--tile", tiles, "--weights-memory", memories]);
         let header = text.lines().find(|l| l.trim_start().starts_with("size ")).expect("a header");
         assert!(header.ends_with(" err"), "err is the last column: {header}");
         let rows: Vec<String> = text.lines().filter(|l| l.split_whitespace().next() == Some("32x32")).map(str::to_string).collect();
@@ -567,24 +543,7 @@ fn bench_interleave_prints_a_row_per_combination_against_the_first() {
     // tile twice, whose pipelines the other bench runs compile for their error's reference
     // frames, and the 2x1 tile bench_times_sampled_and_storage_sources compiles (lavapipe
     // compiles each distinct pipeline for seconds, `auto`'s F(4x4) ones for 10-20).
-    let out = rae()
-        .args([
-            "bench",
-            &fixture("weights_full.safetensors"),
-            "--sizes",
-            "32x32",
-            "--frames",
-            "2",
-            "--precision",
-            "f32",
-            "--tile",
-            &format!("{REFERENCE_TILE},2x1,{REFERENCE_TILE}"),
-            "--interleave",
-        ])
-        .output()
-        .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    let text = String::from_utf8(out.stdout).unwrap();
+    let text = bench_32x32("2", &["--tile", &format!("{REFERENCE_TILE},2x1,{REFERENCE_TILE}"), "--interleave"]);
     let rows: Vec<Vec<&str>> =
         text.lines().map(|l| l.split_whitespace().collect::<Vec<_>>()).filter(|f| f.first() == Some(&"32x32")).collect();
     assert_eq!(rows.iter().map(|f| f[2]).collect::<Vec<_>>(), [REFERENCE_TILE, "2x1", REFERENCE_TILE], "{text}");
