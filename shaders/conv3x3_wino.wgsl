@@ -103,10 +103,11 @@ fn wino_row_of(d0: vec4<f32>, d1: vec4<f32>, d2: vec4<f32>, d3: vec4<f32>) -> Qu
 // Add input block `cb` of cat(a, b) (conv3x3_rows.wgsl's `window4`) to the transformed tiles
 // m<t><j> (tile t from the top, output block j) whose top-left output is (x, y0): the window's
 // columns are fetched once, each of its rows transformed once, and each position's weights,
-// taken from the lanes once, go to every tile before the next position's. The body is one
-// unrolled basic block per (OB, ROWS), the overrides dropping the others: 4 x 4 x 16 products
-// of a 4x4 and a vec4 at most (the 16 transformed tiles, 1,024 vec4s, stay in the stack between
-// blocks). One loop runs it over both sources' blocks, so LLVM compiles it once.
+// taken from the lanes once, go to every tile before the next position's. The body is unrolled
+// per (OB, ROWS), the overrides dropping the others: 4 x 4 x 16 products of a 4x4 and a vec4 at
+// most (the 16 transformed tiles, 1,024 vec4s, stay in the stack between blocks), in two basic
+// blocks of two tile rows each (conv_common.wgsl's `once`: one block took 2.3x the compile
+// time). One loop runs it over both sources' blocks, so LLVM compiles it once.
 fn wino_step(m00: ptr<function, Wino>, m01: ptr<function, Wino>, m02: ptr<function, Wino>, m03: ptr<function, Wino>, m10: ptr<function, Wino>, m11: ptr<function, Wino>, m12: ptr<function, Wino>, m13: ptr<function, Wino>, m20: ptr<function, Wino>, m21: ptr<function, Wino>, m22: ptr<function, Wino>, m23: ptr<function, Wino>, m30: ptr<function, Wino>, m31: ptr<function, Wino>, m32: ptr<function, Wino>, m33: ptr<function, Wino>, cb: u32, w: u32, x: i32, y0: i32) {
     let k = window4(cb, x, y0);
     let k0 = k.k0;
@@ -134,344 +135,368 @@ fn wino_step(m00: ptr<function, Wino>, m01: ptr<function, Wino>, m02: ptr<functi
     let g = wino_gather(w + cb * 64u * OB);
     // Position p = 4 i + c of each tile (Wino's r<i>.c<c>), block by block.
     if OB == 1u {
-        { let u = ob1_0(g.g0);
-          (*m00).r0.c0 = mac((*m00).r0.c0, u, v0.r0.c0); (*m10).r0.c0 = mac((*m10).r0.c0, u, v1.r0.c0);
-          if ROWS > 4u { (*m20).r0.c0 = mac((*m20).r0.c0, u, v2.r0.c0); (*m30).r0.c0 = mac((*m30).r0.c0, u, v3.r0.c0); } }
-        { let u = ob1_1(g.g0);
-          (*m00).r0.c1 = mac((*m00).r0.c1, u, v0.r0.c1); (*m10).r0.c1 = mac((*m10).r0.c1, u, v1.r0.c1);
-          if ROWS > 4u { (*m20).r0.c1 = mac((*m20).r0.c1, u, v2.r0.c1); (*m30).r0.c1 = mac((*m30).r0.c1, u, v3.r0.c1); } }
-        { let u = ob1_2(g.g0);
-          (*m00).r0.c2 = mac((*m00).r0.c2, u, v0.r0.c2); (*m10).r0.c2 = mac((*m10).r0.c2, u, v1.r0.c2);
-          if ROWS > 4u { (*m20).r0.c2 = mac((*m20).r0.c2, u, v2.r0.c2); (*m30).r0.c2 = mac((*m30).r0.c2, u, v3.r0.c2); } }
-        { let u = ob1_3(g.g0);
-          (*m00).r0.c3 = mac((*m00).r0.c3, u, v0.r0.c3); (*m10).r0.c3 = mac((*m10).r0.c3, u, v1.r0.c3);
-          if ROWS > 4u { (*m20).r0.c3 = mac((*m20).r0.c3, u, v2.r0.c3); (*m30).r0.c3 = mac((*m30).r0.c3, u, v3.r0.c3); } }
-        { let u = ob1_0(g.g1);
-          (*m00).r1.c0 = mac((*m00).r1.c0, u, v0.r1.c0); (*m10).r1.c0 = mac((*m10).r1.c0, u, v1.r1.c0);
-          if ROWS > 4u { (*m20).r1.c0 = mac((*m20).r1.c0, u, v2.r1.c0); (*m30).r1.c0 = mac((*m30).r1.c0, u, v3.r1.c0); } }
-        { let u = ob1_1(g.g1);
-          (*m00).r1.c1 = mac((*m00).r1.c1, u, v0.r1.c1); (*m10).r1.c1 = mac((*m10).r1.c1, u, v1.r1.c1);
-          if ROWS > 4u { (*m20).r1.c1 = mac((*m20).r1.c1, u, v2.r1.c1); (*m30).r1.c1 = mac((*m30).r1.c1, u, v3.r1.c1); } }
-        { let u = ob1_2(g.g1);
-          (*m00).r1.c2 = mac((*m00).r1.c2, u, v0.r1.c2); (*m10).r1.c2 = mac((*m10).r1.c2, u, v1.r1.c2);
-          if ROWS > 4u { (*m20).r1.c2 = mac((*m20).r1.c2, u, v2.r1.c2); (*m30).r1.c2 = mac((*m30).r1.c2, u, v3.r1.c2); } }
-        { let u = ob1_3(g.g1);
-          (*m00).r1.c3 = mac((*m00).r1.c3, u, v0.r1.c3); (*m10).r1.c3 = mac((*m10).r1.c3, u, v1.r1.c3);
-          if ROWS > 4u { (*m20).r1.c3 = mac((*m20).r1.c3, u, v2.r1.c3); (*m30).r1.c3 = mac((*m30).r1.c3, u, v3.r1.c3); } }
-        { let u = ob1_0(g.g2);
-          (*m00).r2.c0 = mac((*m00).r2.c0, u, v0.r2.c0); (*m10).r2.c0 = mac((*m10).r2.c0, u, v1.r2.c0);
-          if ROWS > 4u { (*m20).r2.c0 = mac((*m20).r2.c0, u, v2.r2.c0); (*m30).r2.c0 = mac((*m30).r2.c0, u, v3.r2.c0); } }
-        { let u = ob1_1(g.g2);
-          (*m00).r2.c1 = mac((*m00).r2.c1, u, v0.r2.c1); (*m10).r2.c1 = mac((*m10).r2.c1, u, v1.r2.c1);
-          if ROWS > 4u { (*m20).r2.c1 = mac((*m20).r2.c1, u, v2.r2.c1); (*m30).r2.c1 = mac((*m30).r2.c1, u, v3.r2.c1); } }
-        { let u = ob1_2(g.g2);
-          (*m00).r2.c2 = mac((*m00).r2.c2, u, v0.r2.c2); (*m10).r2.c2 = mac((*m10).r2.c2, u, v1.r2.c2);
-          if ROWS > 4u { (*m20).r2.c2 = mac((*m20).r2.c2, u, v2.r2.c2); (*m30).r2.c2 = mac((*m30).r2.c2, u, v3.r2.c2); } }
-        { let u = ob1_3(g.g2);
-          (*m00).r2.c3 = mac((*m00).r2.c3, u, v0.r2.c3); (*m10).r2.c3 = mac((*m10).r2.c3, u, v1.r2.c3);
-          if ROWS > 4u { (*m20).r2.c3 = mac((*m20).r2.c3, u, v2.r2.c3); (*m30).r2.c3 = mac((*m30).r2.c3, u, v3.r2.c3); } }
-        { let u = ob1_0(g.g3);
-          (*m00).r3.c0 = mac((*m00).r3.c0, u, v0.r3.c0); (*m10).r3.c0 = mac((*m10).r3.c0, u, v1.r3.c0);
-          if ROWS > 4u { (*m20).r3.c0 = mac((*m20).r3.c0, u, v2.r3.c0); (*m30).r3.c0 = mac((*m30).r3.c0, u, v3.r3.c0); } }
-        { let u = ob1_1(g.g3);
-          (*m00).r3.c1 = mac((*m00).r3.c1, u, v0.r3.c1); (*m10).r3.c1 = mac((*m10).r3.c1, u, v1.r3.c1);
-          if ROWS > 4u { (*m20).r3.c1 = mac((*m20).r3.c1, u, v2.r3.c1); (*m30).r3.c1 = mac((*m30).r3.c1, u, v3.r3.c1); } }
-        { let u = ob1_2(g.g3);
-          (*m00).r3.c2 = mac((*m00).r3.c2, u, v0.r3.c2); (*m10).r3.c2 = mac((*m10).r3.c2, u, v1.r3.c2);
-          if ROWS > 4u { (*m20).r3.c2 = mac((*m20).r3.c2, u, v2.r3.c2); (*m30).r3.c2 = mac((*m30).r3.c2, u, v3.r3.c2); } }
-        { let u = ob1_3(g.g3);
-          (*m00).r3.c3 = mac((*m00).r3.c3, u, v0.r3.c3); (*m10).r3.c3 = mac((*m10).r3.c3, u, v1.r3.c3);
-          if ROWS > 4u { (*m20).r3.c3 = mac((*m20).r3.c3, u, v2.r3.c3); (*m30).r3.c3 = mac((*m30).r3.c3, u, v3.r3.c3); } }
+        // Tile rows 0 and 1, 2 and 3, each pair in a loop that runs once: a basic
+        // block of its own for LLVM (conv_common.wgsl's `once`).
+        loop {
+            { let u = ob1_0(g.g0);
+              (*m00).r0.c0 = mac((*m00).r0.c0, u, v0.r0.c0); (*m10).r0.c0 = mac((*m10).r0.c0, u, v1.r0.c0);
+              if ROWS > 4u { (*m20).r0.c0 = mac((*m20).r0.c0, u, v2.r0.c0); (*m30).r0.c0 = mac((*m30).r0.c0, u, v3.r0.c0); } }
+            { let u = ob1_1(g.g0);
+              (*m00).r0.c1 = mac((*m00).r0.c1, u, v0.r0.c1); (*m10).r0.c1 = mac((*m10).r0.c1, u, v1.r0.c1);
+              if ROWS > 4u { (*m20).r0.c1 = mac((*m20).r0.c1, u, v2.r0.c1); (*m30).r0.c1 = mac((*m30).r0.c1, u, v3.r0.c1); } }
+            { let u = ob1_2(g.g0);
+              (*m00).r0.c2 = mac((*m00).r0.c2, u, v0.r0.c2); (*m10).r0.c2 = mac((*m10).r0.c2, u, v1.r0.c2);
+              if ROWS > 4u { (*m20).r0.c2 = mac((*m20).r0.c2, u, v2.r0.c2); (*m30).r0.c2 = mac((*m30).r0.c2, u, v3.r0.c2); } }
+            { let u = ob1_3(g.g0);
+              (*m00).r0.c3 = mac((*m00).r0.c3, u, v0.r0.c3); (*m10).r0.c3 = mac((*m10).r0.c3, u, v1.r0.c3);
+              if ROWS > 4u { (*m20).r0.c3 = mac((*m20).r0.c3, u, v2.r0.c3); (*m30).r0.c3 = mac((*m30).r0.c3, u, v3.r0.c3); } }
+            { let u = ob1_0(g.g1);
+              (*m00).r1.c0 = mac((*m00).r1.c0, u, v0.r1.c0); (*m10).r1.c0 = mac((*m10).r1.c0, u, v1.r1.c0);
+              if ROWS > 4u { (*m20).r1.c0 = mac((*m20).r1.c0, u, v2.r1.c0); (*m30).r1.c0 = mac((*m30).r1.c0, u, v3.r1.c0); } }
+            { let u = ob1_1(g.g1);
+              (*m00).r1.c1 = mac((*m00).r1.c1, u, v0.r1.c1); (*m10).r1.c1 = mac((*m10).r1.c1, u, v1.r1.c1);
+              if ROWS > 4u { (*m20).r1.c1 = mac((*m20).r1.c1, u, v2.r1.c1); (*m30).r1.c1 = mac((*m30).r1.c1, u, v3.r1.c1); } }
+            { let u = ob1_2(g.g1);
+              (*m00).r1.c2 = mac((*m00).r1.c2, u, v0.r1.c2); (*m10).r1.c2 = mac((*m10).r1.c2, u, v1.r1.c2);
+              if ROWS > 4u { (*m20).r1.c2 = mac((*m20).r1.c2, u, v2.r1.c2); (*m30).r1.c2 = mac((*m30).r1.c2, u, v3.r1.c2); } }
+            { let u = ob1_3(g.g1);
+              (*m00).r1.c3 = mac((*m00).r1.c3, u, v0.r1.c3); (*m10).r1.c3 = mac((*m10).r1.c3, u, v1.r1.c3);
+              if ROWS > 4u { (*m20).r1.c3 = mac((*m20).r1.c3, u, v2.r1.c3); (*m30).r1.c3 = mac((*m30).r1.c3, u, v3.r1.c3); } }
+            continuing { break if once(); }
+        }
+        loop {
+            { let u = ob1_0(g.g2);
+              (*m00).r2.c0 = mac((*m00).r2.c0, u, v0.r2.c0); (*m10).r2.c0 = mac((*m10).r2.c0, u, v1.r2.c0);
+              if ROWS > 4u { (*m20).r2.c0 = mac((*m20).r2.c0, u, v2.r2.c0); (*m30).r2.c0 = mac((*m30).r2.c0, u, v3.r2.c0); } }
+            { let u = ob1_1(g.g2);
+              (*m00).r2.c1 = mac((*m00).r2.c1, u, v0.r2.c1); (*m10).r2.c1 = mac((*m10).r2.c1, u, v1.r2.c1);
+              if ROWS > 4u { (*m20).r2.c1 = mac((*m20).r2.c1, u, v2.r2.c1); (*m30).r2.c1 = mac((*m30).r2.c1, u, v3.r2.c1); } }
+            { let u = ob1_2(g.g2);
+              (*m00).r2.c2 = mac((*m00).r2.c2, u, v0.r2.c2); (*m10).r2.c2 = mac((*m10).r2.c2, u, v1.r2.c2);
+              if ROWS > 4u { (*m20).r2.c2 = mac((*m20).r2.c2, u, v2.r2.c2); (*m30).r2.c2 = mac((*m30).r2.c2, u, v3.r2.c2); } }
+            { let u = ob1_3(g.g2);
+              (*m00).r2.c3 = mac((*m00).r2.c3, u, v0.r2.c3); (*m10).r2.c3 = mac((*m10).r2.c3, u, v1.r2.c3);
+              if ROWS > 4u { (*m20).r2.c3 = mac((*m20).r2.c3, u, v2.r2.c3); (*m30).r2.c3 = mac((*m30).r2.c3, u, v3.r2.c3); } }
+            { let u = ob1_0(g.g3);
+              (*m00).r3.c0 = mac((*m00).r3.c0, u, v0.r3.c0); (*m10).r3.c0 = mac((*m10).r3.c0, u, v1.r3.c0);
+              if ROWS > 4u { (*m20).r3.c0 = mac((*m20).r3.c0, u, v2.r3.c0); (*m30).r3.c0 = mac((*m30).r3.c0, u, v3.r3.c0); } }
+            { let u = ob1_1(g.g3);
+              (*m00).r3.c1 = mac((*m00).r3.c1, u, v0.r3.c1); (*m10).r3.c1 = mac((*m10).r3.c1, u, v1.r3.c1);
+              if ROWS > 4u { (*m20).r3.c1 = mac((*m20).r3.c1, u, v2.r3.c1); (*m30).r3.c1 = mac((*m30).r3.c1, u, v3.r3.c1); } }
+            { let u = ob1_2(g.g3);
+              (*m00).r3.c2 = mac((*m00).r3.c2, u, v0.r3.c2); (*m10).r3.c2 = mac((*m10).r3.c2, u, v1.r3.c2);
+              if ROWS > 4u { (*m20).r3.c2 = mac((*m20).r3.c2, u, v2.r3.c2); (*m30).r3.c2 = mac((*m30).r3.c2, u, v3.r3.c2); } }
+            { let u = ob1_3(g.g3);
+              (*m00).r3.c3 = mac((*m00).r3.c3, u, v0.r3.c3); (*m10).r3.c3 = mac((*m10).r3.c3, u, v1.r3.c3);
+              if ROWS > 4u { (*m20).r3.c3 = mac((*m20).r3.c3, u, v2.r3.c3); (*m30).r3.c3 = mac((*m30).r3.c3, u, v3.r3.c3); } }
+            continuing { break if once(); }
+        }
     } else if OB == 2u {
-        { let u = ob2_00(g.g0);
-          (*m00).r0.c0 = mac((*m00).r0.c0, u, v0.r0.c0); (*m10).r0.c0 = mac((*m10).r0.c0, u, v1.r0.c0);
-          if ROWS > 4u { (*m20).r0.c0 = mac((*m20).r0.c0, u, v2.r0.c0); (*m30).r0.c0 = mac((*m30).r0.c0, u, v3.r0.c0); } }
-        { let u = ob2_01(g.g0);
-          (*m01).r0.c0 = mac((*m01).r0.c0, u, v0.r0.c0); (*m11).r0.c0 = mac((*m11).r0.c0, u, v1.r0.c0);
-          if ROWS > 4u { (*m21).r0.c0 = mac((*m21).r0.c0, u, v2.r0.c0); (*m31).r0.c0 = mac((*m31).r0.c0, u, v3.r0.c0); } }
-        { let u = ob2_10(g.g0);
-          (*m00).r0.c1 = mac((*m00).r0.c1, u, v0.r0.c1); (*m10).r0.c1 = mac((*m10).r0.c1, u, v1.r0.c1);
-          if ROWS > 4u { (*m20).r0.c1 = mac((*m20).r0.c1, u, v2.r0.c1); (*m30).r0.c1 = mac((*m30).r0.c1, u, v3.r0.c1); } }
-        { let u = ob2_11(g.g0);
-          (*m01).r0.c1 = mac((*m01).r0.c1, u, v0.r0.c1); (*m11).r0.c1 = mac((*m11).r0.c1, u, v1.r0.c1);
-          if ROWS > 4u { (*m21).r0.c1 = mac((*m21).r0.c1, u, v2.r0.c1); (*m31).r0.c1 = mac((*m31).r0.c1, u, v3.r0.c1); } }
-        { let u = ob2_00(g.g1);
-          (*m00).r0.c2 = mac((*m00).r0.c2, u, v0.r0.c2); (*m10).r0.c2 = mac((*m10).r0.c2, u, v1.r0.c2);
-          if ROWS > 4u { (*m20).r0.c2 = mac((*m20).r0.c2, u, v2.r0.c2); (*m30).r0.c2 = mac((*m30).r0.c2, u, v3.r0.c2); } }
-        { let u = ob2_01(g.g1);
-          (*m01).r0.c2 = mac((*m01).r0.c2, u, v0.r0.c2); (*m11).r0.c2 = mac((*m11).r0.c2, u, v1.r0.c2);
-          if ROWS > 4u { (*m21).r0.c2 = mac((*m21).r0.c2, u, v2.r0.c2); (*m31).r0.c2 = mac((*m31).r0.c2, u, v3.r0.c2); } }
-        { let u = ob2_10(g.g1);
-          (*m00).r0.c3 = mac((*m00).r0.c3, u, v0.r0.c3); (*m10).r0.c3 = mac((*m10).r0.c3, u, v1.r0.c3);
-          if ROWS > 4u { (*m20).r0.c3 = mac((*m20).r0.c3, u, v2.r0.c3); (*m30).r0.c3 = mac((*m30).r0.c3, u, v3.r0.c3); } }
-        { let u = ob2_11(g.g1);
-          (*m01).r0.c3 = mac((*m01).r0.c3, u, v0.r0.c3); (*m11).r0.c3 = mac((*m11).r0.c3, u, v1.r0.c3);
-          if ROWS > 4u { (*m21).r0.c3 = mac((*m21).r0.c3, u, v2.r0.c3); (*m31).r0.c3 = mac((*m31).r0.c3, u, v3.r0.c3); } }
-        { let u = ob2_00(g.g2);
-          (*m00).r1.c0 = mac((*m00).r1.c0, u, v0.r1.c0); (*m10).r1.c0 = mac((*m10).r1.c0, u, v1.r1.c0);
-          if ROWS > 4u { (*m20).r1.c0 = mac((*m20).r1.c0, u, v2.r1.c0); (*m30).r1.c0 = mac((*m30).r1.c0, u, v3.r1.c0); } }
-        { let u = ob2_01(g.g2);
-          (*m01).r1.c0 = mac((*m01).r1.c0, u, v0.r1.c0); (*m11).r1.c0 = mac((*m11).r1.c0, u, v1.r1.c0);
-          if ROWS > 4u { (*m21).r1.c0 = mac((*m21).r1.c0, u, v2.r1.c0); (*m31).r1.c0 = mac((*m31).r1.c0, u, v3.r1.c0); } }
-        { let u = ob2_10(g.g2);
-          (*m00).r1.c1 = mac((*m00).r1.c1, u, v0.r1.c1); (*m10).r1.c1 = mac((*m10).r1.c1, u, v1.r1.c1);
-          if ROWS > 4u { (*m20).r1.c1 = mac((*m20).r1.c1, u, v2.r1.c1); (*m30).r1.c1 = mac((*m30).r1.c1, u, v3.r1.c1); } }
-        { let u = ob2_11(g.g2);
-          (*m01).r1.c1 = mac((*m01).r1.c1, u, v0.r1.c1); (*m11).r1.c1 = mac((*m11).r1.c1, u, v1.r1.c1);
-          if ROWS > 4u { (*m21).r1.c1 = mac((*m21).r1.c1, u, v2.r1.c1); (*m31).r1.c1 = mac((*m31).r1.c1, u, v3.r1.c1); } }
-        { let u = ob2_00(g.g3);
-          (*m00).r1.c2 = mac((*m00).r1.c2, u, v0.r1.c2); (*m10).r1.c2 = mac((*m10).r1.c2, u, v1.r1.c2);
-          if ROWS > 4u { (*m20).r1.c2 = mac((*m20).r1.c2, u, v2.r1.c2); (*m30).r1.c2 = mac((*m30).r1.c2, u, v3.r1.c2); } }
-        { let u = ob2_01(g.g3);
-          (*m01).r1.c2 = mac((*m01).r1.c2, u, v0.r1.c2); (*m11).r1.c2 = mac((*m11).r1.c2, u, v1.r1.c2);
-          if ROWS > 4u { (*m21).r1.c2 = mac((*m21).r1.c2, u, v2.r1.c2); (*m31).r1.c2 = mac((*m31).r1.c2, u, v3.r1.c2); } }
-        { let u = ob2_10(g.g3);
-          (*m00).r1.c3 = mac((*m00).r1.c3, u, v0.r1.c3); (*m10).r1.c3 = mac((*m10).r1.c3, u, v1.r1.c3);
-          if ROWS > 4u { (*m20).r1.c3 = mac((*m20).r1.c3, u, v2.r1.c3); (*m30).r1.c3 = mac((*m30).r1.c3, u, v3.r1.c3); } }
-        { let u = ob2_11(g.g3);
-          (*m01).r1.c3 = mac((*m01).r1.c3, u, v0.r1.c3); (*m11).r1.c3 = mac((*m11).r1.c3, u, v1.r1.c3);
-          if ROWS > 4u { (*m21).r1.c3 = mac((*m21).r1.c3, u, v2.r1.c3); (*m31).r1.c3 = mac((*m31).r1.c3, u, v3.r1.c3); } }
-        { let u = ob2_00(g.g4);
-          (*m00).r2.c0 = mac((*m00).r2.c0, u, v0.r2.c0); (*m10).r2.c0 = mac((*m10).r2.c0, u, v1.r2.c0);
-          if ROWS > 4u { (*m20).r2.c0 = mac((*m20).r2.c0, u, v2.r2.c0); (*m30).r2.c0 = mac((*m30).r2.c0, u, v3.r2.c0); } }
-        { let u = ob2_01(g.g4);
-          (*m01).r2.c0 = mac((*m01).r2.c0, u, v0.r2.c0); (*m11).r2.c0 = mac((*m11).r2.c0, u, v1.r2.c0);
-          if ROWS > 4u { (*m21).r2.c0 = mac((*m21).r2.c0, u, v2.r2.c0); (*m31).r2.c0 = mac((*m31).r2.c0, u, v3.r2.c0); } }
-        { let u = ob2_10(g.g4);
-          (*m00).r2.c1 = mac((*m00).r2.c1, u, v0.r2.c1); (*m10).r2.c1 = mac((*m10).r2.c1, u, v1.r2.c1);
-          if ROWS > 4u { (*m20).r2.c1 = mac((*m20).r2.c1, u, v2.r2.c1); (*m30).r2.c1 = mac((*m30).r2.c1, u, v3.r2.c1); } }
-        { let u = ob2_11(g.g4);
-          (*m01).r2.c1 = mac((*m01).r2.c1, u, v0.r2.c1); (*m11).r2.c1 = mac((*m11).r2.c1, u, v1.r2.c1);
-          if ROWS > 4u { (*m21).r2.c1 = mac((*m21).r2.c1, u, v2.r2.c1); (*m31).r2.c1 = mac((*m31).r2.c1, u, v3.r2.c1); } }
-        { let u = ob2_00(g.g5);
-          (*m00).r2.c2 = mac((*m00).r2.c2, u, v0.r2.c2); (*m10).r2.c2 = mac((*m10).r2.c2, u, v1.r2.c2);
-          if ROWS > 4u { (*m20).r2.c2 = mac((*m20).r2.c2, u, v2.r2.c2); (*m30).r2.c2 = mac((*m30).r2.c2, u, v3.r2.c2); } }
-        { let u = ob2_01(g.g5);
-          (*m01).r2.c2 = mac((*m01).r2.c2, u, v0.r2.c2); (*m11).r2.c2 = mac((*m11).r2.c2, u, v1.r2.c2);
-          if ROWS > 4u { (*m21).r2.c2 = mac((*m21).r2.c2, u, v2.r2.c2); (*m31).r2.c2 = mac((*m31).r2.c2, u, v3.r2.c2); } }
-        { let u = ob2_10(g.g5);
-          (*m00).r2.c3 = mac((*m00).r2.c3, u, v0.r2.c3); (*m10).r2.c3 = mac((*m10).r2.c3, u, v1.r2.c3);
-          if ROWS > 4u { (*m20).r2.c3 = mac((*m20).r2.c3, u, v2.r2.c3); (*m30).r2.c3 = mac((*m30).r2.c3, u, v3.r2.c3); } }
-        { let u = ob2_11(g.g5);
-          (*m01).r2.c3 = mac((*m01).r2.c3, u, v0.r2.c3); (*m11).r2.c3 = mac((*m11).r2.c3, u, v1.r2.c3);
-          if ROWS > 4u { (*m21).r2.c3 = mac((*m21).r2.c3, u, v2.r2.c3); (*m31).r2.c3 = mac((*m31).r2.c3, u, v3.r2.c3); } }
-        { let u = ob2_00(g.g6);
-          (*m00).r3.c0 = mac((*m00).r3.c0, u, v0.r3.c0); (*m10).r3.c0 = mac((*m10).r3.c0, u, v1.r3.c0);
-          if ROWS > 4u { (*m20).r3.c0 = mac((*m20).r3.c0, u, v2.r3.c0); (*m30).r3.c0 = mac((*m30).r3.c0, u, v3.r3.c0); } }
-        { let u = ob2_01(g.g6);
-          (*m01).r3.c0 = mac((*m01).r3.c0, u, v0.r3.c0); (*m11).r3.c0 = mac((*m11).r3.c0, u, v1.r3.c0);
-          if ROWS > 4u { (*m21).r3.c0 = mac((*m21).r3.c0, u, v2.r3.c0); (*m31).r3.c0 = mac((*m31).r3.c0, u, v3.r3.c0); } }
-        { let u = ob2_10(g.g6);
-          (*m00).r3.c1 = mac((*m00).r3.c1, u, v0.r3.c1); (*m10).r3.c1 = mac((*m10).r3.c1, u, v1.r3.c1);
-          if ROWS > 4u { (*m20).r3.c1 = mac((*m20).r3.c1, u, v2.r3.c1); (*m30).r3.c1 = mac((*m30).r3.c1, u, v3.r3.c1); } }
-        { let u = ob2_11(g.g6);
-          (*m01).r3.c1 = mac((*m01).r3.c1, u, v0.r3.c1); (*m11).r3.c1 = mac((*m11).r3.c1, u, v1.r3.c1);
-          if ROWS > 4u { (*m21).r3.c1 = mac((*m21).r3.c1, u, v2.r3.c1); (*m31).r3.c1 = mac((*m31).r3.c1, u, v3.r3.c1); } }
-        { let u = ob2_00(g.g7);
-          (*m00).r3.c2 = mac((*m00).r3.c2, u, v0.r3.c2); (*m10).r3.c2 = mac((*m10).r3.c2, u, v1.r3.c2);
-          if ROWS > 4u { (*m20).r3.c2 = mac((*m20).r3.c2, u, v2.r3.c2); (*m30).r3.c2 = mac((*m30).r3.c2, u, v3.r3.c2); } }
-        { let u = ob2_01(g.g7);
-          (*m01).r3.c2 = mac((*m01).r3.c2, u, v0.r3.c2); (*m11).r3.c2 = mac((*m11).r3.c2, u, v1.r3.c2);
-          if ROWS > 4u { (*m21).r3.c2 = mac((*m21).r3.c2, u, v2.r3.c2); (*m31).r3.c2 = mac((*m31).r3.c2, u, v3.r3.c2); } }
-        { let u = ob2_10(g.g7);
-          (*m00).r3.c3 = mac((*m00).r3.c3, u, v0.r3.c3); (*m10).r3.c3 = mac((*m10).r3.c3, u, v1.r3.c3);
-          if ROWS > 4u { (*m20).r3.c3 = mac((*m20).r3.c3, u, v2.r3.c3); (*m30).r3.c3 = mac((*m30).r3.c3, u, v3.r3.c3); } }
-        { let u = ob2_11(g.g7);
-          (*m01).r3.c3 = mac((*m01).r3.c3, u, v0.r3.c3); (*m11).r3.c3 = mac((*m11).r3.c3, u, v1.r3.c3);
-          if ROWS > 4u { (*m21).r3.c3 = mac((*m21).r3.c3, u, v2.r3.c3); (*m31).r3.c3 = mac((*m31).r3.c3, u, v3.r3.c3); } }
+        // Tile rows 0 and 1, 2 and 3, each pair in a loop that runs once: a basic
+        // block of its own for LLVM (conv_common.wgsl's `once`).
+        loop {
+            { let u = ob2_00(g.g0);
+              (*m00).r0.c0 = mac((*m00).r0.c0, u, v0.r0.c0); (*m10).r0.c0 = mac((*m10).r0.c0, u, v1.r0.c0);
+              if ROWS > 4u { (*m20).r0.c0 = mac((*m20).r0.c0, u, v2.r0.c0); (*m30).r0.c0 = mac((*m30).r0.c0, u, v3.r0.c0); } }
+            { let u = ob2_01(g.g0);
+              (*m01).r0.c0 = mac((*m01).r0.c0, u, v0.r0.c0); (*m11).r0.c0 = mac((*m11).r0.c0, u, v1.r0.c0);
+              if ROWS > 4u { (*m21).r0.c0 = mac((*m21).r0.c0, u, v2.r0.c0); (*m31).r0.c0 = mac((*m31).r0.c0, u, v3.r0.c0); } }
+            { let u = ob2_10(g.g0);
+              (*m00).r0.c1 = mac((*m00).r0.c1, u, v0.r0.c1); (*m10).r0.c1 = mac((*m10).r0.c1, u, v1.r0.c1);
+              if ROWS > 4u { (*m20).r0.c1 = mac((*m20).r0.c1, u, v2.r0.c1); (*m30).r0.c1 = mac((*m30).r0.c1, u, v3.r0.c1); } }
+            { let u = ob2_11(g.g0);
+              (*m01).r0.c1 = mac((*m01).r0.c1, u, v0.r0.c1); (*m11).r0.c1 = mac((*m11).r0.c1, u, v1.r0.c1);
+              if ROWS > 4u { (*m21).r0.c1 = mac((*m21).r0.c1, u, v2.r0.c1); (*m31).r0.c1 = mac((*m31).r0.c1, u, v3.r0.c1); } }
+            { let u = ob2_00(g.g1);
+              (*m00).r0.c2 = mac((*m00).r0.c2, u, v0.r0.c2); (*m10).r0.c2 = mac((*m10).r0.c2, u, v1.r0.c2);
+              if ROWS > 4u { (*m20).r0.c2 = mac((*m20).r0.c2, u, v2.r0.c2); (*m30).r0.c2 = mac((*m30).r0.c2, u, v3.r0.c2); } }
+            { let u = ob2_01(g.g1);
+              (*m01).r0.c2 = mac((*m01).r0.c2, u, v0.r0.c2); (*m11).r0.c2 = mac((*m11).r0.c2, u, v1.r0.c2);
+              if ROWS > 4u { (*m21).r0.c2 = mac((*m21).r0.c2, u, v2.r0.c2); (*m31).r0.c2 = mac((*m31).r0.c2, u, v3.r0.c2); } }
+            { let u = ob2_10(g.g1);
+              (*m00).r0.c3 = mac((*m00).r0.c3, u, v0.r0.c3); (*m10).r0.c3 = mac((*m10).r0.c3, u, v1.r0.c3);
+              if ROWS > 4u { (*m20).r0.c3 = mac((*m20).r0.c3, u, v2.r0.c3); (*m30).r0.c3 = mac((*m30).r0.c3, u, v3.r0.c3); } }
+            { let u = ob2_11(g.g1);
+              (*m01).r0.c3 = mac((*m01).r0.c3, u, v0.r0.c3); (*m11).r0.c3 = mac((*m11).r0.c3, u, v1.r0.c3);
+              if ROWS > 4u { (*m21).r0.c3 = mac((*m21).r0.c3, u, v2.r0.c3); (*m31).r0.c3 = mac((*m31).r0.c3, u, v3.r0.c3); } }
+            { let u = ob2_00(g.g2);
+              (*m00).r1.c0 = mac((*m00).r1.c0, u, v0.r1.c0); (*m10).r1.c0 = mac((*m10).r1.c0, u, v1.r1.c0);
+              if ROWS > 4u { (*m20).r1.c0 = mac((*m20).r1.c0, u, v2.r1.c0); (*m30).r1.c0 = mac((*m30).r1.c0, u, v3.r1.c0); } }
+            { let u = ob2_01(g.g2);
+              (*m01).r1.c0 = mac((*m01).r1.c0, u, v0.r1.c0); (*m11).r1.c0 = mac((*m11).r1.c0, u, v1.r1.c0);
+              if ROWS > 4u { (*m21).r1.c0 = mac((*m21).r1.c0, u, v2.r1.c0); (*m31).r1.c0 = mac((*m31).r1.c0, u, v3.r1.c0); } }
+            { let u = ob2_10(g.g2);
+              (*m00).r1.c1 = mac((*m00).r1.c1, u, v0.r1.c1); (*m10).r1.c1 = mac((*m10).r1.c1, u, v1.r1.c1);
+              if ROWS > 4u { (*m20).r1.c1 = mac((*m20).r1.c1, u, v2.r1.c1); (*m30).r1.c1 = mac((*m30).r1.c1, u, v3.r1.c1); } }
+            { let u = ob2_11(g.g2);
+              (*m01).r1.c1 = mac((*m01).r1.c1, u, v0.r1.c1); (*m11).r1.c1 = mac((*m11).r1.c1, u, v1.r1.c1);
+              if ROWS > 4u { (*m21).r1.c1 = mac((*m21).r1.c1, u, v2.r1.c1); (*m31).r1.c1 = mac((*m31).r1.c1, u, v3.r1.c1); } }
+            { let u = ob2_00(g.g3);
+              (*m00).r1.c2 = mac((*m00).r1.c2, u, v0.r1.c2); (*m10).r1.c2 = mac((*m10).r1.c2, u, v1.r1.c2);
+              if ROWS > 4u { (*m20).r1.c2 = mac((*m20).r1.c2, u, v2.r1.c2); (*m30).r1.c2 = mac((*m30).r1.c2, u, v3.r1.c2); } }
+            { let u = ob2_01(g.g3);
+              (*m01).r1.c2 = mac((*m01).r1.c2, u, v0.r1.c2); (*m11).r1.c2 = mac((*m11).r1.c2, u, v1.r1.c2);
+              if ROWS > 4u { (*m21).r1.c2 = mac((*m21).r1.c2, u, v2.r1.c2); (*m31).r1.c2 = mac((*m31).r1.c2, u, v3.r1.c2); } }
+            { let u = ob2_10(g.g3);
+              (*m00).r1.c3 = mac((*m00).r1.c3, u, v0.r1.c3); (*m10).r1.c3 = mac((*m10).r1.c3, u, v1.r1.c3);
+              if ROWS > 4u { (*m20).r1.c3 = mac((*m20).r1.c3, u, v2.r1.c3); (*m30).r1.c3 = mac((*m30).r1.c3, u, v3.r1.c3); } }
+            { let u = ob2_11(g.g3);
+              (*m01).r1.c3 = mac((*m01).r1.c3, u, v0.r1.c3); (*m11).r1.c3 = mac((*m11).r1.c3, u, v1.r1.c3);
+              if ROWS > 4u { (*m21).r1.c3 = mac((*m21).r1.c3, u, v2.r1.c3); (*m31).r1.c3 = mac((*m31).r1.c3, u, v3.r1.c3); } }
+            continuing { break if once(); }
+        }
+        loop {
+            { let u = ob2_00(g.g4);
+              (*m00).r2.c0 = mac((*m00).r2.c0, u, v0.r2.c0); (*m10).r2.c0 = mac((*m10).r2.c0, u, v1.r2.c0);
+              if ROWS > 4u { (*m20).r2.c0 = mac((*m20).r2.c0, u, v2.r2.c0); (*m30).r2.c0 = mac((*m30).r2.c0, u, v3.r2.c0); } }
+            { let u = ob2_01(g.g4);
+              (*m01).r2.c0 = mac((*m01).r2.c0, u, v0.r2.c0); (*m11).r2.c0 = mac((*m11).r2.c0, u, v1.r2.c0);
+              if ROWS > 4u { (*m21).r2.c0 = mac((*m21).r2.c0, u, v2.r2.c0); (*m31).r2.c0 = mac((*m31).r2.c0, u, v3.r2.c0); } }
+            { let u = ob2_10(g.g4);
+              (*m00).r2.c1 = mac((*m00).r2.c1, u, v0.r2.c1); (*m10).r2.c1 = mac((*m10).r2.c1, u, v1.r2.c1);
+              if ROWS > 4u { (*m20).r2.c1 = mac((*m20).r2.c1, u, v2.r2.c1); (*m30).r2.c1 = mac((*m30).r2.c1, u, v3.r2.c1); } }
+            { let u = ob2_11(g.g4);
+              (*m01).r2.c1 = mac((*m01).r2.c1, u, v0.r2.c1); (*m11).r2.c1 = mac((*m11).r2.c1, u, v1.r2.c1);
+              if ROWS > 4u { (*m21).r2.c1 = mac((*m21).r2.c1, u, v2.r2.c1); (*m31).r2.c1 = mac((*m31).r2.c1, u, v3.r2.c1); } }
+            { let u = ob2_00(g.g5);
+              (*m00).r2.c2 = mac((*m00).r2.c2, u, v0.r2.c2); (*m10).r2.c2 = mac((*m10).r2.c2, u, v1.r2.c2);
+              if ROWS > 4u { (*m20).r2.c2 = mac((*m20).r2.c2, u, v2.r2.c2); (*m30).r2.c2 = mac((*m30).r2.c2, u, v3.r2.c2); } }
+            { let u = ob2_01(g.g5);
+              (*m01).r2.c2 = mac((*m01).r2.c2, u, v0.r2.c2); (*m11).r2.c2 = mac((*m11).r2.c2, u, v1.r2.c2);
+              if ROWS > 4u { (*m21).r2.c2 = mac((*m21).r2.c2, u, v2.r2.c2); (*m31).r2.c2 = mac((*m31).r2.c2, u, v3.r2.c2); } }
+            { let u = ob2_10(g.g5);
+              (*m00).r2.c3 = mac((*m00).r2.c3, u, v0.r2.c3); (*m10).r2.c3 = mac((*m10).r2.c3, u, v1.r2.c3);
+              if ROWS > 4u { (*m20).r2.c3 = mac((*m20).r2.c3, u, v2.r2.c3); (*m30).r2.c3 = mac((*m30).r2.c3, u, v3.r2.c3); } }
+            { let u = ob2_11(g.g5);
+              (*m01).r2.c3 = mac((*m01).r2.c3, u, v0.r2.c3); (*m11).r2.c3 = mac((*m11).r2.c3, u, v1.r2.c3);
+              if ROWS > 4u { (*m21).r2.c3 = mac((*m21).r2.c3, u, v2.r2.c3); (*m31).r2.c3 = mac((*m31).r2.c3, u, v3.r2.c3); } }
+            { let u = ob2_00(g.g6);
+              (*m00).r3.c0 = mac((*m00).r3.c0, u, v0.r3.c0); (*m10).r3.c0 = mac((*m10).r3.c0, u, v1.r3.c0);
+              if ROWS > 4u { (*m20).r3.c0 = mac((*m20).r3.c0, u, v2.r3.c0); (*m30).r3.c0 = mac((*m30).r3.c0, u, v3.r3.c0); } }
+            { let u = ob2_01(g.g6);
+              (*m01).r3.c0 = mac((*m01).r3.c0, u, v0.r3.c0); (*m11).r3.c0 = mac((*m11).r3.c0, u, v1.r3.c0);
+              if ROWS > 4u { (*m21).r3.c0 = mac((*m21).r3.c0, u, v2.r3.c0); (*m31).r3.c0 = mac((*m31).r3.c0, u, v3.r3.c0); } }
+            { let u = ob2_10(g.g6);
+              (*m00).r3.c1 = mac((*m00).r3.c1, u, v0.r3.c1); (*m10).r3.c1 = mac((*m10).r3.c1, u, v1.r3.c1);
+              if ROWS > 4u { (*m20).r3.c1 = mac((*m20).r3.c1, u, v2.r3.c1); (*m30).r3.c1 = mac((*m30).r3.c1, u, v3.r3.c1); } }
+            { let u = ob2_11(g.g6);
+              (*m01).r3.c1 = mac((*m01).r3.c1, u, v0.r3.c1); (*m11).r3.c1 = mac((*m11).r3.c1, u, v1.r3.c1);
+              if ROWS > 4u { (*m21).r3.c1 = mac((*m21).r3.c1, u, v2.r3.c1); (*m31).r3.c1 = mac((*m31).r3.c1, u, v3.r3.c1); } }
+            { let u = ob2_00(g.g7);
+              (*m00).r3.c2 = mac((*m00).r3.c2, u, v0.r3.c2); (*m10).r3.c2 = mac((*m10).r3.c2, u, v1.r3.c2);
+              if ROWS > 4u { (*m20).r3.c2 = mac((*m20).r3.c2, u, v2.r3.c2); (*m30).r3.c2 = mac((*m30).r3.c2, u, v3.r3.c2); } }
+            { let u = ob2_01(g.g7);
+              (*m01).r3.c2 = mac((*m01).r3.c2, u, v0.r3.c2); (*m11).r3.c2 = mac((*m11).r3.c2, u, v1.r3.c2);
+              if ROWS > 4u { (*m21).r3.c2 = mac((*m21).r3.c2, u, v2.r3.c2); (*m31).r3.c2 = mac((*m31).r3.c2, u, v3.r3.c2); } }
+            { let u = ob2_10(g.g7);
+              (*m00).r3.c3 = mac((*m00).r3.c3, u, v0.r3.c3); (*m10).r3.c3 = mac((*m10).r3.c3, u, v1.r3.c3);
+              if ROWS > 4u { (*m20).r3.c3 = mac((*m20).r3.c3, u, v2.r3.c3); (*m30).r3.c3 = mac((*m30).r3.c3, u, v3.r3.c3); } }
+            { let u = ob2_11(g.g7);
+              (*m01).r3.c3 = mac((*m01).r3.c3, u, v0.r3.c3); (*m11).r3.c3 = mac((*m11).r3.c3, u, v1.r3.c3);
+              if ROWS > 4u { (*m21).r3.c3 = mac((*m21).r3.c3, u, v2.r3.c3); (*m31).r3.c3 = mac((*m31).r3.c3, u, v3.r3.c3); } }
+            continuing { break if once(); }
+        }
     } else {
-        { let u = ob4_0(g.g0);
-          (*m00).r0.c0 = mac((*m00).r0.c0, u, v0.r0.c0); (*m10).r0.c0 = mac((*m10).r0.c0, u, v1.r0.c0);
-          if ROWS > 4u { (*m20).r0.c0 = mac((*m20).r0.c0, u, v2.r0.c0); (*m30).r0.c0 = mac((*m30).r0.c0, u, v3.r0.c0); } }
-        { let u = ob4_1(g.g0);
-          (*m01).r0.c0 = mac((*m01).r0.c0, u, v0.r0.c0); (*m11).r0.c0 = mac((*m11).r0.c0, u, v1.r0.c0);
-          if ROWS > 4u { (*m21).r0.c0 = mac((*m21).r0.c0, u, v2.r0.c0); (*m31).r0.c0 = mac((*m31).r0.c0, u, v3.r0.c0); } }
-        { let u = ob4_2(g.g0);
-          (*m02).r0.c0 = mac((*m02).r0.c0, u, v0.r0.c0); (*m12).r0.c0 = mac((*m12).r0.c0, u, v1.r0.c0);
-          if ROWS > 4u { (*m22).r0.c0 = mac((*m22).r0.c0, u, v2.r0.c0); (*m32).r0.c0 = mac((*m32).r0.c0, u, v3.r0.c0); } }
-        { let u = ob4_3(g.g0);
-          (*m03).r0.c0 = mac((*m03).r0.c0, u, v0.r0.c0); (*m13).r0.c0 = mac((*m13).r0.c0, u, v1.r0.c0);
-          if ROWS > 4u { (*m23).r0.c0 = mac((*m23).r0.c0, u, v2.r0.c0); (*m33).r0.c0 = mac((*m33).r0.c0, u, v3.r0.c0); } }
-        { let u = ob4_0(g.g1);
-          (*m00).r0.c1 = mac((*m00).r0.c1, u, v0.r0.c1); (*m10).r0.c1 = mac((*m10).r0.c1, u, v1.r0.c1);
-          if ROWS > 4u { (*m20).r0.c1 = mac((*m20).r0.c1, u, v2.r0.c1); (*m30).r0.c1 = mac((*m30).r0.c1, u, v3.r0.c1); } }
-        { let u = ob4_1(g.g1);
-          (*m01).r0.c1 = mac((*m01).r0.c1, u, v0.r0.c1); (*m11).r0.c1 = mac((*m11).r0.c1, u, v1.r0.c1);
-          if ROWS > 4u { (*m21).r0.c1 = mac((*m21).r0.c1, u, v2.r0.c1); (*m31).r0.c1 = mac((*m31).r0.c1, u, v3.r0.c1); } }
-        { let u = ob4_2(g.g1);
-          (*m02).r0.c1 = mac((*m02).r0.c1, u, v0.r0.c1); (*m12).r0.c1 = mac((*m12).r0.c1, u, v1.r0.c1);
-          if ROWS > 4u { (*m22).r0.c1 = mac((*m22).r0.c1, u, v2.r0.c1); (*m32).r0.c1 = mac((*m32).r0.c1, u, v3.r0.c1); } }
-        { let u = ob4_3(g.g1);
-          (*m03).r0.c1 = mac((*m03).r0.c1, u, v0.r0.c1); (*m13).r0.c1 = mac((*m13).r0.c1, u, v1.r0.c1);
-          if ROWS > 4u { (*m23).r0.c1 = mac((*m23).r0.c1, u, v2.r0.c1); (*m33).r0.c1 = mac((*m33).r0.c1, u, v3.r0.c1); } }
-        { let u = ob4_0(g.g2);
-          (*m00).r0.c2 = mac((*m00).r0.c2, u, v0.r0.c2); (*m10).r0.c2 = mac((*m10).r0.c2, u, v1.r0.c2);
-          if ROWS > 4u { (*m20).r0.c2 = mac((*m20).r0.c2, u, v2.r0.c2); (*m30).r0.c2 = mac((*m30).r0.c2, u, v3.r0.c2); } }
-        { let u = ob4_1(g.g2);
-          (*m01).r0.c2 = mac((*m01).r0.c2, u, v0.r0.c2); (*m11).r0.c2 = mac((*m11).r0.c2, u, v1.r0.c2);
-          if ROWS > 4u { (*m21).r0.c2 = mac((*m21).r0.c2, u, v2.r0.c2); (*m31).r0.c2 = mac((*m31).r0.c2, u, v3.r0.c2); } }
-        { let u = ob4_2(g.g2);
-          (*m02).r0.c2 = mac((*m02).r0.c2, u, v0.r0.c2); (*m12).r0.c2 = mac((*m12).r0.c2, u, v1.r0.c2);
-          if ROWS > 4u { (*m22).r0.c2 = mac((*m22).r0.c2, u, v2.r0.c2); (*m32).r0.c2 = mac((*m32).r0.c2, u, v3.r0.c2); } }
-        { let u = ob4_3(g.g2);
-          (*m03).r0.c2 = mac((*m03).r0.c2, u, v0.r0.c2); (*m13).r0.c2 = mac((*m13).r0.c2, u, v1.r0.c2);
-          if ROWS > 4u { (*m23).r0.c2 = mac((*m23).r0.c2, u, v2.r0.c2); (*m33).r0.c2 = mac((*m33).r0.c2, u, v3.r0.c2); } }
-        { let u = ob4_0(g.g3);
-          (*m00).r0.c3 = mac((*m00).r0.c3, u, v0.r0.c3); (*m10).r0.c3 = mac((*m10).r0.c3, u, v1.r0.c3);
-          if ROWS > 4u { (*m20).r0.c3 = mac((*m20).r0.c3, u, v2.r0.c3); (*m30).r0.c3 = mac((*m30).r0.c3, u, v3.r0.c3); } }
-        { let u = ob4_1(g.g3);
-          (*m01).r0.c3 = mac((*m01).r0.c3, u, v0.r0.c3); (*m11).r0.c3 = mac((*m11).r0.c3, u, v1.r0.c3);
-          if ROWS > 4u { (*m21).r0.c3 = mac((*m21).r0.c3, u, v2.r0.c3); (*m31).r0.c3 = mac((*m31).r0.c3, u, v3.r0.c3); } }
-        { let u = ob4_2(g.g3);
-          (*m02).r0.c3 = mac((*m02).r0.c3, u, v0.r0.c3); (*m12).r0.c3 = mac((*m12).r0.c3, u, v1.r0.c3);
-          if ROWS > 4u { (*m22).r0.c3 = mac((*m22).r0.c3, u, v2.r0.c3); (*m32).r0.c3 = mac((*m32).r0.c3, u, v3.r0.c3); } }
-        { let u = ob4_3(g.g3);
-          (*m03).r0.c3 = mac((*m03).r0.c3, u, v0.r0.c3); (*m13).r0.c3 = mac((*m13).r0.c3, u, v1.r0.c3);
-          if ROWS > 4u { (*m23).r0.c3 = mac((*m23).r0.c3, u, v2.r0.c3); (*m33).r0.c3 = mac((*m33).r0.c3, u, v3.r0.c3); } }
-        { let u = ob4_0(g.g4);
-          (*m00).r1.c0 = mac((*m00).r1.c0, u, v0.r1.c0); (*m10).r1.c0 = mac((*m10).r1.c0, u, v1.r1.c0);
-          if ROWS > 4u { (*m20).r1.c0 = mac((*m20).r1.c0, u, v2.r1.c0); (*m30).r1.c0 = mac((*m30).r1.c0, u, v3.r1.c0); } }
-        { let u = ob4_1(g.g4);
-          (*m01).r1.c0 = mac((*m01).r1.c0, u, v0.r1.c0); (*m11).r1.c0 = mac((*m11).r1.c0, u, v1.r1.c0);
-          if ROWS > 4u { (*m21).r1.c0 = mac((*m21).r1.c0, u, v2.r1.c0); (*m31).r1.c0 = mac((*m31).r1.c0, u, v3.r1.c0); } }
-        { let u = ob4_2(g.g4);
-          (*m02).r1.c0 = mac((*m02).r1.c0, u, v0.r1.c0); (*m12).r1.c0 = mac((*m12).r1.c0, u, v1.r1.c0);
-          if ROWS > 4u { (*m22).r1.c0 = mac((*m22).r1.c0, u, v2.r1.c0); (*m32).r1.c0 = mac((*m32).r1.c0, u, v3.r1.c0); } }
-        { let u = ob4_3(g.g4);
-          (*m03).r1.c0 = mac((*m03).r1.c0, u, v0.r1.c0); (*m13).r1.c0 = mac((*m13).r1.c0, u, v1.r1.c0);
-          if ROWS > 4u { (*m23).r1.c0 = mac((*m23).r1.c0, u, v2.r1.c0); (*m33).r1.c0 = mac((*m33).r1.c0, u, v3.r1.c0); } }
-        { let u = ob4_0(g.g5);
-          (*m00).r1.c1 = mac((*m00).r1.c1, u, v0.r1.c1); (*m10).r1.c1 = mac((*m10).r1.c1, u, v1.r1.c1);
-          if ROWS > 4u { (*m20).r1.c1 = mac((*m20).r1.c1, u, v2.r1.c1); (*m30).r1.c1 = mac((*m30).r1.c1, u, v3.r1.c1); } }
-        { let u = ob4_1(g.g5);
-          (*m01).r1.c1 = mac((*m01).r1.c1, u, v0.r1.c1); (*m11).r1.c1 = mac((*m11).r1.c1, u, v1.r1.c1);
-          if ROWS > 4u { (*m21).r1.c1 = mac((*m21).r1.c1, u, v2.r1.c1); (*m31).r1.c1 = mac((*m31).r1.c1, u, v3.r1.c1); } }
-        { let u = ob4_2(g.g5);
-          (*m02).r1.c1 = mac((*m02).r1.c1, u, v0.r1.c1); (*m12).r1.c1 = mac((*m12).r1.c1, u, v1.r1.c1);
-          if ROWS > 4u { (*m22).r1.c1 = mac((*m22).r1.c1, u, v2.r1.c1); (*m32).r1.c1 = mac((*m32).r1.c1, u, v3.r1.c1); } }
-        { let u = ob4_3(g.g5);
-          (*m03).r1.c1 = mac((*m03).r1.c1, u, v0.r1.c1); (*m13).r1.c1 = mac((*m13).r1.c1, u, v1.r1.c1);
-          if ROWS > 4u { (*m23).r1.c1 = mac((*m23).r1.c1, u, v2.r1.c1); (*m33).r1.c1 = mac((*m33).r1.c1, u, v3.r1.c1); } }
-        { let u = ob4_0(g.g6);
-          (*m00).r1.c2 = mac((*m00).r1.c2, u, v0.r1.c2); (*m10).r1.c2 = mac((*m10).r1.c2, u, v1.r1.c2);
-          if ROWS > 4u { (*m20).r1.c2 = mac((*m20).r1.c2, u, v2.r1.c2); (*m30).r1.c2 = mac((*m30).r1.c2, u, v3.r1.c2); } }
-        { let u = ob4_1(g.g6);
-          (*m01).r1.c2 = mac((*m01).r1.c2, u, v0.r1.c2); (*m11).r1.c2 = mac((*m11).r1.c2, u, v1.r1.c2);
-          if ROWS > 4u { (*m21).r1.c2 = mac((*m21).r1.c2, u, v2.r1.c2); (*m31).r1.c2 = mac((*m31).r1.c2, u, v3.r1.c2); } }
-        { let u = ob4_2(g.g6);
-          (*m02).r1.c2 = mac((*m02).r1.c2, u, v0.r1.c2); (*m12).r1.c2 = mac((*m12).r1.c2, u, v1.r1.c2);
-          if ROWS > 4u { (*m22).r1.c2 = mac((*m22).r1.c2, u, v2.r1.c2); (*m32).r1.c2 = mac((*m32).r1.c2, u, v3.r1.c2); } }
-        { let u = ob4_3(g.g6);
-          (*m03).r1.c2 = mac((*m03).r1.c2, u, v0.r1.c2); (*m13).r1.c2 = mac((*m13).r1.c2, u, v1.r1.c2);
-          if ROWS > 4u { (*m23).r1.c2 = mac((*m23).r1.c2, u, v2.r1.c2); (*m33).r1.c2 = mac((*m33).r1.c2, u, v3.r1.c2); } }
-        { let u = ob4_0(g.g7);
-          (*m00).r1.c3 = mac((*m00).r1.c3, u, v0.r1.c3); (*m10).r1.c3 = mac((*m10).r1.c3, u, v1.r1.c3);
-          if ROWS > 4u { (*m20).r1.c3 = mac((*m20).r1.c3, u, v2.r1.c3); (*m30).r1.c3 = mac((*m30).r1.c3, u, v3.r1.c3); } }
-        { let u = ob4_1(g.g7);
-          (*m01).r1.c3 = mac((*m01).r1.c3, u, v0.r1.c3); (*m11).r1.c3 = mac((*m11).r1.c3, u, v1.r1.c3);
-          if ROWS > 4u { (*m21).r1.c3 = mac((*m21).r1.c3, u, v2.r1.c3); (*m31).r1.c3 = mac((*m31).r1.c3, u, v3.r1.c3); } }
-        { let u = ob4_2(g.g7);
-          (*m02).r1.c3 = mac((*m02).r1.c3, u, v0.r1.c3); (*m12).r1.c3 = mac((*m12).r1.c3, u, v1.r1.c3);
-          if ROWS > 4u { (*m22).r1.c3 = mac((*m22).r1.c3, u, v2.r1.c3); (*m32).r1.c3 = mac((*m32).r1.c3, u, v3.r1.c3); } }
-        { let u = ob4_3(g.g7);
-          (*m03).r1.c3 = mac((*m03).r1.c3, u, v0.r1.c3); (*m13).r1.c3 = mac((*m13).r1.c3, u, v1.r1.c3);
-          if ROWS > 4u { (*m23).r1.c3 = mac((*m23).r1.c3, u, v2.r1.c3); (*m33).r1.c3 = mac((*m33).r1.c3, u, v3.r1.c3); } }
-        { let u = ob4_0(g.g8);
-          (*m00).r2.c0 = mac((*m00).r2.c0, u, v0.r2.c0); (*m10).r2.c0 = mac((*m10).r2.c0, u, v1.r2.c0);
-          if ROWS > 4u { (*m20).r2.c0 = mac((*m20).r2.c0, u, v2.r2.c0); (*m30).r2.c0 = mac((*m30).r2.c0, u, v3.r2.c0); } }
-        { let u = ob4_1(g.g8);
-          (*m01).r2.c0 = mac((*m01).r2.c0, u, v0.r2.c0); (*m11).r2.c0 = mac((*m11).r2.c0, u, v1.r2.c0);
-          if ROWS > 4u { (*m21).r2.c0 = mac((*m21).r2.c0, u, v2.r2.c0); (*m31).r2.c0 = mac((*m31).r2.c0, u, v3.r2.c0); } }
-        { let u = ob4_2(g.g8);
-          (*m02).r2.c0 = mac((*m02).r2.c0, u, v0.r2.c0); (*m12).r2.c0 = mac((*m12).r2.c0, u, v1.r2.c0);
-          if ROWS > 4u { (*m22).r2.c0 = mac((*m22).r2.c0, u, v2.r2.c0); (*m32).r2.c0 = mac((*m32).r2.c0, u, v3.r2.c0); } }
-        { let u = ob4_3(g.g8);
-          (*m03).r2.c0 = mac((*m03).r2.c0, u, v0.r2.c0); (*m13).r2.c0 = mac((*m13).r2.c0, u, v1.r2.c0);
-          if ROWS > 4u { (*m23).r2.c0 = mac((*m23).r2.c0, u, v2.r2.c0); (*m33).r2.c0 = mac((*m33).r2.c0, u, v3.r2.c0); } }
-        { let u = ob4_0(g.g9);
-          (*m00).r2.c1 = mac((*m00).r2.c1, u, v0.r2.c1); (*m10).r2.c1 = mac((*m10).r2.c1, u, v1.r2.c1);
-          if ROWS > 4u { (*m20).r2.c1 = mac((*m20).r2.c1, u, v2.r2.c1); (*m30).r2.c1 = mac((*m30).r2.c1, u, v3.r2.c1); } }
-        { let u = ob4_1(g.g9);
-          (*m01).r2.c1 = mac((*m01).r2.c1, u, v0.r2.c1); (*m11).r2.c1 = mac((*m11).r2.c1, u, v1.r2.c1);
-          if ROWS > 4u { (*m21).r2.c1 = mac((*m21).r2.c1, u, v2.r2.c1); (*m31).r2.c1 = mac((*m31).r2.c1, u, v3.r2.c1); } }
-        { let u = ob4_2(g.g9);
-          (*m02).r2.c1 = mac((*m02).r2.c1, u, v0.r2.c1); (*m12).r2.c1 = mac((*m12).r2.c1, u, v1.r2.c1);
-          if ROWS > 4u { (*m22).r2.c1 = mac((*m22).r2.c1, u, v2.r2.c1); (*m32).r2.c1 = mac((*m32).r2.c1, u, v3.r2.c1); } }
-        { let u = ob4_3(g.g9);
-          (*m03).r2.c1 = mac((*m03).r2.c1, u, v0.r2.c1); (*m13).r2.c1 = mac((*m13).r2.c1, u, v1.r2.c1);
-          if ROWS > 4u { (*m23).r2.c1 = mac((*m23).r2.c1, u, v2.r2.c1); (*m33).r2.c1 = mac((*m33).r2.c1, u, v3.r2.c1); } }
-        { let u = ob4_0(g.g10);
-          (*m00).r2.c2 = mac((*m00).r2.c2, u, v0.r2.c2); (*m10).r2.c2 = mac((*m10).r2.c2, u, v1.r2.c2);
-          if ROWS > 4u { (*m20).r2.c2 = mac((*m20).r2.c2, u, v2.r2.c2); (*m30).r2.c2 = mac((*m30).r2.c2, u, v3.r2.c2); } }
-        { let u = ob4_1(g.g10);
-          (*m01).r2.c2 = mac((*m01).r2.c2, u, v0.r2.c2); (*m11).r2.c2 = mac((*m11).r2.c2, u, v1.r2.c2);
-          if ROWS > 4u { (*m21).r2.c2 = mac((*m21).r2.c2, u, v2.r2.c2); (*m31).r2.c2 = mac((*m31).r2.c2, u, v3.r2.c2); } }
-        { let u = ob4_2(g.g10);
-          (*m02).r2.c2 = mac((*m02).r2.c2, u, v0.r2.c2); (*m12).r2.c2 = mac((*m12).r2.c2, u, v1.r2.c2);
-          if ROWS > 4u { (*m22).r2.c2 = mac((*m22).r2.c2, u, v2.r2.c2); (*m32).r2.c2 = mac((*m32).r2.c2, u, v3.r2.c2); } }
-        { let u = ob4_3(g.g10);
-          (*m03).r2.c2 = mac((*m03).r2.c2, u, v0.r2.c2); (*m13).r2.c2 = mac((*m13).r2.c2, u, v1.r2.c2);
-          if ROWS > 4u { (*m23).r2.c2 = mac((*m23).r2.c2, u, v2.r2.c2); (*m33).r2.c2 = mac((*m33).r2.c2, u, v3.r2.c2); } }
-        { let u = ob4_0(g.g11);
-          (*m00).r2.c3 = mac((*m00).r2.c3, u, v0.r2.c3); (*m10).r2.c3 = mac((*m10).r2.c3, u, v1.r2.c3);
-          if ROWS > 4u { (*m20).r2.c3 = mac((*m20).r2.c3, u, v2.r2.c3); (*m30).r2.c3 = mac((*m30).r2.c3, u, v3.r2.c3); } }
-        { let u = ob4_1(g.g11);
-          (*m01).r2.c3 = mac((*m01).r2.c3, u, v0.r2.c3); (*m11).r2.c3 = mac((*m11).r2.c3, u, v1.r2.c3);
-          if ROWS > 4u { (*m21).r2.c3 = mac((*m21).r2.c3, u, v2.r2.c3); (*m31).r2.c3 = mac((*m31).r2.c3, u, v3.r2.c3); } }
-        { let u = ob4_2(g.g11);
-          (*m02).r2.c3 = mac((*m02).r2.c3, u, v0.r2.c3); (*m12).r2.c3 = mac((*m12).r2.c3, u, v1.r2.c3);
-          if ROWS > 4u { (*m22).r2.c3 = mac((*m22).r2.c3, u, v2.r2.c3); (*m32).r2.c3 = mac((*m32).r2.c3, u, v3.r2.c3); } }
-        { let u = ob4_3(g.g11);
-          (*m03).r2.c3 = mac((*m03).r2.c3, u, v0.r2.c3); (*m13).r2.c3 = mac((*m13).r2.c3, u, v1.r2.c3);
-          if ROWS > 4u { (*m23).r2.c3 = mac((*m23).r2.c3, u, v2.r2.c3); (*m33).r2.c3 = mac((*m33).r2.c3, u, v3.r2.c3); } }
-        { let u = ob4_0(g.g12);
-          (*m00).r3.c0 = mac((*m00).r3.c0, u, v0.r3.c0); (*m10).r3.c0 = mac((*m10).r3.c0, u, v1.r3.c0);
-          if ROWS > 4u { (*m20).r3.c0 = mac((*m20).r3.c0, u, v2.r3.c0); (*m30).r3.c0 = mac((*m30).r3.c0, u, v3.r3.c0); } }
-        { let u = ob4_1(g.g12);
-          (*m01).r3.c0 = mac((*m01).r3.c0, u, v0.r3.c0); (*m11).r3.c0 = mac((*m11).r3.c0, u, v1.r3.c0);
-          if ROWS > 4u { (*m21).r3.c0 = mac((*m21).r3.c0, u, v2.r3.c0); (*m31).r3.c0 = mac((*m31).r3.c0, u, v3.r3.c0); } }
-        { let u = ob4_2(g.g12);
-          (*m02).r3.c0 = mac((*m02).r3.c0, u, v0.r3.c0); (*m12).r3.c0 = mac((*m12).r3.c0, u, v1.r3.c0);
-          if ROWS > 4u { (*m22).r3.c0 = mac((*m22).r3.c0, u, v2.r3.c0); (*m32).r3.c0 = mac((*m32).r3.c0, u, v3.r3.c0); } }
-        { let u = ob4_3(g.g12);
-          (*m03).r3.c0 = mac((*m03).r3.c0, u, v0.r3.c0); (*m13).r3.c0 = mac((*m13).r3.c0, u, v1.r3.c0);
-          if ROWS > 4u { (*m23).r3.c0 = mac((*m23).r3.c0, u, v2.r3.c0); (*m33).r3.c0 = mac((*m33).r3.c0, u, v3.r3.c0); } }
-        { let u = ob4_0(g.g13);
-          (*m00).r3.c1 = mac((*m00).r3.c1, u, v0.r3.c1); (*m10).r3.c1 = mac((*m10).r3.c1, u, v1.r3.c1);
-          if ROWS > 4u { (*m20).r3.c1 = mac((*m20).r3.c1, u, v2.r3.c1); (*m30).r3.c1 = mac((*m30).r3.c1, u, v3.r3.c1); } }
-        { let u = ob4_1(g.g13);
-          (*m01).r3.c1 = mac((*m01).r3.c1, u, v0.r3.c1); (*m11).r3.c1 = mac((*m11).r3.c1, u, v1.r3.c1);
-          if ROWS > 4u { (*m21).r3.c1 = mac((*m21).r3.c1, u, v2.r3.c1); (*m31).r3.c1 = mac((*m31).r3.c1, u, v3.r3.c1); } }
-        { let u = ob4_2(g.g13);
-          (*m02).r3.c1 = mac((*m02).r3.c1, u, v0.r3.c1); (*m12).r3.c1 = mac((*m12).r3.c1, u, v1.r3.c1);
-          if ROWS > 4u { (*m22).r3.c1 = mac((*m22).r3.c1, u, v2.r3.c1); (*m32).r3.c1 = mac((*m32).r3.c1, u, v3.r3.c1); } }
-        { let u = ob4_3(g.g13);
-          (*m03).r3.c1 = mac((*m03).r3.c1, u, v0.r3.c1); (*m13).r3.c1 = mac((*m13).r3.c1, u, v1.r3.c1);
-          if ROWS > 4u { (*m23).r3.c1 = mac((*m23).r3.c1, u, v2.r3.c1); (*m33).r3.c1 = mac((*m33).r3.c1, u, v3.r3.c1); } }
-        { let u = ob4_0(g.g14);
-          (*m00).r3.c2 = mac((*m00).r3.c2, u, v0.r3.c2); (*m10).r3.c2 = mac((*m10).r3.c2, u, v1.r3.c2);
-          if ROWS > 4u { (*m20).r3.c2 = mac((*m20).r3.c2, u, v2.r3.c2); (*m30).r3.c2 = mac((*m30).r3.c2, u, v3.r3.c2); } }
-        { let u = ob4_1(g.g14);
-          (*m01).r3.c2 = mac((*m01).r3.c2, u, v0.r3.c2); (*m11).r3.c2 = mac((*m11).r3.c2, u, v1.r3.c2);
-          if ROWS > 4u { (*m21).r3.c2 = mac((*m21).r3.c2, u, v2.r3.c2); (*m31).r3.c2 = mac((*m31).r3.c2, u, v3.r3.c2); } }
-        { let u = ob4_2(g.g14);
-          (*m02).r3.c2 = mac((*m02).r3.c2, u, v0.r3.c2); (*m12).r3.c2 = mac((*m12).r3.c2, u, v1.r3.c2);
-          if ROWS > 4u { (*m22).r3.c2 = mac((*m22).r3.c2, u, v2.r3.c2); (*m32).r3.c2 = mac((*m32).r3.c2, u, v3.r3.c2); } }
-        { let u = ob4_3(g.g14);
-          (*m03).r3.c2 = mac((*m03).r3.c2, u, v0.r3.c2); (*m13).r3.c2 = mac((*m13).r3.c2, u, v1.r3.c2);
-          if ROWS > 4u { (*m23).r3.c2 = mac((*m23).r3.c2, u, v2.r3.c2); (*m33).r3.c2 = mac((*m33).r3.c2, u, v3.r3.c2); } }
-        { let u = ob4_0(g.g15);
-          (*m00).r3.c3 = mac((*m00).r3.c3, u, v0.r3.c3); (*m10).r3.c3 = mac((*m10).r3.c3, u, v1.r3.c3);
-          if ROWS > 4u { (*m20).r3.c3 = mac((*m20).r3.c3, u, v2.r3.c3); (*m30).r3.c3 = mac((*m30).r3.c3, u, v3.r3.c3); } }
-        { let u = ob4_1(g.g15);
-          (*m01).r3.c3 = mac((*m01).r3.c3, u, v0.r3.c3); (*m11).r3.c3 = mac((*m11).r3.c3, u, v1.r3.c3);
-          if ROWS > 4u { (*m21).r3.c3 = mac((*m21).r3.c3, u, v2.r3.c3); (*m31).r3.c3 = mac((*m31).r3.c3, u, v3.r3.c3); } }
-        { let u = ob4_2(g.g15);
-          (*m02).r3.c3 = mac((*m02).r3.c3, u, v0.r3.c3); (*m12).r3.c3 = mac((*m12).r3.c3, u, v1.r3.c3);
-          if ROWS > 4u { (*m22).r3.c3 = mac((*m22).r3.c3, u, v2.r3.c3); (*m32).r3.c3 = mac((*m32).r3.c3, u, v3.r3.c3); } }
-        { let u = ob4_3(g.g15);
-          (*m03).r3.c3 = mac((*m03).r3.c3, u, v0.r3.c3); (*m13).r3.c3 = mac((*m13).r3.c3, u, v1.r3.c3);
-          if ROWS > 4u { (*m23).r3.c3 = mac((*m23).r3.c3, u, v2.r3.c3); (*m33).r3.c3 = mac((*m33).r3.c3, u, v3.r3.c3); } }
+        // Tile rows 0 and 1, 2 and 3, each pair in a loop that runs once: a basic
+        // block of its own for LLVM (conv_common.wgsl's `once`).
+        loop {
+            { let u = ob4_0(g.g0);
+              (*m00).r0.c0 = mac((*m00).r0.c0, u, v0.r0.c0); (*m10).r0.c0 = mac((*m10).r0.c0, u, v1.r0.c0);
+              if ROWS > 4u { (*m20).r0.c0 = mac((*m20).r0.c0, u, v2.r0.c0); (*m30).r0.c0 = mac((*m30).r0.c0, u, v3.r0.c0); } }
+            { let u = ob4_1(g.g0);
+              (*m01).r0.c0 = mac((*m01).r0.c0, u, v0.r0.c0); (*m11).r0.c0 = mac((*m11).r0.c0, u, v1.r0.c0);
+              if ROWS > 4u { (*m21).r0.c0 = mac((*m21).r0.c0, u, v2.r0.c0); (*m31).r0.c0 = mac((*m31).r0.c0, u, v3.r0.c0); } }
+            { let u = ob4_2(g.g0);
+              (*m02).r0.c0 = mac((*m02).r0.c0, u, v0.r0.c0); (*m12).r0.c0 = mac((*m12).r0.c0, u, v1.r0.c0);
+              if ROWS > 4u { (*m22).r0.c0 = mac((*m22).r0.c0, u, v2.r0.c0); (*m32).r0.c0 = mac((*m32).r0.c0, u, v3.r0.c0); } }
+            { let u = ob4_3(g.g0);
+              (*m03).r0.c0 = mac((*m03).r0.c0, u, v0.r0.c0); (*m13).r0.c0 = mac((*m13).r0.c0, u, v1.r0.c0);
+              if ROWS > 4u { (*m23).r0.c0 = mac((*m23).r0.c0, u, v2.r0.c0); (*m33).r0.c0 = mac((*m33).r0.c0, u, v3.r0.c0); } }
+            { let u = ob4_0(g.g1);
+              (*m00).r0.c1 = mac((*m00).r0.c1, u, v0.r0.c1); (*m10).r0.c1 = mac((*m10).r0.c1, u, v1.r0.c1);
+              if ROWS > 4u { (*m20).r0.c1 = mac((*m20).r0.c1, u, v2.r0.c1); (*m30).r0.c1 = mac((*m30).r0.c1, u, v3.r0.c1); } }
+            { let u = ob4_1(g.g1);
+              (*m01).r0.c1 = mac((*m01).r0.c1, u, v0.r0.c1); (*m11).r0.c1 = mac((*m11).r0.c1, u, v1.r0.c1);
+              if ROWS > 4u { (*m21).r0.c1 = mac((*m21).r0.c1, u, v2.r0.c1); (*m31).r0.c1 = mac((*m31).r0.c1, u, v3.r0.c1); } }
+            { let u = ob4_2(g.g1);
+              (*m02).r0.c1 = mac((*m02).r0.c1, u, v0.r0.c1); (*m12).r0.c1 = mac((*m12).r0.c1, u, v1.r0.c1);
+              if ROWS > 4u { (*m22).r0.c1 = mac((*m22).r0.c1, u, v2.r0.c1); (*m32).r0.c1 = mac((*m32).r0.c1, u, v3.r0.c1); } }
+            { let u = ob4_3(g.g1);
+              (*m03).r0.c1 = mac((*m03).r0.c1, u, v0.r0.c1); (*m13).r0.c1 = mac((*m13).r0.c1, u, v1.r0.c1);
+              if ROWS > 4u { (*m23).r0.c1 = mac((*m23).r0.c1, u, v2.r0.c1); (*m33).r0.c1 = mac((*m33).r0.c1, u, v3.r0.c1); } }
+            { let u = ob4_0(g.g2);
+              (*m00).r0.c2 = mac((*m00).r0.c2, u, v0.r0.c2); (*m10).r0.c2 = mac((*m10).r0.c2, u, v1.r0.c2);
+              if ROWS > 4u { (*m20).r0.c2 = mac((*m20).r0.c2, u, v2.r0.c2); (*m30).r0.c2 = mac((*m30).r0.c2, u, v3.r0.c2); } }
+            { let u = ob4_1(g.g2);
+              (*m01).r0.c2 = mac((*m01).r0.c2, u, v0.r0.c2); (*m11).r0.c2 = mac((*m11).r0.c2, u, v1.r0.c2);
+              if ROWS > 4u { (*m21).r0.c2 = mac((*m21).r0.c2, u, v2.r0.c2); (*m31).r0.c2 = mac((*m31).r0.c2, u, v3.r0.c2); } }
+            { let u = ob4_2(g.g2);
+              (*m02).r0.c2 = mac((*m02).r0.c2, u, v0.r0.c2); (*m12).r0.c2 = mac((*m12).r0.c2, u, v1.r0.c2);
+              if ROWS > 4u { (*m22).r0.c2 = mac((*m22).r0.c2, u, v2.r0.c2); (*m32).r0.c2 = mac((*m32).r0.c2, u, v3.r0.c2); } }
+            { let u = ob4_3(g.g2);
+              (*m03).r0.c2 = mac((*m03).r0.c2, u, v0.r0.c2); (*m13).r0.c2 = mac((*m13).r0.c2, u, v1.r0.c2);
+              if ROWS > 4u { (*m23).r0.c2 = mac((*m23).r0.c2, u, v2.r0.c2); (*m33).r0.c2 = mac((*m33).r0.c2, u, v3.r0.c2); } }
+            { let u = ob4_0(g.g3);
+              (*m00).r0.c3 = mac((*m00).r0.c3, u, v0.r0.c3); (*m10).r0.c3 = mac((*m10).r0.c3, u, v1.r0.c3);
+              if ROWS > 4u { (*m20).r0.c3 = mac((*m20).r0.c3, u, v2.r0.c3); (*m30).r0.c3 = mac((*m30).r0.c3, u, v3.r0.c3); } }
+            { let u = ob4_1(g.g3);
+              (*m01).r0.c3 = mac((*m01).r0.c3, u, v0.r0.c3); (*m11).r0.c3 = mac((*m11).r0.c3, u, v1.r0.c3);
+              if ROWS > 4u { (*m21).r0.c3 = mac((*m21).r0.c3, u, v2.r0.c3); (*m31).r0.c3 = mac((*m31).r0.c3, u, v3.r0.c3); } }
+            { let u = ob4_2(g.g3);
+              (*m02).r0.c3 = mac((*m02).r0.c3, u, v0.r0.c3); (*m12).r0.c3 = mac((*m12).r0.c3, u, v1.r0.c3);
+              if ROWS > 4u { (*m22).r0.c3 = mac((*m22).r0.c3, u, v2.r0.c3); (*m32).r0.c3 = mac((*m32).r0.c3, u, v3.r0.c3); } }
+            { let u = ob4_3(g.g3);
+              (*m03).r0.c3 = mac((*m03).r0.c3, u, v0.r0.c3); (*m13).r0.c3 = mac((*m13).r0.c3, u, v1.r0.c3);
+              if ROWS > 4u { (*m23).r0.c3 = mac((*m23).r0.c3, u, v2.r0.c3); (*m33).r0.c3 = mac((*m33).r0.c3, u, v3.r0.c3); } }
+            { let u = ob4_0(g.g4);
+              (*m00).r1.c0 = mac((*m00).r1.c0, u, v0.r1.c0); (*m10).r1.c0 = mac((*m10).r1.c0, u, v1.r1.c0);
+              if ROWS > 4u { (*m20).r1.c0 = mac((*m20).r1.c0, u, v2.r1.c0); (*m30).r1.c0 = mac((*m30).r1.c0, u, v3.r1.c0); } }
+            { let u = ob4_1(g.g4);
+              (*m01).r1.c0 = mac((*m01).r1.c0, u, v0.r1.c0); (*m11).r1.c0 = mac((*m11).r1.c0, u, v1.r1.c0);
+              if ROWS > 4u { (*m21).r1.c0 = mac((*m21).r1.c0, u, v2.r1.c0); (*m31).r1.c0 = mac((*m31).r1.c0, u, v3.r1.c0); } }
+            { let u = ob4_2(g.g4);
+              (*m02).r1.c0 = mac((*m02).r1.c0, u, v0.r1.c0); (*m12).r1.c0 = mac((*m12).r1.c0, u, v1.r1.c0);
+              if ROWS > 4u { (*m22).r1.c0 = mac((*m22).r1.c0, u, v2.r1.c0); (*m32).r1.c0 = mac((*m32).r1.c0, u, v3.r1.c0); } }
+            { let u = ob4_3(g.g4);
+              (*m03).r1.c0 = mac((*m03).r1.c0, u, v0.r1.c0); (*m13).r1.c0 = mac((*m13).r1.c0, u, v1.r1.c0);
+              if ROWS > 4u { (*m23).r1.c0 = mac((*m23).r1.c0, u, v2.r1.c0); (*m33).r1.c0 = mac((*m33).r1.c0, u, v3.r1.c0); } }
+            { let u = ob4_0(g.g5);
+              (*m00).r1.c1 = mac((*m00).r1.c1, u, v0.r1.c1); (*m10).r1.c1 = mac((*m10).r1.c1, u, v1.r1.c1);
+              if ROWS > 4u { (*m20).r1.c1 = mac((*m20).r1.c1, u, v2.r1.c1); (*m30).r1.c1 = mac((*m30).r1.c1, u, v3.r1.c1); } }
+            { let u = ob4_1(g.g5);
+              (*m01).r1.c1 = mac((*m01).r1.c1, u, v0.r1.c1); (*m11).r1.c1 = mac((*m11).r1.c1, u, v1.r1.c1);
+              if ROWS > 4u { (*m21).r1.c1 = mac((*m21).r1.c1, u, v2.r1.c1); (*m31).r1.c1 = mac((*m31).r1.c1, u, v3.r1.c1); } }
+            { let u = ob4_2(g.g5);
+              (*m02).r1.c1 = mac((*m02).r1.c1, u, v0.r1.c1); (*m12).r1.c1 = mac((*m12).r1.c1, u, v1.r1.c1);
+              if ROWS > 4u { (*m22).r1.c1 = mac((*m22).r1.c1, u, v2.r1.c1); (*m32).r1.c1 = mac((*m32).r1.c1, u, v3.r1.c1); } }
+            { let u = ob4_3(g.g5);
+              (*m03).r1.c1 = mac((*m03).r1.c1, u, v0.r1.c1); (*m13).r1.c1 = mac((*m13).r1.c1, u, v1.r1.c1);
+              if ROWS > 4u { (*m23).r1.c1 = mac((*m23).r1.c1, u, v2.r1.c1); (*m33).r1.c1 = mac((*m33).r1.c1, u, v3.r1.c1); } }
+            { let u = ob4_0(g.g6);
+              (*m00).r1.c2 = mac((*m00).r1.c2, u, v0.r1.c2); (*m10).r1.c2 = mac((*m10).r1.c2, u, v1.r1.c2);
+              if ROWS > 4u { (*m20).r1.c2 = mac((*m20).r1.c2, u, v2.r1.c2); (*m30).r1.c2 = mac((*m30).r1.c2, u, v3.r1.c2); } }
+            { let u = ob4_1(g.g6);
+              (*m01).r1.c2 = mac((*m01).r1.c2, u, v0.r1.c2); (*m11).r1.c2 = mac((*m11).r1.c2, u, v1.r1.c2);
+              if ROWS > 4u { (*m21).r1.c2 = mac((*m21).r1.c2, u, v2.r1.c2); (*m31).r1.c2 = mac((*m31).r1.c2, u, v3.r1.c2); } }
+            { let u = ob4_2(g.g6);
+              (*m02).r1.c2 = mac((*m02).r1.c2, u, v0.r1.c2); (*m12).r1.c2 = mac((*m12).r1.c2, u, v1.r1.c2);
+              if ROWS > 4u { (*m22).r1.c2 = mac((*m22).r1.c2, u, v2.r1.c2); (*m32).r1.c2 = mac((*m32).r1.c2, u, v3.r1.c2); } }
+            { let u = ob4_3(g.g6);
+              (*m03).r1.c2 = mac((*m03).r1.c2, u, v0.r1.c2); (*m13).r1.c2 = mac((*m13).r1.c2, u, v1.r1.c2);
+              if ROWS > 4u { (*m23).r1.c2 = mac((*m23).r1.c2, u, v2.r1.c2); (*m33).r1.c2 = mac((*m33).r1.c2, u, v3.r1.c2); } }
+            { let u = ob4_0(g.g7);
+              (*m00).r1.c3 = mac((*m00).r1.c3, u, v0.r1.c3); (*m10).r1.c3 = mac((*m10).r1.c3, u, v1.r1.c3);
+              if ROWS > 4u { (*m20).r1.c3 = mac((*m20).r1.c3, u, v2.r1.c3); (*m30).r1.c3 = mac((*m30).r1.c3, u, v3.r1.c3); } }
+            { let u = ob4_1(g.g7);
+              (*m01).r1.c3 = mac((*m01).r1.c3, u, v0.r1.c3); (*m11).r1.c3 = mac((*m11).r1.c3, u, v1.r1.c3);
+              if ROWS > 4u { (*m21).r1.c3 = mac((*m21).r1.c3, u, v2.r1.c3); (*m31).r1.c3 = mac((*m31).r1.c3, u, v3.r1.c3); } }
+            { let u = ob4_2(g.g7);
+              (*m02).r1.c3 = mac((*m02).r1.c3, u, v0.r1.c3); (*m12).r1.c3 = mac((*m12).r1.c3, u, v1.r1.c3);
+              if ROWS > 4u { (*m22).r1.c3 = mac((*m22).r1.c3, u, v2.r1.c3); (*m32).r1.c3 = mac((*m32).r1.c3, u, v3.r1.c3); } }
+            { let u = ob4_3(g.g7);
+              (*m03).r1.c3 = mac((*m03).r1.c3, u, v0.r1.c3); (*m13).r1.c3 = mac((*m13).r1.c3, u, v1.r1.c3);
+              if ROWS > 4u { (*m23).r1.c3 = mac((*m23).r1.c3, u, v2.r1.c3); (*m33).r1.c3 = mac((*m33).r1.c3, u, v3.r1.c3); } }
+            continuing { break if once(); }
+        }
+        loop {
+            { let u = ob4_0(g.g8);
+              (*m00).r2.c0 = mac((*m00).r2.c0, u, v0.r2.c0); (*m10).r2.c0 = mac((*m10).r2.c0, u, v1.r2.c0);
+              if ROWS > 4u { (*m20).r2.c0 = mac((*m20).r2.c0, u, v2.r2.c0); (*m30).r2.c0 = mac((*m30).r2.c0, u, v3.r2.c0); } }
+            { let u = ob4_1(g.g8);
+              (*m01).r2.c0 = mac((*m01).r2.c0, u, v0.r2.c0); (*m11).r2.c0 = mac((*m11).r2.c0, u, v1.r2.c0);
+              if ROWS > 4u { (*m21).r2.c0 = mac((*m21).r2.c0, u, v2.r2.c0); (*m31).r2.c0 = mac((*m31).r2.c0, u, v3.r2.c0); } }
+            { let u = ob4_2(g.g8);
+              (*m02).r2.c0 = mac((*m02).r2.c0, u, v0.r2.c0); (*m12).r2.c0 = mac((*m12).r2.c0, u, v1.r2.c0);
+              if ROWS > 4u { (*m22).r2.c0 = mac((*m22).r2.c0, u, v2.r2.c0); (*m32).r2.c0 = mac((*m32).r2.c0, u, v3.r2.c0); } }
+            { let u = ob4_3(g.g8);
+              (*m03).r2.c0 = mac((*m03).r2.c0, u, v0.r2.c0); (*m13).r2.c0 = mac((*m13).r2.c0, u, v1.r2.c0);
+              if ROWS > 4u { (*m23).r2.c0 = mac((*m23).r2.c0, u, v2.r2.c0); (*m33).r2.c0 = mac((*m33).r2.c0, u, v3.r2.c0); } }
+            { let u = ob4_0(g.g9);
+              (*m00).r2.c1 = mac((*m00).r2.c1, u, v0.r2.c1); (*m10).r2.c1 = mac((*m10).r2.c1, u, v1.r2.c1);
+              if ROWS > 4u { (*m20).r2.c1 = mac((*m20).r2.c1, u, v2.r2.c1); (*m30).r2.c1 = mac((*m30).r2.c1, u, v3.r2.c1); } }
+            { let u = ob4_1(g.g9);
+              (*m01).r2.c1 = mac((*m01).r2.c1, u, v0.r2.c1); (*m11).r2.c1 = mac((*m11).r2.c1, u, v1.r2.c1);
+              if ROWS > 4u { (*m21).r2.c1 = mac((*m21).r2.c1, u, v2.r2.c1); (*m31).r2.c1 = mac((*m31).r2.c1, u, v3.r2.c1); } }
+            { let u = ob4_2(g.g9);
+              (*m02).r2.c1 = mac((*m02).r2.c1, u, v0.r2.c1); (*m12).r2.c1 = mac((*m12).r2.c1, u, v1.r2.c1);
+              if ROWS > 4u { (*m22).r2.c1 = mac((*m22).r2.c1, u, v2.r2.c1); (*m32).r2.c1 = mac((*m32).r2.c1, u, v3.r2.c1); } }
+            { let u = ob4_3(g.g9);
+              (*m03).r2.c1 = mac((*m03).r2.c1, u, v0.r2.c1); (*m13).r2.c1 = mac((*m13).r2.c1, u, v1.r2.c1);
+              if ROWS > 4u { (*m23).r2.c1 = mac((*m23).r2.c1, u, v2.r2.c1); (*m33).r2.c1 = mac((*m33).r2.c1, u, v3.r2.c1); } }
+            { let u = ob4_0(g.g10);
+              (*m00).r2.c2 = mac((*m00).r2.c2, u, v0.r2.c2); (*m10).r2.c2 = mac((*m10).r2.c2, u, v1.r2.c2);
+              if ROWS > 4u { (*m20).r2.c2 = mac((*m20).r2.c2, u, v2.r2.c2); (*m30).r2.c2 = mac((*m30).r2.c2, u, v3.r2.c2); } }
+            { let u = ob4_1(g.g10);
+              (*m01).r2.c2 = mac((*m01).r2.c2, u, v0.r2.c2); (*m11).r2.c2 = mac((*m11).r2.c2, u, v1.r2.c2);
+              if ROWS > 4u { (*m21).r2.c2 = mac((*m21).r2.c2, u, v2.r2.c2); (*m31).r2.c2 = mac((*m31).r2.c2, u, v3.r2.c2); } }
+            { let u = ob4_2(g.g10);
+              (*m02).r2.c2 = mac((*m02).r2.c2, u, v0.r2.c2); (*m12).r2.c2 = mac((*m12).r2.c2, u, v1.r2.c2);
+              if ROWS > 4u { (*m22).r2.c2 = mac((*m22).r2.c2, u, v2.r2.c2); (*m32).r2.c2 = mac((*m32).r2.c2, u, v3.r2.c2); } }
+            { let u = ob4_3(g.g10);
+              (*m03).r2.c2 = mac((*m03).r2.c2, u, v0.r2.c2); (*m13).r2.c2 = mac((*m13).r2.c2, u, v1.r2.c2);
+              if ROWS > 4u { (*m23).r2.c2 = mac((*m23).r2.c2, u, v2.r2.c2); (*m33).r2.c2 = mac((*m33).r2.c2, u, v3.r2.c2); } }
+            { let u = ob4_0(g.g11);
+              (*m00).r2.c3 = mac((*m00).r2.c3, u, v0.r2.c3); (*m10).r2.c3 = mac((*m10).r2.c3, u, v1.r2.c3);
+              if ROWS > 4u { (*m20).r2.c3 = mac((*m20).r2.c3, u, v2.r2.c3); (*m30).r2.c3 = mac((*m30).r2.c3, u, v3.r2.c3); } }
+            { let u = ob4_1(g.g11);
+              (*m01).r2.c3 = mac((*m01).r2.c3, u, v0.r2.c3); (*m11).r2.c3 = mac((*m11).r2.c3, u, v1.r2.c3);
+              if ROWS > 4u { (*m21).r2.c3 = mac((*m21).r2.c3, u, v2.r2.c3); (*m31).r2.c3 = mac((*m31).r2.c3, u, v3.r2.c3); } }
+            { let u = ob4_2(g.g11);
+              (*m02).r2.c3 = mac((*m02).r2.c3, u, v0.r2.c3); (*m12).r2.c3 = mac((*m12).r2.c3, u, v1.r2.c3);
+              if ROWS > 4u { (*m22).r2.c3 = mac((*m22).r2.c3, u, v2.r2.c3); (*m32).r2.c3 = mac((*m32).r2.c3, u, v3.r2.c3); } }
+            { let u = ob4_3(g.g11);
+              (*m03).r2.c3 = mac((*m03).r2.c3, u, v0.r2.c3); (*m13).r2.c3 = mac((*m13).r2.c3, u, v1.r2.c3);
+              if ROWS > 4u { (*m23).r2.c3 = mac((*m23).r2.c3, u, v2.r2.c3); (*m33).r2.c3 = mac((*m33).r2.c3, u, v3.r2.c3); } }
+            { let u = ob4_0(g.g12);
+              (*m00).r3.c0 = mac((*m00).r3.c0, u, v0.r3.c0); (*m10).r3.c0 = mac((*m10).r3.c0, u, v1.r3.c0);
+              if ROWS > 4u { (*m20).r3.c0 = mac((*m20).r3.c0, u, v2.r3.c0); (*m30).r3.c0 = mac((*m30).r3.c0, u, v3.r3.c0); } }
+            { let u = ob4_1(g.g12);
+              (*m01).r3.c0 = mac((*m01).r3.c0, u, v0.r3.c0); (*m11).r3.c0 = mac((*m11).r3.c0, u, v1.r3.c0);
+              if ROWS > 4u { (*m21).r3.c0 = mac((*m21).r3.c0, u, v2.r3.c0); (*m31).r3.c0 = mac((*m31).r3.c0, u, v3.r3.c0); } }
+            { let u = ob4_2(g.g12);
+              (*m02).r3.c0 = mac((*m02).r3.c0, u, v0.r3.c0); (*m12).r3.c0 = mac((*m12).r3.c0, u, v1.r3.c0);
+              if ROWS > 4u { (*m22).r3.c0 = mac((*m22).r3.c0, u, v2.r3.c0); (*m32).r3.c0 = mac((*m32).r3.c0, u, v3.r3.c0); } }
+            { let u = ob4_3(g.g12);
+              (*m03).r3.c0 = mac((*m03).r3.c0, u, v0.r3.c0); (*m13).r3.c0 = mac((*m13).r3.c0, u, v1.r3.c0);
+              if ROWS > 4u { (*m23).r3.c0 = mac((*m23).r3.c0, u, v2.r3.c0); (*m33).r3.c0 = mac((*m33).r3.c0, u, v3.r3.c0); } }
+            { let u = ob4_0(g.g13);
+              (*m00).r3.c1 = mac((*m00).r3.c1, u, v0.r3.c1); (*m10).r3.c1 = mac((*m10).r3.c1, u, v1.r3.c1);
+              if ROWS > 4u { (*m20).r3.c1 = mac((*m20).r3.c1, u, v2.r3.c1); (*m30).r3.c1 = mac((*m30).r3.c1, u, v3.r3.c1); } }
+            { let u = ob4_1(g.g13);
+              (*m01).r3.c1 = mac((*m01).r3.c1, u, v0.r3.c1); (*m11).r3.c1 = mac((*m11).r3.c1, u, v1.r3.c1);
+              if ROWS > 4u { (*m21).r3.c1 = mac((*m21).r3.c1, u, v2.r3.c1); (*m31).r3.c1 = mac((*m31).r3.c1, u, v3.r3.c1); } }
+            { let u = ob4_2(g.g13);
+              (*m02).r3.c1 = mac((*m02).r3.c1, u, v0.r3.c1); (*m12).r3.c1 = mac((*m12).r3.c1, u, v1.r3.c1);
+              if ROWS > 4u { (*m22).r3.c1 = mac((*m22).r3.c1, u, v2.r3.c1); (*m32).r3.c1 = mac((*m32).r3.c1, u, v3.r3.c1); } }
+            { let u = ob4_3(g.g13);
+              (*m03).r3.c1 = mac((*m03).r3.c1, u, v0.r3.c1); (*m13).r3.c1 = mac((*m13).r3.c1, u, v1.r3.c1);
+              if ROWS > 4u { (*m23).r3.c1 = mac((*m23).r3.c1, u, v2.r3.c1); (*m33).r3.c1 = mac((*m33).r3.c1, u, v3.r3.c1); } }
+            { let u = ob4_0(g.g14);
+              (*m00).r3.c2 = mac((*m00).r3.c2, u, v0.r3.c2); (*m10).r3.c2 = mac((*m10).r3.c2, u, v1.r3.c2);
+              if ROWS > 4u { (*m20).r3.c2 = mac((*m20).r3.c2, u, v2.r3.c2); (*m30).r3.c2 = mac((*m30).r3.c2, u, v3.r3.c2); } }
+            { let u = ob4_1(g.g14);
+              (*m01).r3.c2 = mac((*m01).r3.c2, u, v0.r3.c2); (*m11).r3.c2 = mac((*m11).r3.c2, u, v1.r3.c2);
+              if ROWS > 4u { (*m21).r3.c2 = mac((*m21).r3.c2, u, v2.r3.c2); (*m31).r3.c2 = mac((*m31).r3.c2, u, v3.r3.c2); } }
+            { let u = ob4_2(g.g14);
+              (*m02).r3.c2 = mac((*m02).r3.c2, u, v0.r3.c2); (*m12).r3.c2 = mac((*m12).r3.c2, u, v1.r3.c2);
+              if ROWS > 4u { (*m22).r3.c2 = mac((*m22).r3.c2, u, v2.r3.c2); (*m32).r3.c2 = mac((*m32).r3.c2, u, v3.r3.c2); } }
+            { let u = ob4_3(g.g14);
+              (*m03).r3.c2 = mac((*m03).r3.c2, u, v0.r3.c2); (*m13).r3.c2 = mac((*m13).r3.c2, u, v1.r3.c2);
+              if ROWS > 4u { (*m23).r3.c2 = mac((*m23).r3.c2, u, v2.r3.c2); (*m33).r3.c2 = mac((*m33).r3.c2, u, v3.r3.c2); } }
+            { let u = ob4_0(g.g15);
+              (*m00).r3.c3 = mac((*m00).r3.c3, u, v0.r3.c3); (*m10).r3.c3 = mac((*m10).r3.c3, u, v1.r3.c3);
+              if ROWS > 4u { (*m20).r3.c3 = mac((*m20).r3.c3, u, v2.r3.c3); (*m30).r3.c3 = mac((*m30).r3.c3, u, v3.r3.c3); } }
+            { let u = ob4_1(g.g15);
+              (*m01).r3.c3 = mac((*m01).r3.c3, u, v0.r3.c3); (*m11).r3.c3 = mac((*m11).r3.c3, u, v1.r3.c3);
+              if ROWS > 4u { (*m21).r3.c3 = mac((*m21).r3.c3, u, v2.r3.c3); (*m31).r3.c3 = mac((*m31).r3.c3, u, v3.r3.c3); } }
+            { let u = ob4_2(g.g15);
+              (*m02).r3.c3 = mac((*m02).r3.c3, u, v0.r3.c3); (*m12).r3.c3 = mac((*m12).r3.c3, u, v1.r3.c3);
+              if ROWS > 4u { (*m22).r3.c3 = mac((*m22).r3.c3, u, v2.r3.c3); (*m32).r3.c3 = mac((*m32).r3.c3, u, v3.r3.c3); } }
+            { let u = ob4_3(g.g15);
+              (*m03).r3.c3 = mac((*m03).r3.c3, u, v0.r3.c3); (*m13).r3.c3 = mac((*m13).r3.c3, u, v1.r3.c3);
+              if ROWS > 4u { (*m23).r3.c3 = mac((*m23).r3.c3, u, v2.r3.c3); (*m33).r3.c3 = mac((*m33).r3.c3, u, v3.r3.c3); } }
+            continuing { break if once(); }
+        }
     }
 }
 

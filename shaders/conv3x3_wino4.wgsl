@@ -171,9 +171,10 @@ fn window6(t: Source, mode: u32, layer: u32, x: i32, y0: i32) -> Window6 {
 // the transformed tiles m<t><j> (tile t from the top, output block j) whose top-left output is
 // (x, y0): the window's 6 columns are fetched once, each of its rows transformed once, and
 // each position's weights, taken from the lanes once, go to both tiles before the next
-// position's. The body is one unrolled basic block per OB, the overrides dropping the others:
-// 36 x 4 x 2 products of a 4x4 and a vec4 at most (the 8 transformed tiles, 288 vec4s, stay in
-// the stack between blocks). It is the kernel's only copy of that body: one loop runs over
+// position's. The body is unrolled per OB, the overrides dropping the others: 36 x 4 x 2
+// products of a 4x4 and a vec4 at most (the 8 transformed tiles, 288 vec4s, stay in the stack
+// between blocks), in three basic blocks of two tile rows each (`once`: one block took twice
+// the compile time). It is the kernel's only copy of that body: one loop runs over
 // both sources' blocks, the window alone chosen per source, so LLVM compiles the body once.
 fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<function, Wino6>, m03: ptr<function, Wino6>, m10: ptr<function, Wino6>, m11: ptr<function, Wino6>, m12: ptr<function, Wino6>, m13: ptr<function, Wino6>, cb: u32, w: u32, x: i32, y0: i32) {
     var k: Window6;
@@ -207,952 +208,985 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
     // Position p = 6 i + c of each tile (Wino6's r<i>.c<c>), block by block, each gather of 16
     // vec4s loaded just before the positions it holds.
     if OB == 1u {
-        {
-        let g = weight_texel(base + 0u + lane);
-        { let u = ob1_0(g);
-          (*m00).r0.c0 = mac((*m00).r0.c0, u, v0.r0.c0);
-          if ROWS > 4u { (*m10).r0.c0 = mac((*m10).r0.c0, u, v1.r0.c0); } }
-        { let u = ob1_1(g);
-          (*m00).r0.c1 = mac((*m00).r0.c1, u, v0.r0.c1);
-          if ROWS > 4u { (*m10).r0.c1 = mac((*m10).r0.c1, u, v1.r0.c1); } }
-        { let u = ob1_2(g);
-          (*m00).r0.c2 = mac((*m00).r0.c2, u, v0.r0.c2);
-          if ROWS > 4u { (*m10).r0.c2 = mac((*m10).r0.c2, u, v1.r0.c2); } }
-        { let u = ob1_3(g);
-          (*m00).r0.c3 = mac((*m00).r0.c3, u, v0.r0.c3);
-          if ROWS > 4u { (*m10).r0.c3 = mac((*m10).r0.c3, u, v1.r0.c3); } }
+        // Tile rows 0 and 1, 2 and 3, 4 and 5, each pair in a loop that runs once: a basic
+        // block of its own for LLVM (conv_common.wgsl's `once`).
+        loop {
+            {
+            let g = weight_texel(base + 0u + lane);
+            { let u = ob1_0(g);
+              (*m00).r0.c0 = mac((*m00).r0.c0, u, v0.r0.c0);
+              if ROWS > 4u { (*m10).r0.c0 = mac((*m10).r0.c0, u, v1.r0.c0); } }
+            { let u = ob1_1(g);
+              (*m00).r0.c1 = mac((*m00).r0.c1, u, v0.r0.c1);
+              if ROWS > 4u { (*m10).r0.c1 = mac((*m10).r0.c1, u, v1.r0.c1); } }
+            { let u = ob1_2(g);
+              (*m00).r0.c2 = mac((*m00).r0.c2, u, v0.r0.c2);
+              if ROWS > 4u { (*m10).r0.c2 = mac((*m10).r0.c2, u, v1.r0.c2); } }
+            { let u = ob1_3(g);
+              (*m00).r0.c3 = mac((*m00).r0.c3, u, v0.r0.c3);
+              if ROWS > 4u { (*m10).r0.c3 = mac((*m10).r0.c3, u, v1.r0.c3); } }
+            }
+            {
+            let g = weight_texel(base + 16u + lane);
+            { let u = ob1_0(g);
+              (*m00).r0.c4 = mac((*m00).r0.c4, u, v0.r0.c4);
+              if ROWS > 4u { (*m10).r0.c4 = mac((*m10).r0.c4, u, v1.r0.c4); } }
+            { let u = ob1_1(g);
+              (*m00).r0.c5 = mac((*m00).r0.c5, u, v0.r0.c5);
+              if ROWS > 4u { (*m10).r0.c5 = mac((*m10).r0.c5, u, v1.r0.c5); } }
+            { let u = ob1_2(g);
+              (*m00).r1.c0 = mac((*m00).r1.c0, u, v0.r1.c0);
+              if ROWS > 4u { (*m10).r1.c0 = mac((*m10).r1.c0, u, v1.r1.c0); } }
+            { let u = ob1_3(g);
+              (*m00).r1.c1 = mac((*m00).r1.c1, u, v0.r1.c1);
+              if ROWS > 4u { (*m10).r1.c1 = mac((*m10).r1.c1, u, v1.r1.c1); } }
+            }
+            {
+            let g = weight_texel(base + 32u + lane);
+            { let u = ob1_0(g);
+              (*m00).r1.c2 = mac((*m00).r1.c2, u, v0.r1.c2);
+              if ROWS > 4u { (*m10).r1.c2 = mac((*m10).r1.c2, u, v1.r1.c2); } }
+            { let u = ob1_1(g);
+              (*m00).r1.c3 = mac((*m00).r1.c3, u, v0.r1.c3);
+              if ROWS > 4u { (*m10).r1.c3 = mac((*m10).r1.c3, u, v1.r1.c3); } }
+            { let u = ob1_2(g);
+              (*m00).r1.c4 = mac((*m00).r1.c4, u, v0.r1.c4);
+              if ROWS > 4u { (*m10).r1.c4 = mac((*m10).r1.c4, u, v1.r1.c4); } }
+            { let u = ob1_3(g);
+              (*m00).r1.c5 = mac((*m00).r1.c5, u, v0.r1.c5);
+              if ROWS > 4u { (*m10).r1.c5 = mac((*m10).r1.c5, u, v1.r1.c5); } }
+            }
+            continuing { break if once(); }
         }
-        {
-        let g = weight_texel(base + 16u + lane);
-        { let u = ob1_0(g);
-          (*m00).r0.c4 = mac((*m00).r0.c4, u, v0.r0.c4);
-          if ROWS > 4u { (*m10).r0.c4 = mac((*m10).r0.c4, u, v1.r0.c4); } }
-        { let u = ob1_1(g);
-          (*m00).r0.c5 = mac((*m00).r0.c5, u, v0.r0.c5);
-          if ROWS > 4u { (*m10).r0.c5 = mac((*m10).r0.c5, u, v1.r0.c5); } }
-        { let u = ob1_2(g);
-          (*m00).r1.c0 = mac((*m00).r1.c0, u, v0.r1.c0);
-          if ROWS > 4u { (*m10).r1.c0 = mac((*m10).r1.c0, u, v1.r1.c0); } }
-        { let u = ob1_3(g);
-          (*m00).r1.c1 = mac((*m00).r1.c1, u, v0.r1.c1);
-          if ROWS > 4u { (*m10).r1.c1 = mac((*m10).r1.c1, u, v1.r1.c1); } }
+        loop {
+            {
+            let g = weight_texel(base + 48u + lane);
+            { let u = ob1_0(g);
+              (*m00).r2.c0 = mac((*m00).r2.c0, u, v0.r2.c0);
+              if ROWS > 4u { (*m10).r2.c0 = mac((*m10).r2.c0, u, v1.r2.c0); } }
+            { let u = ob1_1(g);
+              (*m00).r2.c1 = mac((*m00).r2.c1, u, v0.r2.c1);
+              if ROWS > 4u { (*m10).r2.c1 = mac((*m10).r2.c1, u, v1.r2.c1); } }
+            { let u = ob1_2(g);
+              (*m00).r2.c2 = mac((*m00).r2.c2, u, v0.r2.c2);
+              if ROWS > 4u { (*m10).r2.c2 = mac((*m10).r2.c2, u, v1.r2.c2); } }
+            { let u = ob1_3(g);
+              (*m00).r2.c3 = mac((*m00).r2.c3, u, v0.r2.c3);
+              if ROWS > 4u { (*m10).r2.c3 = mac((*m10).r2.c3, u, v1.r2.c3); } }
+            }
+            {
+            let g = weight_texel(base + 64u + lane);
+            { let u = ob1_0(g);
+              (*m00).r2.c4 = mac((*m00).r2.c4, u, v0.r2.c4);
+              if ROWS > 4u { (*m10).r2.c4 = mac((*m10).r2.c4, u, v1.r2.c4); } }
+            { let u = ob1_1(g);
+              (*m00).r2.c5 = mac((*m00).r2.c5, u, v0.r2.c5);
+              if ROWS > 4u { (*m10).r2.c5 = mac((*m10).r2.c5, u, v1.r2.c5); } }
+            { let u = ob1_2(g);
+              (*m00).r3.c0 = mac((*m00).r3.c0, u, v0.r3.c0);
+              if ROWS > 4u { (*m10).r3.c0 = mac((*m10).r3.c0, u, v1.r3.c0); } }
+            { let u = ob1_3(g);
+              (*m00).r3.c1 = mac((*m00).r3.c1, u, v0.r3.c1);
+              if ROWS > 4u { (*m10).r3.c1 = mac((*m10).r3.c1, u, v1.r3.c1); } }
+            }
+            {
+            let g = weight_texel(base + 80u + lane);
+            { let u = ob1_0(g);
+              (*m00).r3.c2 = mac((*m00).r3.c2, u, v0.r3.c2);
+              if ROWS > 4u { (*m10).r3.c2 = mac((*m10).r3.c2, u, v1.r3.c2); } }
+            { let u = ob1_1(g);
+              (*m00).r3.c3 = mac((*m00).r3.c3, u, v0.r3.c3);
+              if ROWS > 4u { (*m10).r3.c3 = mac((*m10).r3.c3, u, v1.r3.c3); } }
+            { let u = ob1_2(g);
+              (*m00).r3.c4 = mac((*m00).r3.c4, u, v0.r3.c4);
+              if ROWS > 4u { (*m10).r3.c4 = mac((*m10).r3.c4, u, v1.r3.c4); } }
+            { let u = ob1_3(g);
+              (*m00).r3.c5 = mac((*m00).r3.c5, u, v0.r3.c5);
+              if ROWS > 4u { (*m10).r3.c5 = mac((*m10).r3.c5, u, v1.r3.c5); } }
+            }
+            continuing { break if once(); }
         }
-        {
-        let g = weight_texel(base + 32u + lane);
-        { let u = ob1_0(g);
-          (*m00).r1.c2 = mac((*m00).r1.c2, u, v0.r1.c2);
-          if ROWS > 4u { (*m10).r1.c2 = mac((*m10).r1.c2, u, v1.r1.c2); } }
-        { let u = ob1_1(g);
-          (*m00).r1.c3 = mac((*m00).r1.c3, u, v0.r1.c3);
-          if ROWS > 4u { (*m10).r1.c3 = mac((*m10).r1.c3, u, v1.r1.c3); } }
-        { let u = ob1_2(g);
-          (*m00).r1.c4 = mac((*m00).r1.c4, u, v0.r1.c4);
-          if ROWS > 4u { (*m10).r1.c4 = mac((*m10).r1.c4, u, v1.r1.c4); } }
-        { let u = ob1_3(g);
-          (*m00).r1.c5 = mac((*m00).r1.c5, u, v0.r1.c5);
-          if ROWS > 4u { (*m10).r1.c5 = mac((*m10).r1.c5, u, v1.r1.c5); } }
-        }
-        {
-        let g = weight_texel(base + 48u + lane);
-        { let u = ob1_0(g);
-          (*m00).r2.c0 = mac((*m00).r2.c0, u, v0.r2.c0);
-          if ROWS > 4u { (*m10).r2.c0 = mac((*m10).r2.c0, u, v1.r2.c0); } }
-        { let u = ob1_1(g);
-          (*m00).r2.c1 = mac((*m00).r2.c1, u, v0.r2.c1);
-          if ROWS > 4u { (*m10).r2.c1 = mac((*m10).r2.c1, u, v1.r2.c1); } }
-        { let u = ob1_2(g);
-          (*m00).r2.c2 = mac((*m00).r2.c2, u, v0.r2.c2);
-          if ROWS > 4u { (*m10).r2.c2 = mac((*m10).r2.c2, u, v1.r2.c2); } }
-        { let u = ob1_3(g);
-          (*m00).r2.c3 = mac((*m00).r2.c3, u, v0.r2.c3);
-          if ROWS > 4u { (*m10).r2.c3 = mac((*m10).r2.c3, u, v1.r2.c3); } }
-        }
-        {
-        let g = weight_texel(base + 64u + lane);
-        { let u = ob1_0(g);
-          (*m00).r2.c4 = mac((*m00).r2.c4, u, v0.r2.c4);
-          if ROWS > 4u { (*m10).r2.c4 = mac((*m10).r2.c4, u, v1.r2.c4); } }
-        { let u = ob1_1(g);
-          (*m00).r2.c5 = mac((*m00).r2.c5, u, v0.r2.c5);
-          if ROWS > 4u { (*m10).r2.c5 = mac((*m10).r2.c5, u, v1.r2.c5); } }
-        { let u = ob1_2(g);
-          (*m00).r3.c0 = mac((*m00).r3.c0, u, v0.r3.c0);
-          if ROWS > 4u { (*m10).r3.c0 = mac((*m10).r3.c0, u, v1.r3.c0); } }
-        { let u = ob1_3(g);
-          (*m00).r3.c1 = mac((*m00).r3.c1, u, v0.r3.c1);
-          if ROWS > 4u { (*m10).r3.c1 = mac((*m10).r3.c1, u, v1.r3.c1); } }
-        }
-        {
-        let g = weight_texel(base + 80u + lane);
-        { let u = ob1_0(g);
-          (*m00).r3.c2 = mac((*m00).r3.c2, u, v0.r3.c2);
-          if ROWS > 4u { (*m10).r3.c2 = mac((*m10).r3.c2, u, v1.r3.c2); } }
-        { let u = ob1_1(g);
-          (*m00).r3.c3 = mac((*m00).r3.c3, u, v0.r3.c3);
-          if ROWS > 4u { (*m10).r3.c3 = mac((*m10).r3.c3, u, v1.r3.c3); } }
-        { let u = ob1_2(g);
-          (*m00).r3.c4 = mac((*m00).r3.c4, u, v0.r3.c4);
-          if ROWS > 4u { (*m10).r3.c4 = mac((*m10).r3.c4, u, v1.r3.c4); } }
-        { let u = ob1_3(g);
-          (*m00).r3.c5 = mac((*m00).r3.c5, u, v0.r3.c5);
-          if ROWS > 4u { (*m10).r3.c5 = mac((*m10).r3.c5, u, v1.r3.c5); } }
-        }
-        {
-        let g = weight_texel(base + 96u + lane);
-        { let u = ob1_0(g);
-          (*m00).r4.c0 = mac((*m00).r4.c0, u, v0.r4.c0);
-          if ROWS > 4u { (*m10).r4.c0 = mac((*m10).r4.c0, u, v1.r4.c0); } }
-        { let u = ob1_1(g);
-          (*m00).r4.c1 = mac((*m00).r4.c1, u, v0.r4.c1);
-          if ROWS > 4u { (*m10).r4.c1 = mac((*m10).r4.c1, u, v1.r4.c1); } }
-        { let u = ob1_2(g);
-          (*m00).r4.c2 = mac((*m00).r4.c2, u, v0.r4.c2);
-          if ROWS > 4u { (*m10).r4.c2 = mac((*m10).r4.c2, u, v1.r4.c2); } }
-        { let u = ob1_3(g);
-          (*m00).r4.c3 = mac((*m00).r4.c3, u, v0.r4.c3);
-          if ROWS > 4u { (*m10).r4.c3 = mac((*m10).r4.c3, u, v1.r4.c3); } }
-        }
-        {
-        let g = weight_texel(base + 112u + lane);
-        { let u = ob1_0(g);
-          (*m00).r4.c4 = mac((*m00).r4.c4, u, v0.r4.c4);
-          if ROWS > 4u { (*m10).r4.c4 = mac((*m10).r4.c4, u, v1.r4.c4); } }
-        { let u = ob1_1(g);
-          (*m00).r4.c5 = mac((*m00).r4.c5, u, v0.r4.c5);
-          if ROWS > 4u { (*m10).r4.c5 = mac((*m10).r4.c5, u, v1.r4.c5); } }
-        { let u = ob1_2(g);
-          (*m00).r5.c0 = mac((*m00).r5.c0, u, v0.r5.c0);
-          if ROWS > 4u { (*m10).r5.c0 = mac((*m10).r5.c0, u, v1.r5.c0); } }
-        { let u = ob1_3(g);
-          (*m00).r5.c1 = mac((*m00).r5.c1, u, v0.r5.c1);
-          if ROWS > 4u { (*m10).r5.c1 = mac((*m10).r5.c1, u, v1.r5.c1); } }
-        }
-        {
-        let g = weight_texel(base + 128u + lane);
-        { let u = ob1_0(g);
-          (*m00).r5.c2 = mac((*m00).r5.c2, u, v0.r5.c2);
-          if ROWS > 4u { (*m10).r5.c2 = mac((*m10).r5.c2, u, v1.r5.c2); } }
-        { let u = ob1_1(g);
-          (*m00).r5.c3 = mac((*m00).r5.c3, u, v0.r5.c3);
-          if ROWS > 4u { (*m10).r5.c3 = mac((*m10).r5.c3, u, v1.r5.c3); } }
-        { let u = ob1_2(g);
-          (*m00).r5.c4 = mac((*m00).r5.c4, u, v0.r5.c4);
-          if ROWS > 4u { (*m10).r5.c4 = mac((*m10).r5.c4, u, v1.r5.c4); } }
-        { let u = ob1_3(g);
-          (*m00).r5.c5 = mac((*m00).r5.c5, u, v0.r5.c5);
-          if ROWS > 4u { (*m10).r5.c5 = mac((*m10).r5.c5, u, v1.r5.c5); } }
+        loop {
+            {
+            let g = weight_texel(base + 96u + lane);
+            { let u = ob1_0(g);
+              (*m00).r4.c0 = mac((*m00).r4.c0, u, v0.r4.c0);
+              if ROWS > 4u { (*m10).r4.c0 = mac((*m10).r4.c0, u, v1.r4.c0); } }
+            { let u = ob1_1(g);
+              (*m00).r4.c1 = mac((*m00).r4.c1, u, v0.r4.c1);
+              if ROWS > 4u { (*m10).r4.c1 = mac((*m10).r4.c1, u, v1.r4.c1); } }
+            { let u = ob1_2(g);
+              (*m00).r4.c2 = mac((*m00).r4.c2, u, v0.r4.c2);
+              if ROWS > 4u { (*m10).r4.c2 = mac((*m10).r4.c2, u, v1.r4.c2); } }
+            { let u = ob1_3(g);
+              (*m00).r4.c3 = mac((*m00).r4.c3, u, v0.r4.c3);
+              if ROWS > 4u { (*m10).r4.c3 = mac((*m10).r4.c3, u, v1.r4.c3); } }
+            }
+            {
+            let g = weight_texel(base + 112u + lane);
+            { let u = ob1_0(g);
+              (*m00).r4.c4 = mac((*m00).r4.c4, u, v0.r4.c4);
+              if ROWS > 4u { (*m10).r4.c4 = mac((*m10).r4.c4, u, v1.r4.c4); } }
+            { let u = ob1_1(g);
+              (*m00).r4.c5 = mac((*m00).r4.c5, u, v0.r4.c5);
+              if ROWS > 4u { (*m10).r4.c5 = mac((*m10).r4.c5, u, v1.r4.c5); } }
+            { let u = ob1_2(g);
+              (*m00).r5.c0 = mac((*m00).r5.c0, u, v0.r5.c0);
+              if ROWS > 4u { (*m10).r5.c0 = mac((*m10).r5.c0, u, v1.r5.c0); } }
+            { let u = ob1_3(g);
+              (*m00).r5.c1 = mac((*m00).r5.c1, u, v0.r5.c1);
+              if ROWS > 4u { (*m10).r5.c1 = mac((*m10).r5.c1, u, v1.r5.c1); } }
+            }
+            {
+            let g = weight_texel(base + 128u + lane);
+            { let u = ob1_0(g);
+              (*m00).r5.c2 = mac((*m00).r5.c2, u, v0.r5.c2);
+              if ROWS > 4u { (*m10).r5.c2 = mac((*m10).r5.c2, u, v1.r5.c2); } }
+            { let u = ob1_1(g);
+              (*m00).r5.c3 = mac((*m00).r5.c3, u, v0.r5.c3);
+              if ROWS > 4u { (*m10).r5.c3 = mac((*m10).r5.c3, u, v1.r5.c3); } }
+            { let u = ob1_2(g);
+              (*m00).r5.c4 = mac((*m00).r5.c4, u, v0.r5.c4);
+              if ROWS > 4u { (*m10).r5.c4 = mac((*m10).r5.c4, u, v1.r5.c4); } }
+            { let u = ob1_3(g);
+              (*m00).r5.c5 = mac((*m00).r5.c5, u, v0.r5.c5);
+              if ROWS > 4u { (*m10).r5.c5 = mac((*m10).r5.c5, u, v1.r5.c5); } }
+            }
+            continuing { break if once(); }
         }
     } else if OB == 2u {
-        {
-        let g = weight_texel(base + 0u + lane);
-        { let u = ob2_00(g);
-          (*m00).r0.c0 = mac((*m00).r0.c0, u, v0.r0.c0);
-          if ROWS > 4u { (*m10).r0.c0 = mac((*m10).r0.c0, u, v1.r0.c0); } }
-        { let u = ob2_01(g);
-          (*m01).r0.c0 = mac((*m01).r0.c0, u, v0.r0.c0);
-          if ROWS > 4u { (*m11).r0.c0 = mac((*m11).r0.c0, u, v1.r0.c0); } }
-        { let u = ob2_10(g);
-          (*m00).r0.c1 = mac((*m00).r0.c1, u, v0.r0.c1);
-          if ROWS > 4u { (*m10).r0.c1 = mac((*m10).r0.c1, u, v1.r0.c1); } }
-        { let u = ob2_11(g);
-          (*m01).r0.c1 = mac((*m01).r0.c1, u, v0.r0.c1);
-          if ROWS > 4u { (*m11).r0.c1 = mac((*m11).r0.c1, u, v1.r0.c1); } }
+        // Tile rows 0 and 1, 2 and 3, 4 and 5, each pair in a loop that runs once: a basic
+        // block of its own for LLVM (conv_common.wgsl's `once`).
+        loop {
+            {
+            let g = weight_texel(base + 0u + lane);
+            { let u = ob2_00(g);
+              (*m00).r0.c0 = mac((*m00).r0.c0, u, v0.r0.c0);
+              if ROWS > 4u { (*m10).r0.c0 = mac((*m10).r0.c0, u, v1.r0.c0); } }
+            { let u = ob2_01(g);
+              (*m01).r0.c0 = mac((*m01).r0.c0, u, v0.r0.c0);
+              if ROWS > 4u { (*m11).r0.c0 = mac((*m11).r0.c0, u, v1.r0.c0); } }
+            { let u = ob2_10(g);
+              (*m00).r0.c1 = mac((*m00).r0.c1, u, v0.r0.c1);
+              if ROWS > 4u { (*m10).r0.c1 = mac((*m10).r0.c1, u, v1.r0.c1); } }
+            { let u = ob2_11(g);
+              (*m01).r0.c1 = mac((*m01).r0.c1, u, v0.r0.c1);
+              if ROWS > 4u { (*m11).r0.c1 = mac((*m11).r0.c1, u, v1.r0.c1); } }
+            }
+            {
+            let g = weight_texel(base + 16u + lane);
+            { let u = ob2_00(g);
+              (*m00).r0.c2 = mac((*m00).r0.c2, u, v0.r0.c2);
+              if ROWS > 4u { (*m10).r0.c2 = mac((*m10).r0.c2, u, v1.r0.c2); } }
+            { let u = ob2_01(g);
+              (*m01).r0.c2 = mac((*m01).r0.c2, u, v0.r0.c2);
+              if ROWS > 4u { (*m11).r0.c2 = mac((*m11).r0.c2, u, v1.r0.c2); } }
+            { let u = ob2_10(g);
+              (*m00).r0.c3 = mac((*m00).r0.c3, u, v0.r0.c3);
+              if ROWS > 4u { (*m10).r0.c3 = mac((*m10).r0.c3, u, v1.r0.c3); } }
+            { let u = ob2_11(g);
+              (*m01).r0.c3 = mac((*m01).r0.c3, u, v0.r0.c3);
+              if ROWS > 4u { (*m11).r0.c3 = mac((*m11).r0.c3, u, v1.r0.c3); } }
+            }
+            {
+            let g = weight_texel(base + 32u + lane);
+            { let u = ob2_00(g);
+              (*m00).r0.c4 = mac((*m00).r0.c4, u, v0.r0.c4);
+              if ROWS > 4u { (*m10).r0.c4 = mac((*m10).r0.c4, u, v1.r0.c4); } }
+            { let u = ob2_01(g);
+              (*m01).r0.c4 = mac((*m01).r0.c4, u, v0.r0.c4);
+              if ROWS > 4u { (*m11).r0.c4 = mac((*m11).r0.c4, u, v1.r0.c4); } }
+            { let u = ob2_10(g);
+              (*m00).r0.c5 = mac((*m00).r0.c5, u, v0.r0.c5);
+              if ROWS > 4u { (*m10).r0.c5 = mac((*m10).r0.c5, u, v1.r0.c5); } }
+            { let u = ob2_11(g);
+              (*m01).r0.c5 = mac((*m01).r0.c5, u, v0.r0.c5);
+              if ROWS > 4u { (*m11).r0.c5 = mac((*m11).r0.c5, u, v1.r0.c5); } }
+            }
+            {
+            let g = weight_texel(base + 48u + lane);
+            { let u = ob2_00(g);
+              (*m00).r1.c0 = mac((*m00).r1.c0, u, v0.r1.c0);
+              if ROWS > 4u { (*m10).r1.c0 = mac((*m10).r1.c0, u, v1.r1.c0); } }
+            { let u = ob2_01(g);
+              (*m01).r1.c0 = mac((*m01).r1.c0, u, v0.r1.c0);
+              if ROWS > 4u { (*m11).r1.c0 = mac((*m11).r1.c0, u, v1.r1.c0); } }
+            { let u = ob2_10(g);
+              (*m00).r1.c1 = mac((*m00).r1.c1, u, v0.r1.c1);
+              if ROWS > 4u { (*m10).r1.c1 = mac((*m10).r1.c1, u, v1.r1.c1); } }
+            { let u = ob2_11(g);
+              (*m01).r1.c1 = mac((*m01).r1.c1, u, v0.r1.c1);
+              if ROWS > 4u { (*m11).r1.c1 = mac((*m11).r1.c1, u, v1.r1.c1); } }
+            }
+            {
+            let g = weight_texel(base + 64u + lane);
+            { let u = ob2_00(g);
+              (*m00).r1.c2 = mac((*m00).r1.c2, u, v0.r1.c2);
+              if ROWS > 4u { (*m10).r1.c2 = mac((*m10).r1.c2, u, v1.r1.c2); } }
+            { let u = ob2_01(g);
+              (*m01).r1.c2 = mac((*m01).r1.c2, u, v0.r1.c2);
+              if ROWS > 4u { (*m11).r1.c2 = mac((*m11).r1.c2, u, v1.r1.c2); } }
+            { let u = ob2_10(g);
+              (*m00).r1.c3 = mac((*m00).r1.c3, u, v0.r1.c3);
+              if ROWS > 4u { (*m10).r1.c3 = mac((*m10).r1.c3, u, v1.r1.c3); } }
+            { let u = ob2_11(g);
+              (*m01).r1.c3 = mac((*m01).r1.c3, u, v0.r1.c3);
+              if ROWS > 4u { (*m11).r1.c3 = mac((*m11).r1.c3, u, v1.r1.c3); } }
+            }
+            {
+            let g = weight_texel(base + 80u + lane);
+            { let u = ob2_00(g);
+              (*m00).r1.c4 = mac((*m00).r1.c4, u, v0.r1.c4);
+              if ROWS > 4u { (*m10).r1.c4 = mac((*m10).r1.c4, u, v1.r1.c4); } }
+            { let u = ob2_01(g);
+              (*m01).r1.c4 = mac((*m01).r1.c4, u, v0.r1.c4);
+              if ROWS > 4u { (*m11).r1.c4 = mac((*m11).r1.c4, u, v1.r1.c4); } }
+            { let u = ob2_10(g);
+              (*m00).r1.c5 = mac((*m00).r1.c5, u, v0.r1.c5);
+              if ROWS > 4u { (*m10).r1.c5 = mac((*m10).r1.c5, u, v1.r1.c5); } }
+            { let u = ob2_11(g);
+              (*m01).r1.c5 = mac((*m01).r1.c5, u, v0.r1.c5);
+              if ROWS > 4u { (*m11).r1.c5 = mac((*m11).r1.c5, u, v1.r1.c5); } }
+            }
+            continuing { break if once(); }
         }
-        {
-        let g = weight_texel(base + 16u + lane);
-        { let u = ob2_00(g);
-          (*m00).r0.c2 = mac((*m00).r0.c2, u, v0.r0.c2);
-          if ROWS > 4u { (*m10).r0.c2 = mac((*m10).r0.c2, u, v1.r0.c2); } }
-        { let u = ob2_01(g);
-          (*m01).r0.c2 = mac((*m01).r0.c2, u, v0.r0.c2);
-          if ROWS > 4u { (*m11).r0.c2 = mac((*m11).r0.c2, u, v1.r0.c2); } }
-        { let u = ob2_10(g);
-          (*m00).r0.c3 = mac((*m00).r0.c3, u, v0.r0.c3);
-          if ROWS > 4u { (*m10).r0.c3 = mac((*m10).r0.c3, u, v1.r0.c3); } }
-        { let u = ob2_11(g);
-          (*m01).r0.c3 = mac((*m01).r0.c3, u, v0.r0.c3);
-          if ROWS > 4u { (*m11).r0.c3 = mac((*m11).r0.c3, u, v1.r0.c3); } }
+        loop {
+            {
+            let g = weight_texel(base + 96u + lane);
+            { let u = ob2_00(g);
+              (*m00).r2.c0 = mac((*m00).r2.c0, u, v0.r2.c0);
+              if ROWS > 4u { (*m10).r2.c0 = mac((*m10).r2.c0, u, v1.r2.c0); } }
+            { let u = ob2_01(g);
+              (*m01).r2.c0 = mac((*m01).r2.c0, u, v0.r2.c0);
+              if ROWS > 4u { (*m11).r2.c0 = mac((*m11).r2.c0, u, v1.r2.c0); } }
+            { let u = ob2_10(g);
+              (*m00).r2.c1 = mac((*m00).r2.c1, u, v0.r2.c1);
+              if ROWS > 4u { (*m10).r2.c1 = mac((*m10).r2.c1, u, v1.r2.c1); } }
+            { let u = ob2_11(g);
+              (*m01).r2.c1 = mac((*m01).r2.c1, u, v0.r2.c1);
+              if ROWS > 4u { (*m11).r2.c1 = mac((*m11).r2.c1, u, v1.r2.c1); } }
+            }
+            {
+            let g = weight_texel(base + 112u + lane);
+            { let u = ob2_00(g);
+              (*m00).r2.c2 = mac((*m00).r2.c2, u, v0.r2.c2);
+              if ROWS > 4u { (*m10).r2.c2 = mac((*m10).r2.c2, u, v1.r2.c2); } }
+            { let u = ob2_01(g);
+              (*m01).r2.c2 = mac((*m01).r2.c2, u, v0.r2.c2);
+              if ROWS > 4u { (*m11).r2.c2 = mac((*m11).r2.c2, u, v1.r2.c2); } }
+            { let u = ob2_10(g);
+              (*m00).r2.c3 = mac((*m00).r2.c3, u, v0.r2.c3);
+              if ROWS > 4u { (*m10).r2.c3 = mac((*m10).r2.c3, u, v1.r2.c3); } }
+            { let u = ob2_11(g);
+              (*m01).r2.c3 = mac((*m01).r2.c3, u, v0.r2.c3);
+              if ROWS > 4u { (*m11).r2.c3 = mac((*m11).r2.c3, u, v1.r2.c3); } }
+            }
+            {
+            let g = weight_texel(base + 128u + lane);
+            { let u = ob2_00(g);
+              (*m00).r2.c4 = mac((*m00).r2.c4, u, v0.r2.c4);
+              if ROWS > 4u { (*m10).r2.c4 = mac((*m10).r2.c4, u, v1.r2.c4); } }
+            { let u = ob2_01(g);
+              (*m01).r2.c4 = mac((*m01).r2.c4, u, v0.r2.c4);
+              if ROWS > 4u { (*m11).r2.c4 = mac((*m11).r2.c4, u, v1.r2.c4); } }
+            { let u = ob2_10(g);
+              (*m00).r2.c5 = mac((*m00).r2.c5, u, v0.r2.c5);
+              if ROWS > 4u { (*m10).r2.c5 = mac((*m10).r2.c5, u, v1.r2.c5); } }
+            { let u = ob2_11(g);
+              (*m01).r2.c5 = mac((*m01).r2.c5, u, v0.r2.c5);
+              if ROWS > 4u { (*m11).r2.c5 = mac((*m11).r2.c5, u, v1.r2.c5); } }
+            }
+            {
+            let g = weight_texel(base + 144u + lane);
+            { let u = ob2_00(g);
+              (*m00).r3.c0 = mac((*m00).r3.c0, u, v0.r3.c0);
+              if ROWS > 4u { (*m10).r3.c0 = mac((*m10).r3.c0, u, v1.r3.c0); } }
+            { let u = ob2_01(g);
+              (*m01).r3.c0 = mac((*m01).r3.c0, u, v0.r3.c0);
+              if ROWS > 4u { (*m11).r3.c0 = mac((*m11).r3.c0, u, v1.r3.c0); } }
+            { let u = ob2_10(g);
+              (*m00).r3.c1 = mac((*m00).r3.c1, u, v0.r3.c1);
+              if ROWS > 4u { (*m10).r3.c1 = mac((*m10).r3.c1, u, v1.r3.c1); } }
+            { let u = ob2_11(g);
+              (*m01).r3.c1 = mac((*m01).r3.c1, u, v0.r3.c1);
+              if ROWS > 4u { (*m11).r3.c1 = mac((*m11).r3.c1, u, v1.r3.c1); } }
+            }
+            {
+            let g = weight_texel(base + 160u + lane);
+            { let u = ob2_00(g);
+              (*m00).r3.c2 = mac((*m00).r3.c2, u, v0.r3.c2);
+              if ROWS > 4u { (*m10).r3.c2 = mac((*m10).r3.c2, u, v1.r3.c2); } }
+            { let u = ob2_01(g);
+              (*m01).r3.c2 = mac((*m01).r3.c2, u, v0.r3.c2);
+              if ROWS > 4u { (*m11).r3.c2 = mac((*m11).r3.c2, u, v1.r3.c2); } }
+            { let u = ob2_10(g);
+              (*m00).r3.c3 = mac((*m00).r3.c3, u, v0.r3.c3);
+              if ROWS > 4u { (*m10).r3.c3 = mac((*m10).r3.c3, u, v1.r3.c3); } }
+            { let u = ob2_11(g);
+              (*m01).r3.c3 = mac((*m01).r3.c3, u, v0.r3.c3);
+              if ROWS > 4u { (*m11).r3.c3 = mac((*m11).r3.c3, u, v1.r3.c3); } }
+            }
+            {
+            let g = weight_texel(base + 176u + lane);
+            { let u = ob2_00(g);
+              (*m00).r3.c4 = mac((*m00).r3.c4, u, v0.r3.c4);
+              if ROWS > 4u { (*m10).r3.c4 = mac((*m10).r3.c4, u, v1.r3.c4); } }
+            { let u = ob2_01(g);
+              (*m01).r3.c4 = mac((*m01).r3.c4, u, v0.r3.c4);
+              if ROWS > 4u { (*m11).r3.c4 = mac((*m11).r3.c4, u, v1.r3.c4); } }
+            { let u = ob2_10(g);
+              (*m00).r3.c5 = mac((*m00).r3.c5, u, v0.r3.c5);
+              if ROWS > 4u { (*m10).r3.c5 = mac((*m10).r3.c5, u, v1.r3.c5); } }
+            { let u = ob2_11(g);
+              (*m01).r3.c5 = mac((*m01).r3.c5, u, v0.r3.c5);
+              if ROWS > 4u { (*m11).r3.c5 = mac((*m11).r3.c5, u, v1.r3.c5); } }
+            }
+            continuing { break if once(); }
         }
-        {
-        let g = weight_texel(base + 32u + lane);
-        { let u = ob2_00(g);
-          (*m00).r0.c4 = mac((*m00).r0.c4, u, v0.r0.c4);
-          if ROWS > 4u { (*m10).r0.c4 = mac((*m10).r0.c4, u, v1.r0.c4); } }
-        { let u = ob2_01(g);
-          (*m01).r0.c4 = mac((*m01).r0.c4, u, v0.r0.c4);
-          if ROWS > 4u { (*m11).r0.c4 = mac((*m11).r0.c4, u, v1.r0.c4); } }
-        { let u = ob2_10(g);
-          (*m00).r0.c5 = mac((*m00).r0.c5, u, v0.r0.c5);
-          if ROWS > 4u { (*m10).r0.c5 = mac((*m10).r0.c5, u, v1.r0.c5); } }
-        { let u = ob2_11(g);
-          (*m01).r0.c5 = mac((*m01).r0.c5, u, v0.r0.c5);
-          if ROWS > 4u { (*m11).r0.c5 = mac((*m11).r0.c5, u, v1.r0.c5); } }
-        }
-        {
-        let g = weight_texel(base + 48u + lane);
-        { let u = ob2_00(g);
-          (*m00).r1.c0 = mac((*m00).r1.c0, u, v0.r1.c0);
-          if ROWS > 4u { (*m10).r1.c0 = mac((*m10).r1.c0, u, v1.r1.c0); } }
-        { let u = ob2_01(g);
-          (*m01).r1.c0 = mac((*m01).r1.c0, u, v0.r1.c0);
-          if ROWS > 4u { (*m11).r1.c0 = mac((*m11).r1.c0, u, v1.r1.c0); } }
-        { let u = ob2_10(g);
-          (*m00).r1.c1 = mac((*m00).r1.c1, u, v0.r1.c1);
-          if ROWS > 4u { (*m10).r1.c1 = mac((*m10).r1.c1, u, v1.r1.c1); } }
-        { let u = ob2_11(g);
-          (*m01).r1.c1 = mac((*m01).r1.c1, u, v0.r1.c1);
-          if ROWS > 4u { (*m11).r1.c1 = mac((*m11).r1.c1, u, v1.r1.c1); } }
-        }
-        {
-        let g = weight_texel(base + 64u + lane);
-        { let u = ob2_00(g);
-          (*m00).r1.c2 = mac((*m00).r1.c2, u, v0.r1.c2);
-          if ROWS > 4u { (*m10).r1.c2 = mac((*m10).r1.c2, u, v1.r1.c2); } }
-        { let u = ob2_01(g);
-          (*m01).r1.c2 = mac((*m01).r1.c2, u, v0.r1.c2);
-          if ROWS > 4u { (*m11).r1.c2 = mac((*m11).r1.c2, u, v1.r1.c2); } }
-        { let u = ob2_10(g);
-          (*m00).r1.c3 = mac((*m00).r1.c3, u, v0.r1.c3);
-          if ROWS > 4u { (*m10).r1.c3 = mac((*m10).r1.c3, u, v1.r1.c3); } }
-        { let u = ob2_11(g);
-          (*m01).r1.c3 = mac((*m01).r1.c3, u, v0.r1.c3);
-          if ROWS > 4u { (*m11).r1.c3 = mac((*m11).r1.c3, u, v1.r1.c3); } }
-        }
-        {
-        let g = weight_texel(base + 80u + lane);
-        { let u = ob2_00(g);
-          (*m00).r1.c4 = mac((*m00).r1.c4, u, v0.r1.c4);
-          if ROWS > 4u { (*m10).r1.c4 = mac((*m10).r1.c4, u, v1.r1.c4); } }
-        { let u = ob2_01(g);
-          (*m01).r1.c4 = mac((*m01).r1.c4, u, v0.r1.c4);
-          if ROWS > 4u { (*m11).r1.c4 = mac((*m11).r1.c4, u, v1.r1.c4); } }
-        { let u = ob2_10(g);
-          (*m00).r1.c5 = mac((*m00).r1.c5, u, v0.r1.c5);
-          if ROWS > 4u { (*m10).r1.c5 = mac((*m10).r1.c5, u, v1.r1.c5); } }
-        { let u = ob2_11(g);
-          (*m01).r1.c5 = mac((*m01).r1.c5, u, v0.r1.c5);
-          if ROWS > 4u { (*m11).r1.c5 = mac((*m11).r1.c5, u, v1.r1.c5); } }
-        }
-        {
-        let g = weight_texel(base + 96u + lane);
-        { let u = ob2_00(g);
-          (*m00).r2.c0 = mac((*m00).r2.c0, u, v0.r2.c0);
-          if ROWS > 4u { (*m10).r2.c0 = mac((*m10).r2.c0, u, v1.r2.c0); } }
-        { let u = ob2_01(g);
-          (*m01).r2.c0 = mac((*m01).r2.c0, u, v0.r2.c0);
-          if ROWS > 4u { (*m11).r2.c0 = mac((*m11).r2.c0, u, v1.r2.c0); } }
-        { let u = ob2_10(g);
-          (*m00).r2.c1 = mac((*m00).r2.c1, u, v0.r2.c1);
-          if ROWS > 4u { (*m10).r2.c1 = mac((*m10).r2.c1, u, v1.r2.c1); } }
-        { let u = ob2_11(g);
-          (*m01).r2.c1 = mac((*m01).r2.c1, u, v0.r2.c1);
-          if ROWS > 4u { (*m11).r2.c1 = mac((*m11).r2.c1, u, v1.r2.c1); } }
-        }
-        {
-        let g = weight_texel(base + 112u + lane);
-        { let u = ob2_00(g);
-          (*m00).r2.c2 = mac((*m00).r2.c2, u, v0.r2.c2);
-          if ROWS > 4u { (*m10).r2.c2 = mac((*m10).r2.c2, u, v1.r2.c2); } }
-        { let u = ob2_01(g);
-          (*m01).r2.c2 = mac((*m01).r2.c2, u, v0.r2.c2);
-          if ROWS > 4u { (*m11).r2.c2 = mac((*m11).r2.c2, u, v1.r2.c2); } }
-        { let u = ob2_10(g);
-          (*m00).r2.c3 = mac((*m00).r2.c3, u, v0.r2.c3);
-          if ROWS > 4u { (*m10).r2.c3 = mac((*m10).r2.c3, u, v1.r2.c3); } }
-        { let u = ob2_11(g);
-          (*m01).r2.c3 = mac((*m01).r2.c3, u, v0.r2.c3);
-          if ROWS > 4u { (*m11).r2.c3 = mac((*m11).r2.c3, u, v1.r2.c3); } }
-        }
-        {
-        let g = weight_texel(base + 128u + lane);
-        { let u = ob2_00(g);
-          (*m00).r2.c4 = mac((*m00).r2.c4, u, v0.r2.c4);
-          if ROWS > 4u { (*m10).r2.c4 = mac((*m10).r2.c4, u, v1.r2.c4); } }
-        { let u = ob2_01(g);
-          (*m01).r2.c4 = mac((*m01).r2.c4, u, v0.r2.c4);
-          if ROWS > 4u { (*m11).r2.c4 = mac((*m11).r2.c4, u, v1.r2.c4); } }
-        { let u = ob2_10(g);
-          (*m00).r2.c5 = mac((*m00).r2.c5, u, v0.r2.c5);
-          if ROWS > 4u { (*m10).r2.c5 = mac((*m10).r2.c5, u, v1.r2.c5); } }
-        { let u = ob2_11(g);
-          (*m01).r2.c5 = mac((*m01).r2.c5, u, v0.r2.c5);
-          if ROWS > 4u { (*m11).r2.c5 = mac((*m11).r2.c5, u, v1.r2.c5); } }
-        }
-        {
-        let g = weight_texel(base + 144u + lane);
-        { let u = ob2_00(g);
-          (*m00).r3.c0 = mac((*m00).r3.c0, u, v0.r3.c0);
-          if ROWS > 4u { (*m10).r3.c0 = mac((*m10).r3.c0, u, v1.r3.c0); } }
-        { let u = ob2_01(g);
-          (*m01).r3.c0 = mac((*m01).r3.c0, u, v0.r3.c0);
-          if ROWS > 4u { (*m11).r3.c0 = mac((*m11).r3.c0, u, v1.r3.c0); } }
-        { let u = ob2_10(g);
-          (*m00).r3.c1 = mac((*m00).r3.c1, u, v0.r3.c1);
-          if ROWS > 4u { (*m10).r3.c1 = mac((*m10).r3.c1, u, v1.r3.c1); } }
-        { let u = ob2_11(g);
-          (*m01).r3.c1 = mac((*m01).r3.c1, u, v0.r3.c1);
-          if ROWS > 4u { (*m11).r3.c1 = mac((*m11).r3.c1, u, v1.r3.c1); } }
-        }
-        {
-        let g = weight_texel(base + 160u + lane);
-        { let u = ob2_00(g);
-          (*m00).r3.c2 = mac((*m00).r3.c2, u, v0.r3.c2);
-          if ROWS > 4u { (*m10).r3.c2 = mac((*m10).r3.c2, u, v1.r3.c2); } }
-        { let u = ob2_01(g);
-          (*m01).r3.c2 = mac((*m01).r3.c2, u, v0.r3.c2);
-          if ROWS > 4u { (*m11).r3.c2 = mac((*m11).r3.c2, u, v1.r3.c2); } }
-        { let u = ob2_10(g);
-          (*m00).r3.c3 = mac((*m00).r3.c3, u, v0.r3.c3);
-          if ROWS > 4u { (*m10).r3.c3 = mac((*m10).r3.c3, u, v1.r3.c3); } }
-        { let u = ob2_11(g);
-          (*m01).r3.c3 = mac((*m01).r3.c3, u, v0.r3.c3);
-          if ROWS > 4u { (*m11).r3.c3 = mac((*m11).r3.c3, u, v1.r3.c3); } }
-        }
-        {
-        let g = weight_texel(base + 176u + lane);
-        { let u = ob2_00(g);
-          (*m00).r3.c4 = mac((*m00).r3.c4, u, v0.r3.c4);
-          if ROWS > 4u { (*m10).r3.c4 = mac((*m10).r3.c4, u, v1.r3.c4); } }
-        { let u = ob2_01(g);
-          (*m01).r3.c4 = mac((*m01).r3.c4, u, v0.r3.c4);
-          if ROWS > 4u { (*m11).r3.c4 = mac((*m11).r3.c4, u, v1.r3.c4); } }
-        { let u = ob2_10(g);
-          (*m00).r3.c5 = mac((*m00).r3.c5, u, v0.r3.c5);
-          if ROWS > 4u { (*m10).r3.c5 = mac((*m10).r3.c5, u, v1.r3.c5); } }
-        { let u = ob2_11(g);
-          (*m01).r3.c5 = mac((*m01).r3.c5, u, v0.r3.c5);
-          if ROWS > 4u { (*m11).r3.c5 = mac((*m11).r3.c5, u, v1.r3.c5); } }
-        }
-        {
-        let g = weight_texel(base + 192u + lane);
-        { let u = ob2_00(g);
-          (*m00).r4.c0 = mac((*m00).r4.c0, u, v0.r4.c0);
-          if ROWS > 4u { (*m10).r4.c0 = mac((*m10).r4.c0, u, v1.r4.c0); } }
-        { let u = ob2_01(g);
-          (*m01).r4.c0 = mac((*m01).r4.c0, u, v0.r4.c0);
-          if ROWS > 4u { (*m11).r4.c0 = mac((*m11).r4.c0, u, v1.r4.c0); } }
-        { let u = ob2_10(g);
-          (*m00).r4.c1 = mac((*m00).r4.c1, u, v0.r4.c1);
-          if ROWS > 4u { (*m10).r4.c1 = mac((*m10).r4.c1, u, v1.r4.c1); } }
-        { let u = ob2_11(g);
-          (*m01).r4.c1 = mac((*m01).r4.c1, u, v0.r4.c1);
-          if ROWS > 4u { (*m11).r4.c1 = mac((*m11).r4.c1, u, v1.r4.c1); } }
-        }
-        {
-        let g = weight_texel(base + 208u + lane);
-        { let u = ob2_00(g);
-          (*m00).r4.c2 = mac((*m00).r4.c2, u, v0.r4.c2);
-          if ROWS > 4u { (*m10).r4.c2 = mac((*m10).r4.c2, u, v1.r4.c2); } }
-        { let u = ob2_01(g);
-          (*m01).r4.c2 = mac((*m01).r4.c2, u, v0.r4.c2);
-          if ROWS > 4u { (*m11).r4.c2 = mac((*m11).r4.c2, u, v1.r4.c2); } }
-        { let u = ob2_10(g);
-          (*m00).r4.c3 = mac((*m00).r4.c3, u, v0.r4.c3);
-          if ROWS > 4u { (*m10).r4.c3 = mac((*m10).r4.c3, u, v1.r4.c3); } }
-        { let u = ob2_11(g);
-          (*m01).r4.c3 = mac((*m01).r4.c3, u, v0.r4.c3);
-          if ROWS > 4u { (*m11).r4.c3 = mac((*m11).r4.c3, u, v1.r4.c3); } }
-        }
-        {
-        let g = weight_texel(base + 224u + lane);
-        { let u = ob2_00(g);
-          (*m00).r4.c4 = mac((*m00).r4.c4, u, v0.r4.c4);
-          if ROWS > 4u { (*m10).r4.c4 = mac((*m10).r4.c4, u, v1.r4.c4); } }
-        { let u = ob2_01(g);
-          (*m01).r4.c4 = mac((*m01).r4.c4, u, v0.r4.c4);
-          if ROWS > 4u { (*m11).r4.c4 = mac((*m11).r4.c4, u, v1.r4.c4); } }
-        { let u = ob2_10(g);
-          (*m00).r4.c5 = mac((*m00).r4.c5, u, v0.r4.c5);
-          if ROWS > 4u { (*m10).r4.c5 = mac((*m10).r4.c5, u, v1.r4.c5); } }
-        { let u = ob2_11(g);
-          (*m01).r4.c5 = mac((*m01).r4.c5, u, v0.r4.c5);
-          if ROWS > 4u { (*m11).r4.c5 = mac((*m11).r4.c5, u, v1.r4.c5); } }
-        }
-        {
-        let g = weight_texel(base + 240u + lane);
-        { let u = ob2_00(g);
-          (*m00).r5.c0 = mac((*m00).r5.c0, u, v0.r5.c0);
-          if ROWS > 4u { (*m10).r5.c0 = mac((*m10).r5.c0, u, v1.r5.c0); } }
-        { let u = ob2_01(g);
-          (*m01).r5.c0 = mac((*m01).r5.c0, u, v0.r5.c0);
-          if ROWS > 4u { (*m11).r5.c0 = mac((*m11).r5.c0, u, v1.r5.c0); } }
-        { let u = ob2_10(g);
-          (*m00).r5.c1 = mac((*m00).r5.c1, u, v0.r5.c1);
-          if ROWS > 4u { (*m10).r5.c1 = mac((*m10).r5.c1, u, v1.r5.c1); } }
-        { let u = ob2_11(g);
-          (*m01).r5.c1 = mac((*m01).r5.c1, u, v0.r5.c1);
-          if ROWS > 4u { (*m11).r5.c1 = mac((*m11).r5.c1, u, v1.r5.c1); } }
-        }
-        {
-        let g = weight_texel(base + 256u + lane);
-        { let u = ob2_00(g);
-          (*m00).r5.c2 = mac((*m00).r5.c2, u, v0.r5.c2);
-          if ROWS > 4u { (*m10).r5.c2 = mac((*m10).r5.c2, u, v1.r5.c2); } }
-        { let u = ob2_01(g);
-          (*m01).r5.c2 = mac((*m01).r5.c2, u, v0.r5.c2);
-          if ROWS > 4u { (*m11).r5.c2 = mac((*m11).r5.c2, u, v1.r5.c2); } }
-        { let u = ob2_10(g);
-          (*m00).r5.c3 = mac((*m00).r5.c3, u, v0.r5.c3);
-          if ROWS > 4u { (*m10).r5.c3 = mac((*m10).r5.c3, u, v1.r5.c3); } }
-        { let u = ob2_11(g);
-          (*m01).r5.c3 = mac((*m01).r5.c3, u, v0.r5.c3);
-          if ROWS > 4u { (*m11).r5.c3 = mac((*m11).r5.c3, u, v1.r5.c3); } }
-        }
-        {
-        let g = weight_texel(base + 272u + lane);
-        { let u = ob2_00(g);
-          (*m00).r5.c4 = mac((*m00).r5.c4, u, v0.r5.c4);
-          if ROWS > 4u { (*m10).r5.c4 = mac((*m10).r5.c4, u, v1.r5.c4); } }
-        { let u = ob2_01(g);
-          (*m01).r5.c4 = mac((*m01).r5.c4, u, v0.r5.c4);
-          if ROWS > 4u { (*m11).r5.c4 = mac((*m11).r5.c4, u, v1.r5.c4); } }
-        { let u = ob2_10(g);
-          (*m00).r5.c5 = mac((*m00).r5.c5, u, v0.r5.c5);
-          if ROWS > 4u { (*m10).r5.c5 = mac((*m10).r5.c5, u, v1.r5.c5); } }
-        { let u = ob2_11(g);
-          (*m01).r5.c5 = mac((*m01).r5.c5, u, v0.r5.c5);
-          if ROWS > 4u { (*m11).r5.c5 = mac((*m11).r5.c5, u, v1.r5.c5); } }
+        loop {
+            {
+            let g = weight_texel(base + 192u + lane);
+            { let u = ob2_00(g);
+              (*m00).r4.c0 = mac((*m00).r4.c0, u, v0.r4.c0);
+              if ROWS > 4u { (*m10).r4.c0 = mac((*m10).r4.c0, u, v1.r4.c0); } }
+            { let u = ob2_01(g);
+              (*m01).r4.c0 = mac((*m01).r4.c0, u, v0.r4.c0);
+              if ROWS > 4u { (*m11).r4.c0 = mac((*m11).r4.c0, u, v1.r4.c0); } }
+            { let u = ob2_10(g);
+              (*m00).r4.c1 = mac((*m00).r4.c1, u, v0.r4.c1);
+              if ROWS > 4u { (*m10).r4.c1 = mac((*m10).r4.c1, u, v1.r4.c1); } }
+            { let u = ob2_11(g);
+              (*m01).r4.c1 = mac((*m01).r4.c1, u, v0.r4.c1);
+              if ROWS > 4u { (*m11).r4.c1 = mac((*m11).r4.c1, u, v1.r4.c1); } }
+            }
+            {
+            let g = weight_texel(base + 208u + lane);
+            { let u = ob2_00(g);
+              (*m00).r4.c2 = mac((*m00).r4.c2, u, v0.r4.c2);
+              if ROWS > 4u { (*m10).r4.c2 = mac((*m10).r4.c2, u, v1.r4.c2); } }
+            { let u = ob2_01(g);
+              (*m01).r4.c2 = mac((*m01).r4.c2, u, v0.r4.c2);
+              if ROWS > 4u { (*m11).r4.c2 = mac((*m11).r4.c2, u, v1.r4.c2); } }
+            { let u = ob2_10(g);
+              (*m00).r4.c3 = mac((*m00).r4.c3, u, v0.r4.c3);
+              if ROWS > 4u { (*m10).r4.c3 = mac((*m10).r4.c3, u, v1.r4.c3); } }
+            { let u = ob2_11(g);
+              (*m01).r4.c3 = mac((*m01).r4.c3, u, v0.r4.c3);
+              if ROWS > 4u { (*m11).r4.c3 = mac((*m11).r4.c3, u, v1.r4.c3); } }
+            }
+            {
+            let g = weight_texel(base + 224u + lane);
+            { let u = ob2_00(g);
+              (*m00).r4.c4 = mac((*m00).r4.c4, u, v0.r4.c4);
+              if ROWS > 4u { (*m10).r4.c4 = mac((*m10).r4.c4, u, v1.r4.c4); } }
+            { let u = ob2_01(g);
+              (*m01).r4.c4 = mac((*m01).r4.c4, u, v0.r4.c4);
+              if ROWS > 4u { (*m11).r4.c4 = mac((*m11).r4.c4, u, v1.r4.c4); } }
+            { let u = ob2_10(g);
+              (*m00).r4.c5 = mac((*m00).r4.c5, u, v0.r4.c5);
+              if ROWS > 4u { (*m10).r4.c5 = mac((*m10).r4.c5, u, v1.r4.c5); } }
+            { let u = ob2_11(g);
+              (*m01).r4.c5 = mac((*m01).r4.c5, u, v0.r4.c5);
+              if ROWS > 4u { (*m11).r4.c5 = mac((*m11).r4.c5, u, v1.r4.c5); } }
+            }
+            {
+            let g = weight_texel(base + 240u + lane);
+            { let u = ob2_00(g);
+              (*m00).r5.c0 = mac((*m00).r5.c0, u, v0.r5.c0);
+              if ROWS > 4u { (*m10).r5.c0 = mac((*m10).r5.c0, u, v1.r5.c0); } }
+            { let u = ob2_01(g);
+              (*m01).r5.c0 = mac((*m01).r5.c0, u, v0.r5.c0);
+              if ROWS > 4u { (*m11).r5.c0 = mac((*m11).r5.c0, u, v1.r5.c0); } }
+            { let u = ob2_10(g);
+              (*m00).r5.c1 = mac((*m00).r5.c1, u, v0.r5.c1);
+              if ROWS > 4u { (*m10).r5.c1 = mac((*m10).r5.c1, u, v1.r5.c1); } }
+            { let u = ob2_11(g);
+              (*m01).r5.c1 = mac((*m01).r5.c1, u, v0.r5.c1);
+              if ROWS > 4u { (*m11).r5.c1 = mac((*m11).r5.c1, u, v1.r5.c1); } }
+            }
+            {
+            let g = weight_texel(base + 256u + lane);
+            { let u = ob2_00(g);
+              (*m00).r5.c2 = mac((*m00).r5.c2, u, v0.r5.c2);
+              if ROWS > 4u { (*m10).r5.c2 = mac((*m10).r5.c2, u, v1.r5.c2); } }
+            { let u = ob2_01(g);
+              (*m01).r5.c2 = mac((*m01).r5.c2, u, v0.r5.c2);
+              if ROWS > 4u { (*m11).r5.c2 = mac((*m11).r5.c2, u, v1.r5.c2); } }
+            { let u = ob2_10(g);
+              (*m00).r5.c3 = mac((*m00).r5.c3, u, v0.r5.c3);
+              if ROWS > 4u { (*m10).r5.c3 = mac((*m10).r5.c3, u, v1.r5.c3); } }
+            { let u = ob2_11(g);
+              (*m01).r5.c3 = mac((*m01).r5.c3, u, v0.r5.c3);
+              if ROWS > 4u { (*m11).r5.c3 = mac((*m11).r5.c3, u, v1.r5.c3); } }
+            }
+            {
+            let g = weight_texel(base + 272u + lane);
+            { let u = ob2_00(g);
+              (*m00).r5.c4 = mac((*m00).r5.c4, u, v0.r5.c4);
+              if ROWS > 4u { (*m10).r5.c4 = mac((*m10).r5.c4, u, v1.r5.c4); } }
+            { let u = ob2_01(g);
+              (*m01).r5.c4 = mac((*m01).r5.c4, u, v0.r5.c4);
+              if ROWS > 4u { (*m11).r5.c4 = mac((*m11).r5.c4, u, v1.r5.c4); } }
+            { let u = ob2_10(g);
+              (*m00).r5.c5 = mac((*m00).r5.c5, u, v0.r5.c5);
+              if ROWS > 4u { (*m10).r5.c5 = mac((*m10).r5.c5, u, v1.r5.c5); } }
+            { let u = ob2_11(g);
+              (*m01).r5.c5 = mac((*m01).r5.c5, u, v0.r5.c5);
+              if ROWS > 4u { (*m11).r5.c5 = mac((*m11).r5.c5, u, v1.r5.c5); } }
+            }
+            continuing { break if once(); }
         }
     } else {
-        {
-        let g = weight_texel(base + 0u + lane);
-        { let u = ob4_0(g);
-          (*m00).r0.c0 = mac((*m00).r0.c0, u, v0.r0.c0);
-          if ROWS > 4u { (*m10).r0.c0 = mac((*m10).r0.c0, u, v1.r0.c0); } }
-        { let u = ob4_1(g);
-          (*m01).r0.c0 = mac((*m01).r0.c0, u, v0.r0.c0);
-          if ROWS > 4u { (*m11).r0.c0 = mac((*m11).r0.c0, u, v1.r0.c0); } }
-        { let u = ob4_2(g);
-          (*m02).r0.c0 = mac((*m02).r0.c0, u, v0.r0.c0);
-          if ROWS > 4u { (*m12).r0.c0 = mac((*m12).r0.c0, u, v1.r0.c0); } }
-        { let u = ob4_3(g);
-          (*m03).r0.c0 = mac((*m03).r0.c0, u, v0.r0.c0);
-          if ROWS > 4u { (*m13).r0.c0 = mac((*m13).r0.c0, u, v1.r0.c0); } }
+        // Tile rows 0 and 1, 2 and 3, 4 and 5, each pair in a loop that runs once: a basic
+        // block of its own for LLVM (conv_common.wgsl's `once`).
+        loop {
+            {
+            let g = weight_texel(base + 0u + lane);
+            { let u = ob4_0(g);
+              (*m00).r0.c0 = mac((*m00).r0.c0, u, v0.r0.c0);
+              if ROWS > 4u { (*m10).r0.c0 = mac((*m10).r0.c0, u, v1.r0.c0); } }
+            { let u = ob4_1(g);
+              (*m01).r0.c0 = mac((*m01).r0.c0, u, v0.r0.c0);
+              if ROWS > 4u { (*m11).r0.c0 = mac((*m11).r0.c0, u, v1.r0.c0); } }
+            { let u = ob4_2(g);
+              (*m02).r0.c0 = mac((*m02).r0.c0, u, v0.r0.c0);
+              if ROWS > 4u { (*m12).r0.c0 = mac((*m12).r0.c0, u, v1.r0.c0); } }
+            { let u = ob4_3(g);
+              (*m03).r0.c0 = mac((*m03).r0.c0, u, v0.r0.c0);
+              if ROWS > 4u { (*m13).r0.c0 = mac((*m13).r0.c0, u, v1.r0.c0); } }
+            }
+            {
+            let g = weight_texel(base + 16u + lane);
+            { let u = ob4_0(g);
+              (*m00).r0.c1 = mac((*m00).r0.c1, u, v0.r0.c1);
+              if ROWS > 4u { (*m10).r0.c1 = mac((*m10).r0.c1, u, v1.r0.c1); } }
+            { let u = ob4_1(g);
+              (*m01).r0.c1 = mac((*m01).r0.c1, u, v0.r0.c1);
+              if ROWS > 4u { (*m11).r0.c1 = mac((*m11).r0.c1, u, v1.r0.c1); } }
+            { let u = ob4_2(g);
+              (*m02).r0.c1 = mac((*m02).r0.c1, u, v0.r0.c1);
+              if ROWS > 4u { (*m12).r0.c1 = mac((*m12).r0.c1, u, v1.r0.c1); } }
+            { let u = ob4_3(g);
+              (*m03).r0.c1 = mac((*m03).r0.c1, u, v0.r0.c1);
+              if ROWS > 4u { (*m13).r0.c1 = mac((*m13).r0.c1, u, v1.r0.c1); } }
+            }
+            {
+            let g = weight_texel(base + 32u + lane);
+            { let u = ob4_0(g);
+              (*m00).r0.c2 = mac((*m00).r0.c2, u, v0.r0.c2);
+              if ROWS > 4u { (*m10).r0.c2 = mac((*m10).r0.c2, u, v1.r0.c2); } }
+            { let u = ob4_1(g);
+              (*m01).r0.c2 = mac((*m01).r0.c2, u, v0.r0.c2);
+              if ROWS > 4u { (*m11).r0.c2 = mac((*m11).r0.c2, u, v1.r0.c2); } }
+            { let u = ob4_2(g);
+              (*m02).r0.c2 = mac((*m02).r0.c2, u, v0.r0.c2);
+              if ROWS > 4u { (*m12).r0.c2 = mac((*m12).r0.c2, u, v1.r0.c2); } }
+            { let u = ob4_3(g);
+              (*m03).r0.c2 = mac((*m03).r0.c2, u, v0.r0.c2);
+              if ROWS > 4u { (*m13).r0.c2 = mac((*m13).r0.c2, u, v1.r0.c2); } }
+            }
+            {
+            let g = weight_texel(base + 48u + lane);
+            { let u = ob4_0(g);
+              (*m00).r0.c3 = mac((*m00).r0.c3, u, v0.r0.c3);
+              if ROWS > 4u { (*m10).r0.c3 = mac((*m10).r0.c3, u, v1.r0.c3); } }
+            { let u = ob4_1(g);
+              (*m01).r0.c3 = mac((*m01).r0.c3, u, v0.r0.c3);
+              if ROWS > 4u { (*m11).r0.c3 = mac((*m11).r0.c3, u, v1.r0.c3); } }
+            { let u = ob4_2(g);
+              (*m02).r0.c3 = mac((*m02).r0.c3, u, v0.r0.c3);
+              if ROWS > 4u { (*m12).r0.c3 = mac((*m12).r0.c3, u, v1.r0.c3); } }
+            { let u = ob4_3(g);
+              (*m03).r0.c3 = mac((*m03).r0.c3, u, v0.r0.c3);
+              if ROWS > 4u { (*m13).r0.c3 = mac((*m13).r0.c3, u, v1.r0.c3); } }
+            }
+            {
+            let g = weight_texel(base + 64u + lane);
+            { let u = ob4_0(g);
+              (*m00).r0.c4 = mac((*m00).r0.c4, u, v0.r0.c4);
+              if ROWS > 4u { (*m10).r0.c4 = mac((*m10).r0.c4, u, v1.r0.c4); } }
+            { let u = ob4_1(g);
+              (*m01).r0.c4 = mac((*m01).r0.c4, u, v0.r0.c4);
+              if ROWS > 4u { (*m11).r0.c4 = mac((*m11).r0.c4, u, v1.r0.c4); } }
+            { let u = ob4_2(g);
+              (*m02).r0.c4 = mac((*m02).r0.c4, u, v0.r0.c4);
+              if ROWS > 4u { (*m12).r0.c4 = mac((*m12).r0.c4, u, v1.r0.c4); } }
+            { let u = ob4_3(g);
+              (*m03).r0.c4 = mac((*m03).r0.c4, u, v0.r0.c4);
+              if ROWS > 4u { (*m13).r0.c4 = mac((*m13).r0.c4, u, v1.r0.c4); } }
+            }
+            {
+            let g = weight_texel(base + 80u + lane);
+            { let u = ob4_0(g);
+              (*m00).r0.c5 = mac((*m00).r0.c5, u, v0.r0.c5);
+              if ROWS > 4u { (*m10).r0.c5 = mac((*m10).r0.c5, u, v1.r0.c5); } }
+            { let u = ob4_1(g);
+              (*m01).r0.c5 = mac((*m01).r0.c5, u, v0.r0.c5);
+              if ROWS > 4u { (*m11).r0.c5 = mac((*m11).r0.c5, u, v1.r0.c5); } }
+            { let u = ob4_2(g);
+              (*m02).r0.c5 = mac((*m02).r0.c5, u, v0.r0.c5);
+              if ROWS > 4u { (*m12).r0.c5 = mac((*m12).r0.c5, u, v1.r0.c5); } }
+            { let u = ob4_3(g);
+              (*m03).r0.c5 = mac((*m03).r0.c5, u, v0.r0.c5);
+              if ROWS > 4u { (*m13).r0.c5 = mac((*m13).r0.c5, u, v1.r0.c5); } }
+            }
+            {
+            let g = weight_texel(base + 96u + lane);
+            { let u = ob4_0(g);
+              (*m00).r1.c0 = mac((*m00).r1.c0, u, v0.r1.c0);
+              if ROWS > 4u { (*m10).r1.c0 = mac((*m10).r1.c0, u, v1.r1.c0); } }
+            { let u = ob4_1(g);
+              (*m01).r1.c0 = mac((*m01).r1.c0, u, v0.r1.c0);
+              if ROWS > 4u { (*m11).r1.c0 = mac((*m11).r1.c0, u, v1.r1.c0); } }
+            { let u = ob4_2(g);
+              (*m02).r1.c0 = mac((*m02).r1.c0, u, v0.r1.c0);
+              if ROWS > 4u { (*m12).r1.c0 = mac((*m12).r1.c0, u, v1.r1.c0); } }
+            { let u = ob4_3(g);
+              (*m03).r1.c0 = mac((*m03).r1.c0, u, v0.r1.c0);
+              if ROWS > 4u { (*m13).r1.c0 = mac((*m13).r1.c0, u, v1.r1.c0); } }
+            }
+            {
+            let g = weight_texel(base + 112u + lane);
+            { let u = ob4_0(g);
+              (*m00).r1.c1 = mac((*m00).r1.c1, u, v0.r1.c1);
+              if ROWS > 4u { (*m10).r1.c1 = mac((*m10).r1.c1, u, v1.r1.c1); } }
+            { let u = ob4_1(g);
+              (*m01).r1.c1 = mac((*m01).r1.c1, u, v0.r1.c1);
+              if ROWS > 4u { (*m11).r1.c1 = mac((*m11).r1.c1, u, v1.r1.c1); } }
+            { let u = ob4_2(g);
+              (*m02).r1.c1 = mac((*m02).r1.c1, u, v0.r1.c1);
+              if ROWS > 4u { (*m12).r1.c1 = mac((*m12).r1.c1, u, v1.r1.c1); } }
+            { let u = ob4_3(g);
+              (*m03).r1.c1 = mac((*m03).r1.c1, u, v0.r1.c1);
+              if ROWS > 4u { (*m13).r1.c1 = mac((*m13).r1.c1, u, v1.r1.c1); } }
+            }
+            {
+            let g = weight_texel(base + 128u + lane);
+            { let u = ob4_0(g);
+              (*m00).r1.c2 = mac((*m00).r1.c2, u, v0.r1.c2);
+              if ROWS > 4u { (*m10).r1.c2 = mac((*m10).r1.c2, u, v1.r1.c2); } }
+            { let u = ob4_1(g);
+              (*m01).r1.c2 = mac((*m01).r1.c2, u, v0.r1.c2);
+              if ROWS > 4u { (*m11).r1.c2 = mac((*m11).r1.c2, u, v1.r1.c2); } }
+            { let u = ob4_2(g);
+              (*m02).r1.c2 = mac((*m02).r1.c2, u, v0.r1.c2);
+              if ROWS > 4u { (*m12).r1.c2 = mac((*m12).r1.c2, u, v1.r1.c2); } }
+            { let u = ob4_3(g);
+              (*m03).r1.c2 = mac((*m03).r1.c2, u, v0.r1.c2);
+              if ROWS > 4u { (*m13).r1.c2 = mac((*m13).r1.c2, u, v1.r1.c2); } }
+            }
+            {
+            let g = weight_texel(base + 144u + lane);
+            { let u = ob4_0(g);
+              (*m00).r1.c3 = mac((*m00).r1.c3, u, v0.r1.c3);
+              if ROWS > 4u { (*m10).r1.c3 = mac((*m10).r1.c3, u, v1.r1.c3); } }
+            { let u = ob4_1(g);
+              (*m01).r1.c3 = mac((*m01).r1.c3, u, v0.r1.c3);
+              if ROWS > 4u { (*m11).r1.c3 = mac((*m11).r1.c3, u, v1.r1.c3); } }
+            { let u = ob4_2(g);
+              (*m02).r1.c3 = mac((*m02).r1.c3, u, v0.r1.c3);
+              if ROWS > 4u { (*m12).r1.c3 = mac((*m12).r1.c3, u, v1.r1.c3); } }
+            { let u = ob4_3(g);
+              (*m03).r1.c3 = mac((*m03).r1.c3, u, v0.r1.c3);
+              if ROWS > 4u { (*m13).r1.c3 = mac((*m13).r1.c3, u, v1.r1.c3); } }
+            }
+            {
+            let g = weight_texel(base + 160u + lane);
+            { let u = ob4_0(g);
+              (*m00).r1.c4 = mac((*m00).r1.c4, u, v0.r1.c4);
+              if ROWS > 4u { (*m10).r1.c4 = mac((*m10).r1.c4, u, v1.r1.c4); } }
+            { let u = ob4_1(g);
+              (*m01).r1.c4 = mac((*m01).r1.c4, u, v0.r1.c4);
+              if ROWS > 4u { (*m11).r1.c4 = mac((*m11).r1.c4, u, v1.r1.c4); } }
+            { let u = ob4_2(g);
+              (*m02).r1.c4 = mac((*m02).r1.c4, u, v0.r1.c4);
+              if ROWS > 4u { (*m12).r1.c4 = mac((*m12).r1.c4, u, v1.r1.c4); } }
+            { let u = ob4_3(g);
+              (*m03).r1.c4 = mac((*m03).r1.c4, u, v0.r1.c4);
+              if ROWS > 4u { (*m13).r1.c4 = mac((*m13).r1.c4, u, v1.r1.c4); } }
+            }
+            {
+            let g = weight_texel(base + 176u + lane);
+            { let u = ob4_0(g);
+              (*m00).r1.c5 = mac((*m00).r1.c5, u, v0.r1.c5);
+              if ROWS > 4u { (*m10).r1.c5 = mac((*m10).r1.c5, u, v1.r1.c5); } }
+            { let u = ob4_1(g);
+              (*m01).r1.c5 = mac((*m01).r1.c5, u, v0.r1.c5);
+              if ROWS > 4u { (*m11).r1.c5 = mac((*m11).r1.c5, u, v1.r1.c5); } }
+            { let u = ob4_2(g);
+              (*m02).r1.c5 = mac((*m02).r1.c5, u, v0.r1.c5);
+              if ROWS > 4u { (*m12).r1.c5 = mac((*m12).r1.c5, u, v1.r1.c5); } }
+            { let u = ob4_3(g);
+              (*m03).r1.c5 = mac((*m03).r1.c5, u, v0.r1.c5);
+              if ROWS > 4u { (*m13).r1.c5 = mac((*m13).r1.c5, u, v1.r1.c5); } }
+            }
+            continuing { break if once(); }
         }
-        {
-        let g = weight_texel(base + 16u + lane);
-        { let u = ob4_0(g);
-          (*m00).r0.c1 = mac((*m00).r0.c1, u, v0.r0.c1);
-          if ROWS > 4u { (*m10).r0.c1 = mac((*m10).r0.c1, u, v1.r0.c1); } }
-        { let u = ob4_1(g);
-          (*m01).r0.c1 = mac((*m01).r0.c1, u, v0.r0.c1);
-          if ROWS > 4u { (*m11).r0.c1 = mac((*m11).r0.c1, u, v1.r0.c1); } }
-        { let u = ob4_2(g);
-          (*m02).r0.c1 = mac((*m02).r0.c1, u, v0.r0.c1);
-          if ROWS > 4u { (*m12).r0.c1 = mac((*m12).r0.c1, u, v1.r0.c1); } }
-        { let u = ob4_3(g);
-          (*m03).r0.c1 = mac((*m03).r0.c1, u, v0.r0.c1);
-          if ROWS > 4u { (*m13).r0.c1 = mac((*m13).r0.c1, u, v1.r0.c1); } }
+        loop {
+            {
+            let g = weight_texel(base + 192u + lane);
+            { let u = ob4_0(g);
+              (*m00).r2.c0 = mac((*m00).r2.c0, u, v0.r2.c0);
+              if ROWS > 4u { (*m10).r2.c0 = mac((*m10).r2.c0, u, v1.r2.c0); } }
+            { let u = ob4_1(g);
+              (*m01).r2.c0 = mac((*m01).r2.c0, u, v0.r2.c0);
+              if ROWS > 4u { (*m11).r2.c0 = mac((*m11).r2.c0, u, v1.r2.c0); } }
+            { let u = ob4_2(g);
+              (*m02).r2.c0 = mac((*m02).r2.c0, u, v0.r2.c0);
+              if ROWS > 4u { (*m12).r2.c0 = mac((*m12).r2.c0, u, v1.r2.c0); } }
+            { let u = ob4_3(g);
+              (*m03).r2.c0 = mac((*m03).r2.c0, u, v0.r2.c0);
+              if ROWS > 4u { (*m13).r2.c0 = mac((*m13).r2.c0, u, v1.r2.c0); } }
+            }
+            {
+            let g = weight_texel(base + 208u + lane);
+            { let u = ob4_0(g);
+              (*m00).r2.c1 = mac((*m00).r2.c1, u, v0.r2.c1);
+              if ROWS > 4u { (*m10).r2.c1 = mac((*m10).r2.c1, u, v1.r2.c1); } }
+            { let u = ob4_1(g);
+              (*m01).r2.c1 = mac((*m01).r2.c1, u, v0.r2.c1);
+              if ROWS > 4u { (*m11).r2.c1 = mac((*m11).r2.c1, u, v1.r2.c1); } }
+            { let u = ob4_2(g);
+              (*m02).r2.c1 = mac((*m02).r2.c1, u, v0.r2.c1);
+              if ROWS > 4u { (*m12).r2.c1 = mac((*m12).r2.c1, u, v1.r2.c1); } }
+            { let u = ob4_3(g);
+              (*m03).r2.c1 = mac((*m03).r2.c1, u, v0.r2.c1);
+              if ROWS > 4u { (*m13).r2.c1 = mac((*m13).r2.c1, u, v1.r2.c1); } }
+            }
+            {
+            let g = weight_texel(base + 224u + lane);
+            { let u = ob4_0(g);
+              (*m00).r2.c2 = mac((*m00).r2.c2, u, v0.r2.c2);
+              if ROWS > 4u { (*m10).r2.c2 = mac((*m10).r2.c2, u, v1.r2.c2); } }
+            { let u = ob4_1(g);
+              (*m01).r2.c2 = mac((*m01).r2.c2, u, v0.r2.c2);
+              if ROWS > 4u { (*m11).r2.c2 = mac((*m11).r2.c2, u, v1.r2.c2); } }
+            { let u = ob4_2(g);
+              (*m02).r2.c2 = mac((*m02).r2.c2, u, v0.r2.c2);
+              if ROWS > 4u { (*m12).r2.c2 = mac((*m12).r2.c2, u, v1.r2.c2); } }
+            { let u = ob4_3(g);
+              (*m03).r2.c2 = mac((*m03).r2.c2, u, v0.r2.c2);
+              if ROWS > 4u { (*m13).r2.c2 = mac((*m13).r2.c2, u, v1.r2.c2); } }
+            }
+            {
+            let g = weight_texel(base + 240u + lane);
+            { let u = ob4_0(g);
+              (*m00).r2.c3 = mac((*m00).r2.c3, u, v0.r2.c3);
+              if ROWS > 4u { (*m10).r2.c3 = mac((*m10).r2.c3, u, v1.r2.c3); } }
+            { let u = ob4_1(g);
+              (*m01).r2.c3 = mac((*m01).r2.c3, u, v0.r2.c3);
+              if ROWS > 4u { (*m11).r2.c3 = mac((*m11).r2.c3, u, v1.r2.c3); } }
+            { let u = ob4_2(g);
+              (*m02).r2.c3 = mac((*m02).r2.c3, u, v0.r2.c3);
+              if ROWS > 4u { (*m12).r2.c3 = mac((*m12).r2.c3, u, v1.r2.c3); } }
+            { let u = ob4_3(g);
+              (*m03).r2.c3 = mac((*m03).r2.c3, u, v0.r2.c3);
+              if ROWS > 4u { (*m13).r2.c3 = mac((*m13).r2.c3, u, v1.r2.c3); } }
+            }
+            {
+            let g = weight_texel(base + 256u + lane);
+            { let u = ob4_0(g);
+              (*m00).r2.c4 = mac((*m00).r2.c4, u, v0.r2.c4);
+              if ROWS > 4u { (*m10).r2.c4 = mac((*m10).r2.c4, u, v1.r2.c4); } }
+            { let u = ob4_1(g);
+              (*m01).r2.c4 = mac((*m01).r2.c4, u, v0.r2.c4);
+              if ROWS > 4u { (*m11).r2.c4 = mac((*m11).r2.c4, u, v1.r2.c4); } }
+            { let u = ob4_2(g);
+              (*m02).r2.c4 = mac((*m02).r2.c4, u, v0.r2.c4);
+              if ROWS > 4u { (*m12).r2.c4 = mac((*m12).r2.c4, u, v1.r2.c4); } }
+            { let u = ob4_3(g);
+              (*m03).r2.c4 = mac((*m03).r2.c4, u, v0.r2.c4);
+              if ROWS > 4u { (*m13).r2.c4 = mac((*m13).r2.c4, u, v1.r2.c4); } }
+            }
+            {
+            let g = weight_texel(base + 272u + lane);
+            { let u = ob4_0(g);
+              (*m00).r2.c5 = mac((*m00).r2.c5, u, v0.r2.c5);
+              if ROWS > 4u { (*m10).r2.c5 = mac((*m10).r2.c5, u, v1.r2.c5); } }
+            { let u = ob4_1(g);
+              (*m01).r2.c5 = mac((*m01).r2.c5, u, v0.r2.c5);
+              if ROWS > 4u { (*m11).r2.c5 = mac((*m11).r2.c5, u, v1.r2.c5); } }
+            { let u = ob4_2(g);
+              (*m02).r2.c5 = mac((*m02).r2.c5, u, v0.r2.c5);
+              if ROWS > 4u { (*m12).r2.c5 = mac((*m12).r2.c5, u, v1.r2.c5); } }
+            { let u = ob4_3(g);
+              (*m03).r2.c5 = mac((*m03).r2.c5, u, v0.r2.c5);
+              if ROWS > 4u { (*m13).r2.c5 = mac((*m13).r2.c5, u, v1.r2.c5); } }
+            }
+            {
+            let g = weight_texel(base + 288u + lane);
+            { let u = ob4_0(g);
+              (*m00).r3.c0 = mac((*m00).r3.c0, u, v0.r3.c0);
+              if ROWS > 4u { (*m10).r3.c0 = mac((*m10).r3.c0, u, v1.r3.c0); } }
+            { let u = ob4_1(g);
+              (*m01).r3.c0 = mac((*m01).r3.c0, u, v0.r3.c0);
+              if ROWS > 4u { (*m11).r3.c0 = mac((*m11).r3.c0, u, v1.r3.c0); } }
+            { let u = ob4_2(g);
+              (*m02).r3.c0 = mac((*m02).r3.c0, u, v0.r3.c0);
+              if ROWS > 4u { (*m12).r3.c0 = mac((*m12).r3.c0, u, v1.r3.c0); } }
+            { let u = ob4_3(g);
+              (*m03).r3.c0 = mac((*m03).r3.c0, u, v0.r3.c0);
+              if ROWS > 4u { (*m13).r3.c0 = mac((*m13).r3.c0, u, v1.r3.c0); } }
+            }
+            {
+            let g = weight_texel(base + 304u + lane);
+            { let u = ob4_0(g);
+              (*m00).r3.c1 = mac((*m00).r3.c1, u, v0.r3.c1);
+              if ROWS > 4u { (*m10).r3.c1 = mac((*m10).r3.c1, u, v1.r3.c1); } }
+            { let u = ob4_1(g);
+              (*m01).r3.c1 = mac((*m01).r3.c1, u, v0.r3.c1);
+              if ROWS > 4u { (*m11).r3.c1 = mac((*m11).r3.c1, u, v1.r3.c1); } }
+            { let u = ob4_2(g);
+              (*m02).r3.c1 = mac((*m02).r3.c1, u, v0.r3.c1);
+              if ROWS > 4u { (*m12).r3.c1 = mac((*m12).r3.c1, u, v1.r3.c1); } }
+            { let u = ob4_3(g);
+              (*m03).r3.c1 = mac((*m03).r3.c1, u, v0.r3.c1);
+              if ROWS > 4u { (*m13).r3.c1 = mac((*m13).r3.c1, u, v1.r3.c1); } }
+            }
+            {
+            let g = weight_texel(base + 320u + lane);
+            { let u = ob4_0(g);
+              (*m00).r3.c2 = mac((*m00).r3.c2, u, v0.r3.c2);
+              if ROWS > 4u { (*m10).r3.c2 = mac((*m10).r3.c2, u, v1.r3.c2); } }
+            { let u = ob4_1(g);
+              (*m01).r3.c2 = mac((*m01).r3.c2, u, v0.r3.c2);
+              if ROWS > 4u { (*m11).r3.c2 = mac((*m11).r3.c2, u, v1.r3.c2); } }
+            { let u = ob4_2(g);
+              (*m02).r3.c2 = mac((*m02).r3.c2, u, v0.r3.c2);
+              if ROWS > 4u { (*m12).r3.c2 = mac((*m12).r3.c2, u, v1.r3.c2); } }
+            { let u = ob4_3(g);
+              (*m03).r3.c2 = mac((*m03).r3.c2, u, v0.r3.c2);
+              if ROWS > 4u { (*m13).r3.c2 = mac((*m13).r3.c2, u, v1.r3.c2); } }
+            }
+            {
+            let g = weight_texel(base + 336u + lane);
+            { let u = ob4_0(g);
+              (*m00).r3.c3 = mac((*m00).r3.c3, u, v0.r3.c3);
+              if ROWS > 4u { (*m10).r3.c3 = mac((*m10).r3.c3, u, v1.r3.c3); } }
+            { let u = ob4_1(g);
+              (*m01).r3.c3 = mac((*m01).r3.c3, u, v0.r3.c3);
+              if ROWS > 4u { (*m11).r3.c3 = mac((*m11).r3.c3, u, v1.r3.c3); } }
+            { let u = ob4_2(g);
+              (*m02).r3.c3 = mac((*m02).r3.c3, u, v0.r3.c3);
+              if ROWS > 4u { (*m12).r3.c3 = mac((*m12).r3.c3, u, v1.r3.c3); } }
+            { let u = ob4_3(g);
+              (*m03).r3.c3 = mac((*m03).r3.c3, u, v0.r3.c3);
+              if ROWS > 4u { (*m13).r3.c3 = mac((*m13).r3.c3, u, v1.r3.c3); } }
+            }
+            {
+            let g = weight_texel(base + 352u + lane);
+            { let u = ob4_0(g);
+              (*m00).r3.c4 = mac((*m00).r3.c4, u, v0.r3.c4);
+              if ROWS > 4u { (*m10).r3.c4 = mac((*m10).r3.c4, u, v1.r3.c4); } }
+            { let u = ob4_1(g);
+              (*m01).r3.c4 = mac((*m01).r3.c4, u, v0.r3.c4);
+              if ROWS > 4u { (*m11).r3.c4 = mac((*m11).r3.c4, u, v1.r3.c4); } }
+            { let u = ob4_2(g);
+              (*m02).r3.c4 = mac((*m02).r3.c4, u, v0.r3.c4);
+              if ROWS > 4u { (*m12).r3.c4 = mac((*m12).r3.c4, u, v1.r3.c4); } }
+            { let u = ob4_3(g);
+              (*m03).r3.c4 = mac((*m03).r3.c4, u, v0.r3.c4);
+              if ROWS > 4u { (*m13).r3.c4 = mac((*m13).r3.c4, u, v1.r3.c4); } }
+            }
+            {
+            let g = weight_texel(base + 368u + lane);
+            { let u = ob4_0(g);
+              (*m00).r3.c5 = mac((*m00).r3.c5, u, v0.r3.c5);
+              if ROWS > 4u { (*m10).r3.c5 = mac((*m10).r3.c5, u, v1.r3.c5); } }
+            { let u = ob4_1(g);
+              (*m01).r3.c5 = mac((*m01).r3.c5, u, v0.r3.c5);
+              if ROWS > 4u { (*m11).r3.c5 = mac((*m11).r3.c5, u, v1.r3.c5); } }
+            { let u = ob4_2(g);
+              (*m02).r3.c5 = mac((*m02).r3.c5, u, v0.r3.c5);
+              if ROWS > 4u { (*m12).r3.c5 = mac((*m12).r3.c5, u, v1.r3.c5); } }
+            { let u = ob4_3(g);
+              (*m03).r3.c5 = mac((*m03).r3.c5, u, v0.r3.c5);
+              if ROWS > 4u { (*m13).r3.c5 = mac((*m13).r3.c5, u, v1.r3.c5); } }
+            }
+            continuing { break if once(); }
         }
-        {
-        let g = weight_texel(base + 32u + lane);
-        { let u = ob4_0(g);
-          (*m00).r0.c2 = mac((*m00).r0.c2, u, v0.r0.c2);
-          if ROWS > 4u { (*m10).r0.c2 = mac((*m10).r0.c2, u, v1.r0.c2); } }
-        { let u = ob4_1(g);
-          (*m01).r0.c2 = mac((*m01).r0.c2, u, v0.r0.c2);
-          if ROWS > 4u { (*m11).r0.c2 = mac((*m11).r0.c2, u, v1.r0.c2); } }
-        { let u = ob4_2(g);
-          (*m02).r0.c2 = mac((*m02).r0.c2, u, v0.r0.c2);
-          if ROWS > 4u { (*m12).r0.c2 = mac((*m12).r0.c2, u, v1.r0.c2); } }
-        { let u = ob4_3(g);
-          (*m03).r0.c2 = mac((*m03).r0.c2, u, v0.r0.c2);
-          if ROWS > 4u { (*m13).r0.c2 = mac((*m13).r0.c2, u, v1.r0.c2); } }
-        }
-        {
-        let g = weight_texel(base + 48u + lane);
-        { let u = ob4_0(g);
-          (*m00).r0.c3 = mac((*m00).r0.c3, u, v0.r0.c3);
-          if ROWS > 4u { (*m10).r0.c3 = mac((*m10).r0.c3, u, v1.r0.c3); } }
-        { let u = ob4_1(g);
-          (*m01).r0.c3 = mac((*m01).r0.c3, u, v0.r0.c3);
-          if ROWS > 4u { (*m11).r0.c3 = mac((*m11).r0.c3, u, v1.r0.c3); } }
-        { let u = ob4_2(g);
-          (*m02).r0.c3 = mac((*m02).r0.c3, u, v0.r0.c3);
-          if ROWS > 4u { (*m12).r0.c3 = mac((*m12).r0.c3, u, v1.r0.c3); } }
-        { let u = ob4_3(g);
-          (*m03).r0.c3 = mac((*m03).r0.c3, u, v0.r0.c3);
-          if ROWS > 4u { (*m13).r0.c3 = mac((*m13).r0.c3, u, v1.r0.c3); } }
-        }
-        {
-        let g = weight_texel(base + 64u + lane);
-        { let u = ob4_0(g);
-          (*m00).r0.c4 = mac((*m00).r0.c4, u, v0.r0.c4);
-          if ROWS > 4u { (*m10).r0.c4 = mac((*m10).r0.c4, u, v1.r0.c4); } }
-        { let u = ob4_1(g);
-          (*m01).r0.c4 = mac((*m01).r0.c4, u, v0.r0.c4);
-          if ROWS > 4u { (*m11).r0.c4 = mac((*m11).r0.c4, u, v1.r0.c4); } }
-        { let u = ob4_2(g);
-          (*m02).r0.c4 = mac((*m02).r0.c4, u, v0.r0.c4);
-          if ROWS > 4u { (*m12).r0.c4 = mac((*m12).r0.c4, u, v1.r0.c4); } }
-        { let u = ob4_3(g);
-          (*m03).r0.c4 = mac((*m03).r0.c4, u, v0.r0.c4);
-          if ROWS > 4u { (*m13).r0.c4 = mac((*m13).r0.c4, u, v1.r0.c4); } }
-        }
-        {
-        let g = weight_texel(base + 80u + lane);
-        { let u = ob4_0(g);
-          (*m00).r0.c5 = mac((*m00).r0.c5, u, v0.r0.c5);
-          if ROWS > 4u { (*m10).r0.c5 = mac((*m10).r0.c5, u, v1.r0.c5); } }
-        { let u = ob4_1(g);
-          (*m01).r0.c5 = mac((*m01).r0.c5, u, v0.r0.c5);
-          if ROWS > 4u { (*m11).r0.c5 = mac((*m11).r0.c5, u, v1.r0.c5); } }
-        { let u = ob4_2(g);
-          (*m02).r0.c5 = mac((*m02).r0.c5, u, v0.r0.c5);
-          if ROWS > 4u { (*m12).r0.c5 = mac((*m12).r0.c5, u, v1.r0.c5); } }
-        { let u = ob4_3(g);
-          (*m03).r0.c5 = mac((*m03).r0.c5, u, v0.r0.c5);
-          if ROWS > 4u { (*m13).r0.c5 = mac((*m13).r0.c5, u, v1.r0.c5); } }
-        }
-        {
-        let g = weight_texel(base + 96u + lane);
-        { let u = ob4_0(g);
-          (*m00).r1.c0 = mac((*m00).r1.c0, u, v0.r1.c0);
-          if ROWS > 4u { (*m10).r1.c0 = mac((*m10).r1.c0, u, v1.r1.c0); } }
-        { let u = ob4_1(g);
-          (*m01).r1.c0 = mac((*m01).r1.c0, u, v0.r1.c0);
-          if ROWS > 4u { (*m11).r1.c0 = mac((*m11).r1.c0, u, v1.r1.c0); } }
-        { let u = ob4_2(g);
-          (*m02).r1.c0 = mac((*m02).r1.c0, u, v0.r1.c0);
-          if ROWS > 4u { (*m12).r1.c0 = mac((*m12).r1.c0, u, v1.r1.c0); } }
-        { let u = ob4_3(g);
-          (*m03).r1.c0 = mac((*m03).r1.c0, u, v0.r1.c0);
-          if ROWS > 4u { (*m13).r1.c0 = mac((*m13).r1.c0, u, v1.r1.c0); } }
-        }
-        {
-        let g = weight_texel(base + 112u + lane);
-        { let u = ob4_0(g);
-          (*m00).r1.c1 = mac((*m00).r1.c1, u, v0.r1.c1);
-          if ROWS > 4u { (*m10).r1.c1 = mac((*m10).r1.c1, u, v1.r1.c1); } }
-        { let u = ob4_1(g);
-          (*m01).r1.c1 = mac((*m01).r1.c1, u, v0.r1.c1);
-          if ROWS > 4u { (*m11).r1.c1 = mac((*m11).r1.c1, u, v1.r1.c1); } }
-        { let u = ob4_2(g);
-          (*m02).r1.c1 = mac((*m02).r1.c1, u, v0.r1.c1);
-          if ROWS > 4u { (*m12).r1.c1 = mac((*m12).r1.c1, u, v1.r1.c1); } }
-        { let u = ob4_3(g);
-          (*m03).r1.c1 = mac((*m03).r1.c1, u, v0.r1.c1);
-          if ROWS > 4u { (*m13).r1.c1 = mac((*m13).r1.c1, u, v1.r1.c1); } }
-        }
-        {
-        let g = weight_texel(base + 128u + lane);
-        { let u = ob4_0(g);
-          (*m00).r1.c2 = mac((*m00).r1.c2, u, v0.r1.c2);
-          if ROWS > 4u { (*m10).r1.c2 = mac((*m10).r1.c2, u, v1.r1.c2); } }
-        { let u = ob4_1(g);
-          (*m01).r1.c2 = mac((*m01).r1.c2, u, v0.r1.c2);
-          if ROWS > 4u { (*m11).r1.c2 = mac((*m11).r1.c2, u, v1.r1.c2); } }
-        { let u = ob4_2(g);
-          (*m02).r1.c2 = mac((*m02).r1.c2, u, v0.r1.c2);
-          if ROWS > 4u { (*m12).r1.c2 = mac((*m12).r1.c2, u, v1.r1.c2); } }
-        { let u = ob4_3(g);
-          (*m03).r1.c2 = mac((*m03).r1.c2, u, v0.r1.c2);
-          if ROWS > 4u { (*m13).r1.c2 = mac((*m13).r1.c2, u, v1.r1.c2); } }
-        }
-        {
-        let g = weight_texel(base + 144u + lane);
-        { let u = ob4_0(g);
-          (*m00).r1.c3 = mac((*m00).r1.c3, u, v0.r1.c3);
-          if ROWS > 4u { (*m10).r1.c3 = mac((*m10).r1.c3, u, v1.r1.c3); } }
-        { let u = ob4_1(g);
-          (*m01).r1.c3 = mac((*m01).r1.c3, u, v0.r1.c3);
-          if ROWS > 4u { (*m11).r1.c3 = mac((*m11).r1.c3, u, v1.r1.c3); } }
-        { let u = ob4_2(g);
-          (*m02).r1.c3 = mac((*m02).r1.c3, u, v0.r1.c3);
-          if ROWS > 4u { (*m12).r1.c3 = mac((*m12).r1.c3, u, v1.r1.c3); } }
-        { let u = ob4_3(g);
-          (*m03).r1.c3 = mac((*m03).r1.c3, u, v0.r1.c3);
-          if ROWS > 4u { (*m13).r1.c3 = mac((*m13).r1.c3, u, v1.r1.c3); } }
-        }
-        {
-        let g = weight_texel(base + 160u + lane);
-        { let u = ob4_0(g);
-          (*m00).r1.c4 = mac((*m00).r1.c4, u, v0.r1.c4);
-          if ROWS > 4u { (*m10).r1.c4 = mac((*m10).r1.c4, u, v1.r1.c4); } }
-        { let u = ob4_1(g);
-          (*m01).r1.c4 = mac((*m01).r1.c4, u, v0.r1.c4);
-          if ROWS > 4u { (*m11).r1.c4 = mac((*m11).r1.c4, u, v1.r1.c4); } }
-        { let u = ob4_2(g);
-          (*m02).r1.c4 = mac((*m02).r1.c4, u, v0.r1.c4);
-          if ROWS > 4u { (*m12).r1.c4 = mac((*m12).r1.c4, u, v1.r1.c4); } }
-        { let u = ob4_3(g);
-          (*m03).r1.c4 = mac((*m03).r1.c4, u, v0.r1.c4);
-          if ROWS > 4u { (*m13).r1.c4 = mac((*m13).r1.c4, u, v1.r1.c4); } }
-        }
-        {
-        let g = weight_texel(base + 176u + lane);
-        { let u = ob4_0(g);
-          (*m00).r1.c5 = mac((*m00).r1.c5, u, v0.r1.c5);
-          if ROWS > 4u { (*m10).r1.c5 = mac((*m10).r1.c5, u, v1.r1.c5); } }
-        { let u = ob4_1(g);
-          (*m01).r1.c5 = mac((*m01).r1.c5, u, v0.r1.c5);
-          if ROWS > 4u { (*m11).r1.c5 = mac((*m11).r1.c5, u, v1.r1.c5); } }
-        { let u = ob4_2(g);
-          (*m02).r1.c5 = mac((*m02).r1.c5, u, v0.r1.c5);
-          if ROWS > 4u { (*m12).r1.c5 = mac((*m12).r1.c5, u, v1.r1.c5); } }
-        { let u = ob4_3(g);
-          (*m03).r1.c5 = mac((*m03).r1.c5, u, v0.r1.c5);
-          if ROWS > 4u { (*m13).r1.c5 = mac((*m13).r1.c5, u, v1.r1.c5); } }
-        }
-        {
-        let g = weight_texel(base + 192u + lane);
-        { let u = ob4_0(g);
-          (*m00).r2.c0 = mac((*m00).r2.c0, u, v0.r2.c0);
-          if ROWS > 4u { (*m10).r2.c0 = mac((*m10).r2.c0, u, v1.r2.c0); } }
-        { let u = ob4_1(g);
-          (*m01).r2.c0 = mac((*m01).r2.c0, u, v0.r2.c0);
-          if ROWS > 4u { (*m11).r2.c0 = mac((*m11).r2.c0, u, v1.r2.c0); } }
-        { let u = ob4_2(g);
-          (*m02).r2.c0 = mac((*m02).r2.c0, u, v0.r2.c0);
-          if ROWS > 4u { (*m12).r2.c0 = mac((*m12).r2.c0, u, v1.r2.c0); } }
-        { let u = ob4_3(g);
-          (*m03).r2.c0 = mac((*m03).r2.c0, u, v0.r2.c0);
-          if ROWS > 4u { (*m13).r2.c0 = mac((*m13).r2.c0, u, v1.r2.c0); } }
-        }
-        {
-        let g = weight_texel(base + 208u + lane);
-        { let u = ob4_0(g);
-          (*m00).r2.c1 = mac((*m00).r2.c1, u, v0.r2.c1);
-          if ROWS > 4u { (*m10).r2.c1 = mac((*m10).r2.c1, u, v1.r2.c1); } }
-        { let u = ob4_1(g);
-          (*m01).r2.c1 = mac((*m01).r2.c1, u, v0.r2.c1);
-          if ROWS > 4u { (*m11).r2.c1 = mac((*m11).r2.c1, u, v1.r2.c1); } }
-        { let u = ob4_2(g);
-          (*m02).r2.c1 = mac((*m02).r2.c1, u, v0.r2.c1);
-          if ROWS > 4u { (*m12).r2.c1 = mac((*m12).r2.c1, u, v1.r2.c1); } }
-        { let u = ob4_3(g);
-          (*m03).r2.c1 = mac((*m03).r2.c1, u, v0.r2.c1);
-          if ROWS > 4u { (*m13).r2.c1 = mac((*m13).r2.c1, u, v1.r2.c1); } }
-        }
-        {
-        let g = weight_texel(base + 224u + lane);
-        { let u = ob4_0(g);
-          (*m00).r2.c2 = mac((*m00).r2.c2, u, v0.r2.c2);
-          if ROWS > 4u { (*m10).r2.c2 = mac((*m10).r2.c2, u, v1.r2.c2); } }
-        { let u = ob4_1(g);
-          (*m01).r2.c2 = mac((*m01).r2.c2, u, v0.r2.c2);
-          if ROWS > 4u { (*m11).r2.c2 = mac((*m11).r2.c2, u, v1.r2.c2); } }
-        { let u = ob4_2(g);
-          (*m02).r2.c2 = mac((*m02).r2.c2, u, v0.r2.c2);
-          if ROWS > 4u { (*m12).r2.c2 = mac((*m12).r2.c2, u, v1.r2.c2); } }
-        { let u = ob4_3(g);
-          (*m03).r2.c2 = mac((*m03).r2.c2, u, v0.r2.c2);
-          if ROWS > 4u { (*m13).r2.c2 = mac((*m13).r2.c2, u, v1.r2.c2); } }
-        }
-        {
-        let g = weight_texel(base + 240u + lane);
-        { let u = ob4_0(g);
-          (*m00).r2.c3 = mac((*m00).r2.c3, u, v0.r2.c3);
-          if ROWS > 4u { (*m10).r2.c3 = mac((*m10).r2.c3, u, v1.r2.c3); } }
-        { let u = ob4_1(g);
-          (*m01).r2.c3 = mac((*m01).r2.c3, u, v0.r2.c3);
-          if ROWS > 4u { (*m11).r2.c3 = mac((*m11).r2.c3, u, v1.r2.c3); } }
-        { let u = ob4_2(g);
-          (*m02).r2.c3 = mac((*m02).r2.c3, u, v0.r2.c3);
-          if ROWS > 4u { (*m12).r2.c3 = mac((*m12).r2.c3, u, v1.r2.c3); } }
-        { let u = ob4_3(g);
-          (*m03).r2.c3 = mac((*m03).r2.c3, u, v0.r2.c3);
-          if ROWS > 4u { (*m13).r2.c3 = mac((*m13).r2.c3, u, v1.r2.c3); } }
-        }
-        {
-        let g = weight_texel(base + 256u + lane);
-        { let u = ob4_0(g);
-          (*m00).r2.c4 = mac((*m00).r2.c4, u, v0.r2.c4);
-          if ROWS > 4u { (*m10).r2.c4 = mac((*m10).r2.c4, u, v1.r2.c4); } }
-        { let u = ob4_1(g);
-          (*m01).r2.c4 = mac((*m01).r2.c4, u, v0.r2.c4);
-          if ROWS > 4u { (*m11).r2.c4 = mac((*m11).r2.c4, u, v1.r2.c4); } }
-        { let u = ob4_2(g);
-          (*m02).r2.c4 = mac((*m02).r2.c4, u, v0.r2.c4);
-          if ROWS > 4u { (*m12).r2.c4 = mac((*m12).r2.c4, u, v1.r2.c4); } }
-        { let u = ob4_3(g);
-          (*m03).r2.c4 = mac((*m03).r2.c4, u, v0.r2.c4);
-          if ROWS > 4u { (*m13).r2.c4 = mac((*m13).r2.c4, u, v1.r2.c4); } }
-        }
-        {
-        let g = weight_texel(base + 272u + lane);
-        { let u = ob4_0(g);
-          (*m00).r2.c5 = mac((*m00).r2.c5, u, v0.r2.c5);
-          if ROWS > 4u { (*m10).r2.c5 = mac((*m10).r2.c5, u, v1.r2.c5); } }
-        { let u = ob4_1(g);
-          (*m01).r2.c5 = mac((*m01).r2.c5, u, v0.r2.c5);
-          if ROWS > 4u { (*m11).r2.c5 = mac((*m11).r2.c5, u, v1.r2.c5); } }
-        { let u = ob4_2(g);
-          (*m02).r2.c5 = mac((*m02).r2.c5, u, v0.r2.c5);
-          if ROWS > 4u { (*m12).r2.c5 = mac((*m12).r2.c5, u, v1.r2.c5); } }
-        { let u = ob4_3(g);
-          (*m03).r2.c5 = mac((*m03).r2.c5, u, v0.r2.c5);
-          if ROWS > 4u { (*m13).r2.c5 = mac((*m13).r2.c5, u, v1.r2.c5); } }
-        }
-        {
-        let g = weight_texel(base + 288u + lane);
-        { let u = ob4_0(g);
-          (*m00).r3.c0 = mac((*m00).r3.c0, u, v0.r3.c0);
-          if ROWS > 4u { (*m10).r3.c0 = mac((*m10).r3.c0, u, v1.r3.c0); } }
-        { let u = ob4_1(g);
-          (*m01).r3.c0 = mac((*m01).r3.c0, u, v0.r3.c0);
-          if ROWS > 4u { (*m11).r3.c0 = mac((*m11).r3.c0, u, v1.r3.c0); } }
-        { let u = ob4_2(g);
-          (*m02).r3.c0 = mac((*m02).r3.c0, u, v0.r3.c0);
-          if ROWS > 4u { (*m12).r3.c0 = mac((*m12).r3.c0, u, v1.r3.c0); } }
-        { let u = ob4_3(g);
-          (*m03).r3.c0 = mac((*m03).r3.c0, u, v0.r3.c0);
-          if ROWS > 4u { (*m13).r3.c0 = mac((*m13).r3.c0, u, v1.r3.c0); } }
-        }
-        {
-        let g = weight_texel(base + 304u + lane);
-        { let u = ob4_0(g);
-          (*m00).r3.c1 = mac((*m00).r3.c1, u, v0.r3.c1);
-          if ROWS > 4u { (*m10).r3.c1 = mac((*m10).r3.c1, u, v1.r3.c1); } }
-        { let u = ob4_1(g);
-          (*m01).r3.c1 = mac((*m01).r3.c1, u, v0.r3.c1);
-          if ROWS > 4u { (*m11).r3.c1 = mac((*m11).r3.c1, u, v1.r3.c1); } }
-        { let u = ob4_2(g);
-          (*m02).r3.c1 = mac((*m02).r3.c1, u, v0.r3.c1);
-          if ROWS > 4u { (*m12).r3.c1 = mac((*m12).r3.c1, u, v1.r3.c1); } }
-        { let u = ob4_3(g);
-          (*m03).r3.c1 = mac((*m03).r3.c1, u, v0.r3.c1);
-          if ROWS > 4u { (*m13).r3.c1 = mac((*m13).r3.c1, u, v1.r3.c1); } }
-        }
-        {
-        let g = weight_texel(base + 320u + lane);
-        { let u = ob4_0(g);
-          (*m00).r3.c2 = mac((*m00).r3.c2, u, v0.r3.c2);
-          if ROWS > 4u { (*m10).r3.c2 = mac((*m10).r3.c2, u, v1.r3.c2); } }
-        { let u = ob4_1(g);
-          (*m01).r3.c2 = mac((*m01).r3.c2, u, v0.r3.c2);
-          if ROWS > 4u { (*m11).r3.c2 = mac((*m11).r3.c2, u, v1.r3.c2); } }
-        { let u = ob4_2(g);
-          (*m02).r3.c2 = mac((*m02).r3.c2, u, v0.r3.c2);
-          if ROWS > 4u { (*m12).r3.c2 = mac((*m12).r3.c2, u, v1.r3.c2); } }
-        { let u = ob4_3(g);
-          (*m03).r3.c2 = mac((*m03).r3.c2, u, v0.r3.c2);
-          if ROWS > 4u { (*m13).r3.c2 = mac((*m13).r3.c2, u, v1.r3.c2); } }
-        }
-        {
-        let g = weight_texel(base + 336u + lane);
-        { let u = ob4_0(g);
-          (*m00).r3.c3 = mac((*m00).r3.c3, u, v0.r3.c3);
-          if ROWS > 4u { (*m10).r3.c3 = mac((*m10).r3.c3, u, v1.r3.c3); } }
-        { let u = ob4_1(g);
-          (*m01).r3.c3 = mac((*m01).r3.c3, u, v0.r3.c3);
-          if ROWS > 4u { (*m11).r3.c3 = mac((*m11).r3.c3, u, v1.r3.c3); } }
-        { let u = ob4_2(g);
-          (*m02).r3.c3 = mac((*m02).r3.c3, u, v0.r3.c3);
-          if ROWS > 4u { (*m12).r3.c3 = mac((*m12).r3.c3, u, v1.r3.c3); } }
-        { let u = ob4_3(g);
-          (*m03).r3.c3 = mac((*m03).r3.c3, u, v0.r3.c3);
-          if ROWS > 4u { (*m13).r3.c3 = mac((*m13).r3.c3, u, v1.r3.c3); } }
-        }
-        {
-        let g = weight_texel(base + 352u + lane);
-        { let u = ob4_0(g);
-          (*m00).r3.c4 = mac((*m00).r3.c4, u, v0.r3.c4);
-          if ROWS > 4u { (*m10).r3.c4 = mac((*m10).r3.c4, u, v1.r3.c4); } }
-        { let u = ob4_1(g);
-          (*m01).r3.c4 = mac((*m01).r3.c4, u, v0.r3.c4);
-          if ROWS > 4u { (*m11).r3.c4 = mac((*m11).r3.c4, u, v1.r3.c4); } }
-        { let u = ob4_2(g);
-          (*m02).r3.c4 = mac((*m02).r3.c4, u, v0.r3.c4);
-          if ROWS > 4u { (*m12).r3.c4 = mac((*m12).r3.c4, u, v1.r3.c4); } }
-        { let u = ob4_3(g);
-          (*m03).r3.c4 = mac((*m03).r3.c4, u, v0.r3.c4);
-          if ROWS > 4u { (*m13).r3.c4 = mac((*m13).r3.c4, u, v1.r3.c4); } }
-        }
-        {
-        let g = weight_texel(base + 368u + lane);
-        { let u = ob4_0(g);
-          (*m00).r3.c5 = mac((*m00).r3.c5, u, v0.r3.c5);
-          if ROWS > 4u { (*m10).r3.c5 = mac((*m10).r3.c5, u, v1.r3.c5); } }
-        { let u = ob4_1(g);
-          (*m01).r3.c5 = mac((*m01).r3.c5, u, v0.r3.c5);
-          if ROWS > 4u { (*m11).r3.c5 = mac((*m11).r3.c5, u, v1.r3.c5); } }
-        { let u = ob4_2(g);
-          (*m02).r3.c5 = mac((*m02).r3.c5, u, v0.r3.c5);
-          if ROWS > 4u { (*m12).r3.c5 = mac((*m12).r3.c5, u, v1.r3.c5); } }
-        { let u = ob4_3(g);
-          (*m03).r3.c5 = mac((*m03).r3.c5, u, v0.r3.c5);
-          if ROWS > 4u { (*m13).r3.c5 = mac((*m13).r3.c5, u, v1.r3.c5); } }
-        }
-        {
-        let g = weight_texel(base + 384u + lane);
-        { let u = ob4_0(g);
-          (*m00).r4.c0 = mac((*m00).r4.c0, u, v0.r4.c0);
-          if ROWS > 4u { (*m10).r4.c0 = mac((*m10).r4.c0, u, v1.r4.c0); } }
-        { let u = ob4_1(g);
-          (*m01).r4.c0 = mac((*m01).r4.c0, u, v0.r4.c0);
-          if ROWS > 4u { (*m11).r4.c0 = mac((*m11).r4.c0, u, v1.r4.c0); } }
-        { let u = ob4_2(g);
-          (*m02).r4.c0 = mac((*m02).r4.c0, u, v0.r4.c0);
-          if ROWS > 4u { (*m12).r4.c0 = mac((*m12).r4.c0, u, v1.r4.c0); } }
-        { let u = ob4_3(g);
-          (*m03).r4.c0 = mac((*m03).r4.c0, u, v0.r4.c0);
-          if ROWS > 4u { (*m13).r4.c0 = mac((*m13).r4.c0, u, v1.r4.c0); } }
-        }
-        {
-        let g = weight_texel(base + 400u + lane);
-        { let u = ob4_0(g);
-          (*m00).r4.c1 = mac((*m00).r4.c1, u, v0.r4.c1);
-          if ROWS > 4u { (*m10).r4.c1 = mac((*m10).r4.c1, u, v1.r4.c1); } }
-        { let u = ob4_1(g);
-          (*m01).r4.c1 = mac((*m01).r4.c1, u, v0.r4.c1);
-          if ROWS > 4u { (*m11).r4.c1 = mac((*m11).r4.c1, u, v1.r4.c1); } }
-        { let u = ob4_2(g);
-          (*m02).r4.c1 = mac((*m02).r4.c1, u, v0.r4.c1);
-          if ROWS > 4u { (*m12).r4.c1 = mac((*m12).r4.c1, u, v1.r4.c1); } }
-        { let u = ob4_3(g);
-          (*m03).r4.c1 = mac((*m03).r4.c1, u, v0.r4.c1);
-          if ROWS > 4u { (*m13).r4.c1 = mac((*m13).r4.c1, u, v1.r4.c1); } }
-        }
-        {
-        let g = weight_texel(base + 416u + lane);
-        { let u = ob4_0(g);
-          (*m00).r4.c2 = mac((*m00).r4.c2, u, v0.r4.c2);
-          if ROWS > 4u { (*m10).r4.c2 = mac((*m10).r4.c2, u, v1.r4.c2); } }
-        { let u = ob4_1(g);
-          (*m01).r4.c2 = mac((*m01).r4.c2, u, v0.r4.c2);
-          if ROWS > 4u { (*m11).r4.c2 = mac((*m11).r4.c2, u, v1.r4.c2); } }
-        { let u = ob4_2(g);
-          (*m02).r4.c2 = mac((*m02).r4.c2, u, v0.r4.c2);
-          if ROWS > 4u { (*m12).r4.c2 = mac((*m12).r4.c2, u, v1.r4.c2); } }
-        { let u = ob4_3(g);
-          (*m03).r4.c2 = mac((*m03).r4.c2, u, v0.r4.c2);
-          if ROWS > 4u { (*m13).r4.c2 = mac((*m13).r4.c2, u, v1.r4.c2); } }
-        }
-        {
-        let g = weight_texel(base + 432u + lane);
-        { let u = ob4_0(g);
-          (*m00).r4.c3 = mac((*m00).r4.c3, u, v0.r4.c3);
-          if ROWS > 4u { (*m10).r4.c3 = mac((*m10).r4.c3, u, v1.r4.c3); } }
-        { let u = ob4_1(g);
-          (*m01).r4.c3 = mac((*m01).r4.c3, u, v0.r4.c3);
-          if ROWS > 4u { (*m11).r4.c3 = mac((*m11).r4.c3, u, v1.r4.c3); } }
-        { let u = ob4_2(g);
-          (*m02).r4.c3 = mac((*m02).r4.c3, u, v0.r4.c3);
-          if ROWS > 4u { (*m12).r4.c3 = mac((*m12).r4.c3, u, v1.r4.c3); } }
-        { let u = ob4_3(g);
-          (*m03).r4.c3 = mac((*m03).r4.c3, u, v0.r4.c3);
-          if ROWS > 4u { (*m13).r4.c3 = mac((*m13).r4.c3, u, v1.r4.c3); } }
-        }
-        {
-        let g = weight_texel(base + 448u + lane);
-        { let u = ob4_0(g);
-          (*m00).r4.c4 = mac((*m00).r4.c4, u, v0.r4.c4);
-          if ROWS > 4u { (*m10).r4.c4 = mac((*m10).r4.c4, u, v1.r4.c4); } }
-        { let u = ob4_1(g);
-          (*m01).r4.c4 = mac((*m01).r4.c4, u, v0.r4.c4);
-          if ROWS > 4u { (*m11).r4.c4 = mac((*m11).r4.c4, u, v1.r4.c4); } }
-        { let u = ob4_2(g);
-          (*m02).r4.c4 = mac((*m02).r4.c4, u, v0.r4.c4);
-          if ROWS > 4u { (*m12).r4.c4 = mac((*m12).r4.c4, u, v1.r4.c4); } }
-        { let u = ob4_3(g);
-          (*m03).r4.c4 = mac((*m03).r4.c4, u, v0.r4.c4);
-          if ROWS > 4u { (*m13).r4.c4 = mac((*m13).r4.c4, u, v1.r4.c4); } }
-        }
-        {
-        let g = weight_texel(base + 464u + lane);
-        { let u = ob4_0(g);
-          (*m00).r4.c5 = mac((*m00).r4.c5, u, v0.r4.c5);
-          if ROWS > 4u { (*m10).r4.c5 = mac((*m10).r4.c5, u, v1.r4.c5); } }
-        { let u = ob4_1(g);
-          (*m01).r4.c5 = mac((*m01).r4.c5, u, v0.r4.c5);
-          if ROWS > 4u { (*m11).r4.c5 = mac((*m11).r4.c5, u, v1.r4.c5); } }
-        { let u = ob4_2(g);
-          (*m02).r4.c5 = mac((*m02).r4.c5, u, v0.r4.c5);
-          if ROWS > 4u { (*m12).r4.c5 = mac((*m12).r4.c5, u, v1.r4.c5); } }
-        { let u = ob4_3(g);
-          (*m03).r4.c5 = mac((*m03).r4.c5, u, v0.r4.c5);
-          if ROWS > 4u { (*m13).r4.c5 = mac((*m13).r4.c5, u, v1.r4.c5); } }
-        }
-        {
-        let g = weight_texel(base + 480u + lane);
-        { let u = ob4_0(g);
-          (*m00).r5.c0 = mac((*m00).r5.c0, u, v0.r5.c0);
-          if ROWS > 4u { (*m10).r5.c0 = mac((*m10).r5.c0, u, v1.r5.c0); } }
-        { let u = ob4_1(g);
-          (*m01).r5.c0 = mac((*m01).r5.c0, u, v0.r5.c0);
-          if ROWS > 4u { (*m11).r5.c0 = mac((*m11).r5.c0, u, v1.r5.c0); } }
-        { let u = ob4_2(g);
-          (*m02).r5.c0 = mac((*m02).r5.c0, u, v0.r5.c0);
-          if ROWS > 4u { (*m12).r5.c0 = mac((*m12).r5.c0, u, v1.r5.c0); } }
-        { let u = ob4_3(g);
-          (*m03).r5.c0 = mac((*m03).r5.c0, u, v0.r5.c0);
-          if ROWS > 4u { (*m13).r5.c0 = mac((*m13).r5.c0, u, v1.r5.c0); } }
-        }
-        {
-        let g = weight_texel(base + 496u + lane);
-        { let u = ob4_0(g);
-          (*m00).r5.c1 = mac((*m00).r5.c1, u, v0.r5.c1);
-          if ROWS > 4u { (*m10).r5.c1 = mac((*m10).r5.c1, u, v1.r5.c1); } }
-        { let u = ob4_1(g);
-          (*m01).r5.c1 = mac((*m01).r5.c1, u, v0.r5.c1);
-          if ROWS > 4u { (*m11).r5.c1 = mac((*m11).r5.c1, u, v1.r5.c1); } }
-        { let u = ob4_2(g);
-          (*m02).r5.c1 = mac((*m02).r5.c1, u, v0.r5.c1);
-          if ROWS > 4u { (*m12).r5.c1 = mac((*m12).r5.c1, u, v1.r5.c1); } }
-        { let u = ob4_3(g);
-          (*m03).r5.c1 = mac((*m03).r5.c1, u, v0.r5.c1);
-          if ROWS > 4u { (*m13).r5.c1 = mac((*m13).r5.c1, u, v1.r5.c1); } }
-        }
-        {
-        let g = weight_texel(base + 512u + lane);
-        { let u = ob4_0(g);
-          (*m00).r5.c2 = mac((*m00).r5.c2, u, v0.r5.c2);
-          if ROWS > 4u { (*m10).r5.c2 = mac((*m10).r5.c2, u, v1.r5.c2); } }
-        { let u = ob4_1(g);
-          (*m01).r5.c2 = mac((*m01).r5.c2, u, v0.r5.c2);
-          if ROWS > 4u { (*m11).r5.c2 = mac((*m11).r5.c2, u, v1.r5.c2); } }
-        { let u = ob4_2(g);
-          (*m02).r5.c2 = mac((*m02).r5.c2, u, v0.r5.c2);
-          if ROWS > 4u { (*m12).r5.c2 = mac((*m12).r5.c2, u, v1.r5.c2); } }
-        { let u = ob4_3(g);
-          (*m03).r5.c2 = mac((*m03).r5.c2, u, v0.r5.c2);
-          if ROWS > 4u { (*m13).r5.c2 = mac((*m13).r5.c2, u, v1.r5.c2); } }
-        }
-        {
-        let g = weight_texel(base + 528u + lane);
-        { let u = ob4_0(g);
-          (*m00).r5.c3 = mac((*m00).r5.c3, u, v0.r5.c3);
-          if ROWS > 4u { (*m10).r5.c3 = mac((*m10).r5.c3, u, v1.r5.c3); } }
-        { let u = ob4_1(g);
-          (*m01).r5.c3 = mac((*m01).r5.c3, u, v0.r5.c3);
-          if ROWS > 4u { (*m11).r5.c3 = mac((*m11).r5.c3, u, v1.r5.c3); } }
-        { let u = ob4_2(g);
-          (*m02).r5.c3 = mac((*m02).r5.c3, u, v0.r5.c3);
-          if ROWS > 4u { (*m12).r5.c3 = mac((*m12).r5.c3, u, v1.r5.c3); } }
-        { let u = ob4_3(g);
-          (*m03).r5.c3 = mac((*m03).r5.c3, u, v0.r5.c3);
-          if ROWS > 4u { (*m13).r5.c3 = mac((*m13).r5.c3, u, v1.r5.c3); } }
-        }
-        {
-        let g = weight_texel(base + 544u + lane);
-        { let u = ob4_0(g);
-          (*m00).r5.c4 = mac((*m00).r5.c4, u, v0.r5.c4);
-          if ROWS > 4u { (*m10).r5.c4 = mac((*m10).r5.c4, u, v1.r5.c4); } }
-        { let u = ob4_1(g);
-          (*m01).r5.c4 = mac((*m01).r5.c4, u, v0.r5.c4);
-          if ROWS > 4u { (*m11).r5.c4 = mac((*m11).r5.c4, u, v1.r5.c4); } }
-        { let u = ob4_2(g);
-          (*m02).r5.c4 = mac((*m02).r5.c4, u, v0.r5.c4);
-          if ROWS > 4u { (*m12).r5.c4 = mac((*m12).r5.c4, u, v1.r5.c4); } }
-        { let u = ob4_3(g);
-          (*m03).r5.c4 = mac((*m03).r5.c4, u, v0.r5.c4);
-          if ROWS > 4u { (*m13).r5.c4 = mac((*m13).r5.c4, u, v1.r5.c4); } }
-        }
-        {
-        let g = weight_texel(base + 560u + lane);
-        { let u = ob4_0(g);
-          (*m00).r5.c5 = mac((*m00).r5.c5, u, v0.r5.c5);
-          if ROWS > 4u { (*m10).r5.c5 = mac((*m10).r5.c5, u, v1.r5.c5); } }
-        { let u = ob4_1(g);
-          (*m01).r5.c5 = mac((*m01).r5.c5, u, v0.r5.c5);
-          if ROWS > 4u { (*m11).r5.c5 = mac((*m11).r5.c5, u, v1.r5.c5); } }
-        { let u = ob4_2(g);
-          (*m02).r5.c5 = mac((*m02).r5.c5, u, v0.r5.c5);
-          if ROWS > 4u { (*m12).r5.c5 = mac((*m12).r5.c5, u, v1.r5.c5); } }
-        { let u = ob4_3(g);
-          (*m03).r5.c5 = mac((*m03).r5.c5, u, v0.r5.c5);
-          if ROWS > 4u { (*m13).r5.c5 = mac((*m13).r5.c5, u, v1.r5.c5); } }
+        loop {
+            {
+            let g = weight_texel(base + 384u + lane);
+            { let u = ob4_0(g);
+              (*m00).r4.c0 = mac((*m00).r4.c0, u, v0.r4.c0);
+              if ROWS > 4u { (*m10).r4.c0 = mac((*m10).r4.c0, u, v1.r4.c0); } }
+            { let u = ob4_1(g);
+              (*m01).r4.c0 = mac((*m01).r4.c0, u, v0.r4.c0);
+              if ROWS > 4u { (*m11).r4.c0 = mac((*m11).r4.c0, u, v1.r4.c0); } }
+            { let u = ob4_2(g);
+              (*m02).r4.c0 = mac((*m02).r4.c0, u, v0.r4.c0);
+              if ROWS > 4u { (*m12).r4.c0 = mac((*m12).r4.c0, u, v1.r4.c0); } }
+            { let u = ob4_3(g);
+              (*m03).r4.c0 = mac((*m03).r4.c0, u, v0.r4.c0);
+              if ROWS > 4u { (*m13).r4.c0 = mac((*m13).r4.c0, u, v1.r4.c0); } }
+            }
+            {
+            let g = weight_texel(base + 400u + lane);
+            { let u = ob4_0(g);
+              (*m00).r4.c1 = mac((*m00).r4.c1, u, v0.r4.c1);
+              if ROWS > 4u { (*m10).r4.c1 = mac((*m10).r4.c1, u, v1.r4.c1); } }
+            { let u = ob4_1(g);
+              (*m01).r4.c1 = mac((*m01).r4.c1, u, v0.r4.c1);
+              if ROWS > 4u { (*m11).r4.c1 = mac((*m11).r4.c1, u, v1.r4.c1); } }
+            { let u = ob4_2(g);
+              (*m02).r4.c1 = mac((*m02).r4.c1, u, v0.r4.c1);
+              if ROWS > 4u { (*m12).r4.c1 = mac((*m12).r4.c1, u, v1.r4.c1); } }
+            { let u = ob4_3(g);
+              (*m03).r4.c1 = mac((*m03).r4.c1, u, v0.r4.c1);
+              if ROWS > 4u { (*m13).r4.c1 = mac((*m13).r4.c1, u, v1.r4.c1); } }
+            }
+            {
+            let g = weight_texel(base + 416u + lane);
+            { let u = ob4_0(g);
+              (*m00).r4.c2 = mac((*m00).r4.c2, u, v0.r4.c2);
+              if ROWS > 4u { (*m10).r4.c2 = mac((*m10).r4.c2, u, v1.r4.c2); } }
+            { let u = ob4_1(g);
+              (*m01).r4.c2 = mac((*m01).r4.c2, u, v0.r4.c2);
+              if ROWS > 4u { (*m11).r4.c2 = mac((*m11).r4.c2, u, v1.r4.c2); } }
+            { let u = ob4_2(g);
+              (*m02).r4.c2 = mac((*m02).r4.c2, u, v0.r4.c2);
+              if ROWS > 4u { (*m12).r4.c2 = mac((*m12).r4.c2, u, v1.r4.c2); } }
+            { let u = ob4_3(g);
+              (*m03).r4.c2 = mac((*m03).r4.c2, u, v0.r4.c2);
+              if ROWS > 4u { (*m13).r4.c2 = mac((*m13).r4.c2, u, v1.r4.c2); } }
+            }
+            {
+            let g = weight_texel(base + 432u + lane);
+            { let u = ob4_0(g);
+              (*m00).r4.c3 = mac((*m00).r4.c3, u, v0.r4.c3);
+              if ROWS > 4u { (*m10).r4.c3 = mac((*m10).r4.c3, u, v1.r4.c3); } }
+            { let u = ob4_1(g);
+              (*m01).r4.c3 = mac((*m01).r4.c3, u, v0.r4.c3);
+              if ROWS > 4u { (*m11).r4.c3 = mac((*m11).r4.c3, u, v1.r4.c3); } }
+            { let u = ob4_2(g);
+              (*m02).r4.c3 = mac((*m02).r4.c3, u, v0.r4.c3);
+              if ROWS > 4u { (*m12).r4.c3 = mac((*m12).r4.c3, u, v1.r4.c3); } }
+            { let u = ob4_3(g);
+              (*m03).r4.c3 = mac((*m03).r4.c3, u, v0.r4.c3);
+              if ROWS > 4u { (*m13).r4.c3 = mac((*m13).r4.c3, u, v1.r4.c3); } }
+            }
+            {
+            let g = weight_texel(base + 448u + lane);
+            { let u = ob4_0(g);
+              (*m00).r4.c4 = mac((*m00).r4.c4, u, v0.r4.c4);
+              if ROWS > 4u { (*m10).r4.c4 = mac((*m10).r4.c4, u, v1.r4.c4); } }
+            { let u = ob4_1(g);
+              (*m01).r4.c4 = mac((*m01).r4.c4, u, v0.r4.c4);
+              if ROWS > 4u { (*m11).r4.c4 = mac((*m11).r4.c4, u, v1.r4.c4); } }
+            { let u = ob4_2(g);
+              (*m02).r4.c4 = mac((*m02).r4.c4, u, v0.r4.c4);
+              if ROWS > 4u { (*m12).r4.c4 = mac((*m12).r4.c4, u, v1.r4.c4); } }
+            { let u = ob4_3(g);
+              (*m03).r4.c4 = mac((*m03).r4.c4, u, v0.r4.c4);
+              if ROWS > 4u { (*m13).r4.c4 = mac((*m13).r4.c4, u, v1.r4.c4); } }
+            }
+            {
+            let g = weight_texel(base + 464u + lane);
+            { let u = ob4_0(g);
+              (*m00).r4.c5 = mac((*m00).r4.c5, u, v0.r4.c5);
+              if ROWS > 4u { (*m10).r4.c5 = mac((*m10).r4.c5, u, v1.r4.c5); } }
+            { let u = ob4_1(g);
+              (*m01).r4.c5 = mac((*m01).r4.c5, u, v0.r4.c5);
+              if ROWS > 4u { (*m11).r4.c5 = mac((*m11).r4.c5, u, v1.r4.c5); } }
+            { let u = ob4_2(g);
+              (*m02).r4.c5 = mac((*m02).r4.c5, u, v0.r4.c5);
+              if ROWS > 4u { (*m12).r4.c5 = mac((*m12).r4.c5, u, v1.r4.c5); } }
+            { let u = ob4_3(g);
+              (*m03).r4.c5 = mac((*m03).r4.c5, u, v0.r4.c5);
+              if ROWS > 4u { (*m13).r4.c5 = mac((*m13).r4.c5, u, v1.r4.c5); } }
+            }
+            {
+            let g = weight_texel(base + 480u + lane);
+            { let u = ob4_0(g);
+              (*m00).r5.c0 = mac((*m00).r5.c0, u, v0.r5.c0);
+              if ROWS > 4u { (*m10).r5.c0 = mac((*m10).r5.c0, u, v1.r5.c0); } }
+            { let u = ob4_1(g);
+              (*m01).r5.c0 = mac((*m01).r5.c0, u, v0.r5.c0);
+              if ROWS > 4u { (*m11).r5.c0 = mac((*m11).r5.c0, u, v1.r5.c0); } }
+            { let u = ob4_2(g);
+              (*m02).r5.c0 = mac((*m02).r5.c0, u, v0.r5.c0);
+              if ROWS > 4u { (*m12).r5.c0 = mac((*m12).r5.c0, u, v1.r5.c0); } }
+            { let u = ob4_3(g);
+              (*m03).r5.c0 = mac((*m03).r5.c0, u, v0.r5.c0);
+              if ROWS > 4u { (*m13).r5.c0 = mac((*m13).r5.c0, u, v1.r5.c0); } }
+            }
+            {
+            let g = weight_texel(base + 496u + lane);
+            { let u = ob4_0(g);
+              (*m00).r5.c1 = mac((*m00).r5.c1, u, v0.r5.c1);
+              if ROWS > 4u { (*m10).r5.c1 = mac((*m10).r5.c1, u, v1.r5.c1); } }
+            { let u = ob4_1(g);
+              (*m01).r5.c1 = mac((*m01).r5.c1, u, v0.r5.c1);
+              if ROWS > 4u { (*m11).r5.c1 = mac((*m11).r5.c1, u, v1.r5.c1); } }
+            { let u = ob4_2(g);
+              (*m02).r5.c1 = mac((*m02).r5.c1, u, v0.r5.c1);
+              if ROWS > 4u { (*m12).r5.c1 = mac((*m12).r5.c1, u, v1.r5.c1); } }
+            { let u = ob4_3(g);
+              (*m03).r5.c1 = mac((*m03).r5.c1, u, v0.r5.c1);
+              if ROWS > 4u { (*m13).r5.c1 = mac((*m13).r5.c1, u, v1.r5.c1); } }
+            }
+            {
+            let g = weight_texel(base + 512u + lane);
+            { let u = ob4_0(g);
+              (*m00).r5.c2 = mac((*m00).r5.c2, u, v0.r5.c2);
+              if ROWS > 4u { (*m10).r5.c2 = mac((*m10).r5.c2, u, v1.r5.c2); } }
+            { let u = ob4_1(g);
+              (*m01).r5.c2 = mac((*m01).r5.c2, u, v0.r5.c2);
+              if ROWS > 4u { (*m11).r5.c2 = mac((*m11).r5.c2, u, v1.r5.c2); } }
+            { let u = ob4_2(g);
+              (*m02).r5.c2 = mac((*m02).r5.c2, u, v0.r5.c2);
+              if ROWS > 4u { (*m12).r5.c2 = mac((*m12).r5.c2, u, v1.r5.c2); } }
+            { let u = ob4_3(g);
+              (*m03).r5.c2 = mac((*m03).r5.c2, u, v0.r5.c2);
+              if ROWS > 4u { (*m13).r5.c2 = mac((*m13).r5.c2, u, v1.r5.c2); } }
+            }
+            {
+            let g = weight_texel(base + 528u + lane);
+            { let u = ob4_0(g);
+              (*m00).r5.c3 = mac((*m00).r5.c3, u, v0.r5.c3);
+              if ROWS > 4u { (*m10).r5.c3 = mac((*m10).r5.c3, u, v1.r5.c3); } }
+            { let u = ob4_1(g);
+              (*m01).r5.c3 = mac((*m01).r5.c3, u, v0.r5.c3);
+              if ROWS > 4u { (*m11).r5.c3 = mac((*m11).r5.c3, u, v1.r5.c3); } }
+            { let u = ob4_2(g);
+              (*m02).r5.c3 = mac((*m02).r5.c3, u, v0.r5.c3);
+              if ROWS > 4u { (*m12).r5.c3 = mac((*m12).r5.c3, u, v1.r5.c3); } }
+            { let u = ob4_3(g);
+              (*m03).r5.c3 = mac((*m03).r5.c3, u, v0.r5.c3);
+              if ROWS > 4u { (*m13).r5.c3 = mac((*m13).r5.c3, u, v1.r5.c3); } }
+            }
+            {
+            let g = weight_texel(base + 544u + lane);
+            { let u = ob4_0(g);
+              (*m00).r5.c4 = mac((*m00).r5.c4, u, v0.r5.c4);
+              if ROWS > 4u { (*m10).r5.c4 = mac((*m10).r5.c4, u, v1.r5.c4); } }
+            { let u = ob4_1(g);
+              (*m01).r5.c4 = mac((*m01).r5.c4, u, v0.r5.c4);
+              if ROWS > 4u { (*m11).r5.c4 = mac((*m11).r5.c4, u, v1.r5.c4); } }
+            { let u = ob4_2(g);
+              (*m02).r5.c4 = mac((*m02).r5.c4, u, v0.r5.c4);
+              if ROWS > 4u { (*m12).r5.c4 = mac((*m12).r5.c4, u, v1.r5.c4); } }
+            { let u = ob4_3(g);
+              (*m03).r5.c4 = mac((*m03).r5.c4, u, v0.r5.c4);
+              if ROWS > 4u { (*m13).r5.c4 = mac((*m13).r5.c4, u, v1.r5.c4); } }
+            }
+            {
+            let g = weight_texel(base + 560u + lane);
+            { let u = ob4_0(g);
+              (*m00).r5.c5 = mac((*m00).r5.c5, u, v0.r5.c5);
+              if ROWS > 4u { (*m10).r5.c5 = mac((*m10).r5.c5, u, v1.r5.c5); } }
+            { let u = ob4_1(g);
+              (*m01).r5.c5 = mac((*m01).r5.c5, u, v0.r5.c5);
+              if ROWS > 4u { (*m11).r5.c5 = mac((*m11).r5.c5, u, v1.r5.c5); } }
+            { let u = ob4_2(g);
+              (*m02).r5.c5 = mac((*m02).r5.c5, u, v0.r5.c5);
+              if ROWS > 4u { (*m12).r5.c5 = mac((*m12).r5.c5, u, v1.r5.c5); } }
+            { let u = ob4_3(g);
+              (*m03).r5.c5 = mac((*m03).r5.c5, u, v0.r5.c5);
+              if ROWS > 4u { (*m13).r5.c5 = mac((*m13).r5.c5, u, v1.r5.c5); } }
+            }
+            continuing { break if once(); }
         }
     }
 }

@@ -1,0 +1,99 @@
+//! What one conv pipeline costs the driver to build: a single conv (two 32-channel sources,
+//! 32 outputs, 32x32) with one tile, its plan made and its first dispatch waited on, each
+//! timed. On lavapipe the first dispatch is where LLVM compiles the pipeline, so this is the
+//! build time a plan pays per pipeline into an empty shader cache (docs/PERF.md, session 27,
+//! where the F(4x4) 8x4 tile took 15.8 s and 7.6 s after its body was split into blocks).
+//!
+//! MESA_SHADER_CACHE_DISABLE=true cargo run --release -p rae-core --example compile_cost -- [TILE ...]
+//!
+//! TILE is wino4lanesRxB, winolanesRxB, lanesRxB (two columns), winoRxB, directRxB, mmaC or
+//! mmasC (C channels); wino4lanes8x4 when none is named. Without the variable Mesa's shader
+//! cache answers a second run.
+
+use std::time::Instant;
+
+use rae_core::Gpu;
+use rae_core::graph::Read;
+use rae_core::kernels::{self, ConvPlan, ConvSpec, Kernels, Tile, WeightMemory, blocks};
+
+/// The tile a name on the command line stands for.
+fn parse(s: &str) -> Tile {
+    if let Some(c) = s.strip_prefix("mmas") {
+        return Tile::mma_split(c.parse().unwrap()).expect("an mma split tile");
+    }
+    if let Some(c) = s.strip_prefix("mma") {
+        return Tile::mma(c.parse().unwrap()).expect("an mma tile");
+    }
+    let (method, rest) =
+        ["wino4lanes", "winolanes", "lanes", "wino", "direct"].iter().find_map(|m| s.strip_prefix(m).map(|r| (*m, r))).expect("tile kind");
+    let (r, b) = rest.split_once('x').expect("RxB");
+    let (r, b): (u32, u32) = (r.parse().unwrap(), b.parse().unwrap());
+    match method {
+        "wino4lanes" => Tile::winograd4_lanes(r, b),
+        "winolanes" => Tile::winograd_lanes(r, b),
+        "wino" => Tile::winograd(r, b),
+        "direct" => Tile::new(r, b),
+        _ => Tile::lanes(r, b, 2),
+    }
+    .expect("a tile the kernels have")
+}
+
+fn main() {
+    let tiles: Vec<String> = std::env::args().skip(1).collect();
+    let tiles = if tiles.is_empty() { vec!["wino4lanes8x4".to_string()] } else { tiles };
+    let g = Gpu::new().expect("a device");
+    eprintln!("{}", g.describe());
+    let (w, h, c) = (32u32, 32u32, 32usize);
+    let weight = vec![0.01f32; 2 * c * c * 9];
+    let bias = vec![0.0f32; c];
+    let texture = |layers: u32| {
+        g.device.create_texture(&wgpu::TextureDescriptor {
+            label: None,
+            size: wgpu::Extent3d { width: w, height: h, depth_or_array_layers: layers },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: kernels::ACTIVATION_FORMAT,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::STORAGE_BINDING,
+            view_formats: &[],
+        })
+    };
+    let view = |t: &wgpu::Texture| {
+        t.create_view(&wgpu::TextureViewDescriptor { dimension: Some(wgpu::TextureViewDimension::D2Array), ..Default::default() })
+    };
+    let (a, b, out) = (texture(blocks(c)), texture(blocks(c)), texture(blocks(c)));
+    for name in tiles {
+        let tile = parse(&name);
+        let mut k = Kernels::new(&g.device, kernels::Precision::F32, WeightMemory::Storage);
+        let spec = ConvSpec {
+            name: "probe",
+            width: w,
+            height: h,
+            ca: c,
+            cb: c,
+            cout: c,
+            weight: &weight,
+            bias: &bias,
+            read_a: Read::Direct,
+            read_b: Read::Direct,
+            leaky: true,
+            slope: 0.1,
+            b_is_hidden: false,
+            pooled: false,
+        };
+        let t0 = Instant::now();
+        let plan = ConvPlan::new(&g.device, &g.queue, &mut k, &[spec], &[tile]).expect("plan");
+        let group = plan.bind_group(&g.device, &k, 0, &view(&a), &view(&b), &view(&out), None);
+        let made = t0.elapsed();
+        let t1 = Instant::now();
+        let mut enc = g.device.create_command_encoder(&Default::default());
+        {
+            let mut pass = enc.begin_compute_pass(&Default::default());
+            plan.record(&mut pass, 0, false, &group);
+        }
+        g.queue.submit(Some(enc.finish()));
+        g.device.poll(wgpu::PollType::wait_indefinitely()).expect("poll");
+        let first = t1.elapsed();
+        println!("{name:>16}  plan {:8.2} s  first dispatch {:8.2} s", made.as_secs_f64(), first.as_secs_f64());
+    }
+}
