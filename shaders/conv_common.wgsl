@@ -85,7 +85,7 @@ fn read_at(t: Source, mode: u32, x: i32, y: i32, layer: u32) -> vec4<f32> {
 // variable from the block's start to the variable's first use, so a body of thousands of
 // operations in one block compiles in time quadratic in its length: 40% of the F(4x4) 8x4
 // tile's compile was that scan. In three blocks per step that tile compiled in 7.6 s instead
-// of 15.8, its frames as fast (docs/PERF.md, session 27). The condition holds in every
+// of 15.8, for frames 1.01-1.07x as long (docs/PERF.md, session 27). The condition holds in every
 // invocation that reaches such a loop (the kernels return first where ob0 >= cout4, so cout4
 // is at least 1), but the compiler cannot know it, so the loop and its blocks stay.
 fn once() -> bool {
