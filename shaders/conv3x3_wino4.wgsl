@@ -144,13 +144,28 @@ fn wino4_store(m: Wino6, bias: vec4<f32>, x: u32, y0: u32, layer: u32) {
     }
 }
 
+// The output goes into binding 5 (`partial`) as the texture's rows, layer by layer, and the
+// frame copies it into `dst` after the conv (kernels::ConvVariant::staged, CPU drivers only).
+// On lavapipe a texel store of rgba32float is four loops over the lanes, one per 32-bit word,
+// and a buffer store of a vec4 is one: 0.68-0.86x the time (docs/PERF.md, sessions 25 and 28).
+override OUT_BUFFER: bool = false;
+
 // One output row of a 4x4 tile at (x .. x + 3, y), columns past the right edge dropped.
 fn wino4_row(x: u32, y: u32, layer: u32, a: vec4<f32>, b: vec4<f32>, c: vec4<f32>, d: vec4<f32>) {
     let w = params.width;
-    textureStore(dst, vec2<u32>(x, y), layer, activate(a));
-    if x + 1u < w { textureStore(dst, vec2<u32>(x + 1u, y), layer, activate(b)); }
-    if x + 2u < w { textureStore(dst, vec2<u32>(x + 2u, y), layer, activate(c)); }
-    if x + 3u < w { textureStore(dst, vec2<u32>(x + 3u, y), layer, activate(d)); }
+    if OUT_BUFFER {
+        // A staged level is a multiple of 16 wide, so the row's four pixels are inside.
+        let i = (layer * params.height + y) * w + x;
+        partial[i] = activate(a);
+        partial[i + 1u] = activate(b);
+        partial[i + 2u] = activate(c);
+        partial[i + 3u] = activate(d);
+    } else {
+        textureStore(dst, vec2<u32>(x, y), layer, activate(a));
+        if x + 1u < w { textureStore(dst, vec2<u32>(x + 1u, y), layer, activate(b)); }
+        if x + 2u < w { textureStore(dst, vec2<u32>(x + 2u, y), layer, activate(c)); }
+        if x + 3u < w { textureStore(dst, vec2<u32>(x + 3u, y), layer, activate(d)); }
+    }
 }
 
 // The 6 columns of an input window, x - 1 .. x + 4.

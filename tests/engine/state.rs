@@ -98,7 +98,17 @@ fn cpu_tiles_by_level_and_width_follow_the_rule() {
         (d, frames)
     };
     let (auto, frames) = run(TileChoice::Auto);
-    let (_, one_tile) = run(TileChoice::Fixed(Tile::cpu(&g.device)));
+    let (lanes, one_tile) = run(TileChoice::Fixed(Tile::cpu(&g.device)));
+    // Staged outputs (Options::staging, left open: CPU drivers): the F(4x4) convs on levels a
+    // multiple of 16 wide write a buffer the frame copies into their textures; no other tile.
+    let cpu = g.device.adapter_info().device_type == wgpu::DeviceType::Cpu;
+    for (d, what) in [(&auto, "auto"), (&lanes, "one tile")] {
+        let staged = d.staged_convs();
+        for ((n, t), s) in d.graph().nodes.iter().zip(d.conv_tiles()).zip(&staged) {
+            let w = d.padded_size().0 >> n.level;
+            assert_eq!(*s, cpu && t.method == Method::Winograd4Lanes && w % 16 == 0, "{what}: {} ({t}, {w} wide) staged", n.name);
+        }
+    }
     if g.device.adapter_info().device_type != wgpu::DeviceType::Cpu || Tile::cpu(&g.device) != Tile::CPU_LANES {
         assert!(frames.iter().zip(&one_tile).all(|(a, b)| a.to_bits() == b.to_bits()), "one tile everywhere");
         return;
@@ -122,6 +132,9 @@ fn cpu_tiles_by_level_and_width_follow_the_rule() {
     assert!(methods.contains(&Method::Lanes));
     assert_eq!(methods.contains(&Method::WinogradLanes), wino);
     assert_eq!(methods.contains(&Method::Winograd4Lanes), wino);
+    // The 64x64 golden's L0 and L1 (64 and 32 wide) stage where F(4x4) runs: the goldens and
+    // the frames here go through the copies.
+    assert_eq!(auto.staged_convs().contains(&true), wino);
     // Winograd's rounding only: the frames within 1e-5 of the largest value.
     let scale = one_tile.iter().fold(1f32, |m, v| m.max(v.abs()));
     let worst = frames.iter().zip(&one_tile).fold(0f32, |m, (a, b)| m.max((a - b).abs()));

@@ -452,9 +452,9 @@ impl Sweep {
     fn combinations(&self) -> impl Iterator<Item = Options> + '_ {
         self.precisions.iter().flat_map(move |&p| {
             self.memories.iter().flat_map(move |&weights| {
-                self.sources
-                    .iter()
-                    .flat_map(move |&sources| self.tiles.iter().map(move |&tiles| Options { precision: p.into(), tiles, weights, sources }))
+                self.sources.iter().flat_map(move |&sources| {
+                    self.tiles.iter().map(move |&tiles| Options { precision: p.into(), tiles, weights, sources, staging: None })
+                })
             })
         })
     }

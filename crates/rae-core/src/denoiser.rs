@@ -22,6 +22,13 @@
 //!   every invocation of a workgroup reads the same weight at once, which lavapipe broadcasts
 //!   from one load. On GPUs, one read-only storage buffer and one dispatch per conv, so the
 //!   deep levels' few pixels still fill the machine ([`WeightMemory`]).
+//! - **Staged outputs** (CPU drivers, [`Options::staging`]): an F(4x4) conv on a level a
+//!   multiple of 16 wide writes its output into the plan's one buffer ([`ConvPlan::staged`]),
+//!   and the frame ends its compute pass there, copies the buffer into the conv's texture and
+//!   begins the next pass. The buffer lives from that conv to its copy; the next staged conv
+//!   overwrites it. On lavapipe a vec4 store into a buffer is one loop over the lanes and a
+//!   texel store of rgba32float four, and the copy is a memcpy: the 256x256 frame in 0.92-0.94x
+//!   the time, for one buffer the size of the largest staged output (8 MiB there).
 //! - **Tiles**: on GPUs each conv's register tile, and whether it reads its sources as sampled
 //!   or storage textures, is chosen while building, by timing the candidates on the device
 //!   ([`TileChoice::Tuned`], [`Options::sources`]); the candidates' plans are dropped after.
@@ -234,6 +241,11 @@ pub struct Options {
     /// time of sampled ones in one direct conv and were slower in the matrix-unit tiles,
     /// docs/PERF.md session 15); elsewhere by adapter type ([`SourceAccess::for_device_type`]).
     pub sources: Option<SourceAccess>,
+    /// Whether the F(4x4) convs write their outputs into a buffer that the frame copies into
+    /// their textures ([`Kernels::stage_outputs`]). `None`: on CPU drivers, where a buffer store
+    /// costs less than a texel store (lavapipe: the 256x256 frame in 0.92-0.94x the time,
+    /// docs/PERF.md session 28).
+    pub staging: Option<bool>,
 }
 
 /// Runs one model at one frame size, frame after frame, keeping the hidden state on the GPU.
@@ -255,6 +267,9 @@ pub struct Denoiser {
     conv_groups: [Vec<wgpu::BindGroup>; 2],
     /// `[parity][pool]` (a pool reads the state written this frame, whose texture alternates).
     pool_groups: [Vec<wgpu::BindGroup>; 2],
+    /// `[parity][node]`: the texture a conv writes, for the copy of a staged output
+    /// ([`ConvPlan::staged`]).
+    conv_outputs: [Vec<wgpu::Texture>; 2],
     prep_params: wgpu::Buffer,
     output_params: wgpu::Buffer,
     input_texture: wgpu::Texture,
@@ -291,7 +306,10 @@ fn texture(
         sample_count: 1,
         dimension: wgpu::TextureDimension::D2,
         format,
-        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING
+            | wgpu::TextureUsages::STORAGE_BINDING
+            | wgpu::TextureUsages::COPY_SRC
+            | wgpu::TextureUsages::COPY_DST,
         view_formats: &[],
     });
     let v = t.create_view(&wgpu::TextureViewDescriptor { dimension: Some(wgpu::TextureViewDimension::D2Array), ..Default::default() });
@@ -326,7 +344,7 @@ impl Denoiser {
         height: u32,
         options: Options,
     ) -> Result<Self> {
-        let Options { precision, tiles, weights: chosen_memory, sources } = options;
+        let Options { precision, tiles, weights: chosen_memory, sources, staging } = options;
         let device_type = device.adapter_info().device_type;
         // Mma tiles read storage weights: a fixed one picks them where the caller left it open.
         let fixed_mma = matches!(tiles, TileChoice::Fixed(t) if t.method.is_mma());
@@ -363,7 +381,8 @@ impl Denoiser {
         let hidden: Vec<[wgpu::TextureView; 2]> = hidden_pairs.iter().map(|[a, b]| [a.1.clone(), b.1.clone()]).collect();
         let hidden_textures: Vec<[wgpu::Texture; 2]> = hidden_pairs.iter().map(|[a, b]| [a.0.clone(), b.0.clone()]).collect();
         let (assign, slots) = graph.allocate_temps();
-        let slot_views: Vec<wgpu::TextureView> = slots.iter().map(|&(level, c)| make("temp", level, c).1).collect();
+        let slot_textures: Vec<(wgpu::Texture, wgpu::TextureView)> = slots.iter().map(|&(level, c)| make("temp", level, c)).collect();
+        let slot_views: Vec<wgpu::TextureView> = slot_textures.iter().map(|(_, v)| v.clone()).collect();
         let pooled_views: Vec<wgpu::TextureView> = graph.pools.iter().map(|p| make("pooled", p.level, p.channels).1).collect();
         let view = |v: Value, parity: usize| -> &wgpu::TextureView {
             match v {
@@ -374,6 +393,16 @@ impl Denoiser {
                 Value::Pooled(k) => &pooled_views[k],
             }
         };
+        // The texture of a value a conv writes.
+        let written = |v: Value, parity: usize| -> wgpu::Texture {
+            match v {
+                Value::HiddenNew(k) => hidden_textures[k][1 - parity].clone(),
+                Value::Temp(t) => slot_textures[assign[t]].0.clone(),
+                _ => unreachable!("a conv writes a temporary or a new hidden state"),
+            }
+        };
+        let conv_outputs: [Vec<wgpu::Texture>; 2] =
+            std::array::from_fn(|parity| graph.nodes.iter().map(|n| written(n.out, parity)).collect());
         let Value::Temp(out_temp) = graph.output else { unreachable!("the output is a temporary") };
         let output_view = slot_views[assign[out_temp]].clone();
 
@@ -476,6 +505,12 @@ impl Denoiser {
             _ => fixed(Tile::default()),
         };
         let memories: Vec<WeightMemory> = specs.iter().enumerate().map(|(i, s)| memory_of(per_conv(&tiles, i), s)).collect();
+        // On CPU drivers the F(4x4) convs write their outputs into a buffer that the frame copies
+        // into their textures (Kernels::stage_outputs; record_with records the copies). Tuning,
+        // above, timed the convs unstaged: a copy costs every candidate the same.
+        if staging.unwrap_or(device_type == wgpu::DeviceType::Cpu) {
+            kernels.stage_outputs();
+        }
         let convs = ConvPlan::with_choices(device, queue, &mut kernels, &specs, &tiles, &conv_sources, &memories)?;
         debug_assert_eq!(bytes, activation_bytes(&graph, pwidth, pheight, precision));
         bytes += convs.bytes();
@@ -560,6 +595,7 @@ impl Denoiser {
             convs,
             conv_groups,
             pool_groups,
+            conv_outputs,
             prep_params,
             output_params,
             input_texture,
@@ -680,23 +716,41 @@ impl Denoiser {
         }
         let (reset, parity) = (self.reset_pending, self.parity);
         encoder.clear_buffer(&self.stats, 0, None);
-        {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("rae frame"), timestamp_writes: None });
-            let stamp = |pass: &mut wgpu::ComputePass, i: u32| {
-                if let Some(q) = queries {
-                    pass.write_timestamp(q, i);
-                }
-            };
+        let stamp = |pass: &mut wgpu::ComputePass, i: u32| {
             if let Some(q) = queries {
-                write_opening_timestamp(&mut pass, q, 0, self.graph.nodes.len() as u32 + 3);
+                pass.write_timestamp(q, i);
             }
-            pass.set_pipeline(&self.prep);
-            pass.set_bind_group(0, &io.prep, &[]);
-            pass.dispatch_workgroups(self.pwidth.div_ceil(WORKGROUP), self.pheight.div_ceil(WORKGROUP), 1);
-            stamp(&mut pass, 1);
-            let mut pools = self.graph.pools.iter().zip(&self.pool_groups[parity]).peekable();
-            for (i, group) in self.conv_groups[parity].iter().enumerate() {
-                self.convs.record(&mut pass, i, reset, group);
+        };
+        let n = self.conv_groups[parity].len();
+        let mut pools = self.graph.pools.iter().zip(&self.pool_groups[parity]).peekable();
+        // The frame is one compute pass, split after each staged conv for the copy of its output
+        // into its texture (ConvPlan::staged). That conv's stage is stamped at the start of the
+        // next pass, so its time holds the copy.
+        let mut next = 0;
+        let mut pending_stamp = None;
+        loop {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("rae frame"), timestamp_writes: None });
+            if let Some(i) = pending_stamp.take() {
+                stamp(&mut pass, i);
+            }
+            if next == 0 {
+                if let Some(q) = queries {
+                    write_opening_timestamp(&mut pass, q, 0, self.graph.nodes.len() as u32 + 3);
+                }
+                pass.set_pipeline(&self.prep);
+                pass.set_bind_group(0, &io.prep, &[]);
+                pass.dispatch_workgroups(self.pwidth.div_ceil(WORKGROUP), self.pheight.div_ceil(WORKGROUP), 1);
+                stamp(&mut pass, 1);
+            }
+            let mut staged = None;
+            while next < n {
+                let i = next;
+                next += 1;
+                self.convs.record(&mut pass, i, reset, &self.conv_groups[parity][i]);
+                if self.convs.staged(i) {
+                    staged = Some(i);
+                    break;
+                }
                 // The pool of a block's new state runs right after the conv that writes it (its
                 // time is counted with that conv's stage), unless that conv pooled it itself.
                 if let Some((p, g)) = pools.next_if(|(p, _)| p.after == i)
@@ -709,10 +763,20 @@ impl Denoiser {
                 }
                 stamp(&mut pass, 2 + i as u32);
             }
+            if let Some(i) = staged {
+                drop(pass);
+                self.convs.copy_staged(encoder, i, &self.conv_outputs[parity][i]);
+                // A staged conv pools its own output (F(4x4) tiles always can).
+                debug_assert!(self.graph.pools.iter().all(|p| p.after != i) || self.convs.pools(i));
+                let _ = pools.next_if(|(p, _)| p.after == i);
+                pending_stamp = Some(2 + i as u32);
+                continue;
+            }
             pass.set_pipeline(&self.kernels.output);
             pass.set_bind_group(0, &io.output, &[]);
             pass.dispatch_workgroups(self.width.div_ceil(WORKGROUP), self.height.div_ceil(WORKGROUP), 1);
             stamp(&mut pass, 2 + self.graph.nodes.len() as u32);
+            break;
         }
         self.parity ^= 1;
         self.reset_pending = false;
@@ -988,6 +1052,12 @@ impl Denoiser {
     /// else `mixed`.
     pub fn weights_name(&self) -> &'static str {
         self.weight_memory().map_or("mixed", WeightMemory::name)
+    }
+
+    /// Whether each conv writes its output into the buffer the frame copies from
+    /// ([`Options::staging`]).
+    pub fn staged_convs(&self) -> Vec<bool> {
+        (0..self.graph.nodes.len()).map(|i| self.convs.staged(i)).collect()
     }
 
     /// Where each conv reads its weights, in [`Graph::nodes`] order.

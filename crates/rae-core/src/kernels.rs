@@ -547,6 +547,9 @@ pub struct ConvVariant {
     /// Where it reads its weights (the module and bind-group layout it is made with; Mma tiles
     /// read storage weights).
     pub memory: WeightMemory,
+    /// It writes its output into the plan's buffer rather than its texture
+    /// (conv3x3_wino4.wgsl's OUT_BUFFER), for the frame to copy ([`ConvPlan::staged`]).
+    pub staged: bool,
 }
 
 impl ConvVariant {
@@ -710,6 +713,8 @@ pub struct Kernels {
     memory: WeightMemory,
     /// The access of plans that do not choose per conv ([`ConvPlan::new`]).
     sources: SourceAccess,
+    /// Plans made from here stage the outputs they can ([`Kernels::stage_outputs`]).
+    staging: bool,
 }
 
 impl Kernels {
@@ -815,7 +820,23 @@ impl Kernels {
             precision,
             memory,
             sources,
+            staging: false,
         }
+    }
+
+    /// Have the plans made from here on stage the outputs of their F(4x4) convs where a copy
+    /// can take them: the conv writes its output into the plan's buffer and the frame copies it
+    /// into the texture (on a CPU driver, with f32 activations, at levels a multiple of 16
+    /// wide, up to [`STAGING_BYTES`]; [`ConvPlan::staged`]).
+    ///
+    /// Lavapipe stores an rgba32float texel with four loops over the subgroup's lanes, one per
+    /// 32-bit word, each spilling the vectors it picks a lane from; a vec4 store into a buffer is
+    /// one such loop, and `copy_buffer_to_texture` is a memcpy on the queue thread (0.04-0.10x
+    /// the texel stores it replaces; docs/PERF.md, sessions 25 and 28). Only a caller that
+    /// records the copies may ask for it ([`crate::Denoiser`]): [`ConvPlan::record`] alone leaves
+    /// a staged conv's texture unwritten.
+    pub fn stage_outputs(&mut self) {
+        self.staging = self.precision == Precision::F32;
     }
 
     /// A conv kernel's text (`src`, from `file`) with the rewrites both conv modules take: the
@@ -987,6 +1008,7 @@ impl Kernels {
             ]);
             if v.runs_rows() {
                 constants.push(("WEIGHT_TEXELS_WIDTH", WEIGHT_TEXELS_WIDTH as f64));
+                constants.push(("OUT_BUFFER", v.staged as u32 as f64));
             }
             let module = if v.runs_rows() { modules.rows.as_ref() } else { modules.main.as_ref() }.expect("made by prepare");
             ("conv3x3", module, if v.reduce { "reduce" } else { v.method.entry_point() })
@@ -1452,6 +1474,11 @@ pub const MMA_LO_SCALE: f32 = 2048.0;
 /// Full-resolution f32 texture layers split-K's partial sums may take ([`ConvPlan::new`]).
 pub const PARTIAL_LAYERS: u64 = 4;
 
+/// The most bytes one staged conv output may take ([`Kernels::stage_outputs`]): 32 channels
+/// of 512 x 512 in f32, so that a 1080p frame stages its small levels only rather than hold
+/// a 267 MB buffer for its first.
+pub const STAGING_BYTES: u64 = 32 << 20;
+
 /// One convolution to plan: its size, sources, weights and kernel variant.
 #[derive(Debug, Clone, Copy)]
 pub struct ConvSpec<'a> {
@@ -1533,6 +1560,8 @@ struct Planned {
     memory: WeightMemory,
     /// It writes its output max-pooled too ([`ConvPlan::pools`]).
     pool: bool,
+    /// Its output's size (width, height, layers) where it writes it into the buffer to copy.
+    staged: Option<[u32; 3]>,
     workgroups: (u32, u32),
     /// Parts per group (workgroup z runs over groups x parts).
     split: u32,
@@ -1547,7 +1576,8 @@ struct Planned {
 pub struct ConvPlan {
     params: wgpu::Buffer,
     weights: wgpu::Buffer,
-    /// Split-K's partial sums (16 bytes when no conv is split).
+    /// Split-K's partial sums, or the staged outputs ([`Kernels::stage_outputs`]; 16 bytes
+    /// when no conv needs it). Each split or staged conv overwrites it in turn.
     partial: wgpu::Buffer,
     /// Binding 7: the weights of Winograd lanes convs ([`Method::is_winograd_lanes`]),
     /// [`WEIGHT_TEXELS_WIDTH`] texels a row (1 x 1 where the plan has none).
@@ -1696,10 +1726,11 @@ impl ConvPlan {
                     sources: access,
                     pool: false,
                     memory,
+                    staged: false,
                 };
                 // Workgroups of 4 rows (conv3x3_mma.wgsl's ROWS) x 64 or 32 pixels (16 MT).
                 let pixels = if split { MMA_SPLIT_PIXELS } else { MMA_PIXELS };
-                pending.push((variant, false, (s.width.div_ceil(pixels), s.height.div_ceil(4)), 1, vec![group], None));
+                pending.push((variant, false, (s.width.div_ceil(pixels), s.height.div_ceil(4)), 1, vec![group], None, None));
                 used.push(Tile { blocks: 4 * nt, ..tile });
                 continue;
             }
@@ -1740,6 +1771,15 @@ impl ConvPlan {
             let can_pool =
                 (tile.method == Method::Lanes && cols == 2 && rows.is_multiple_of(2) && split == 1) || tile.method.is_winograd_lanes();
             let pool = s.pooled && can_pool;
+            // Staged where asked, the row pitch a copy's (256 bytes), the buffer within bounds.
+            let staged = (kernels.staging
+                && tile.method == Method::Winograd4Lanes
+                && (s.width * 16).is_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT)
+                && part_bytes <= STAGING_BYTES)
+                .then_some([s.width, s.height, cout4]);
+            if staged.is_some() {
+                partial = partial.max(part_bytes);
+            }
             let variant = ConvVariant {
                 read_a: s.read_a,
                 read_b: s.read_b,
@@ -1755,6 +1795,7 @@ impl ConvPlan {
                 sources: access,
                 pool: can_pool,
                 memory,
+                staged: staged.is_some(),
             };
             // Split-K's partial sums: one buffer for the largest split conv, which every split
             // conv overwrites in turn (the reduce of one runs before the next conv starts).
@@ -1804,6 +1845,7 @@ impl ConvPlan {
                 method: Method::Direct,
                 reduce: true,
                 pool: false,
+                staged: false,
                 ..variant
             };
             let reduce = (split > 1).then_some((reduce_variant, [s.width.div_ceil(8), s.height.div_ceil(8), cout4]));
@@ -1814,6 +1856,7 @@ impl ConvPlan {
                 split,
                 groups,
                 reduce,
+                staged,
             ));
             used.push(used_tile);
         }
@@ -1822,11 +1865,12 @@ impl ConvPlan {
         kernels.prepare(device, &variants);
         let convs: Vec<Planned> = pending
             .into_iter()
-            .map(|(variant, pool, workgroups, split, groups, reduce)| Planned {
+            .map(|(variant, pool, workgroups, split, groups, reduce, staged)| Planned {
                 pipeline: kernels.conv(device, variant),
                 sources: variant.sources,
                 memory: variant.memory,
                 pool,
+                staged,
                 workgroups,
                 split,
                 groups,
@@ -1887,7 +1931,7 @@ impl ConvPlan {
             partial: device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("conv partial sums"),
                 size: partial.max(16),
-                usage: wgpu::BufferUsages::STORAGE,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
                 mapped_at_creation: false,
             }),
             weight_binding,
@@ -1925,6 +1969,27 @@ impl ConvPlan {
     /// ([`ConvPlan::bind_group`]).
     pub fn pools(&self, i: usize) -> bool {
         self.convs[i].pool
+    }
+
+    /// Whether conv `i` writes its output into the plan's buffer ([`Kernels::stage_outputs`]):
+    /// after [`ConvPlan::record`] the caller ends the pass and records this copy into the texture
+    /// bound as the conv's output.
+    pub fn staged(&self, i: usize) -> bool {
+        self.convs[i].staged.is_some()
+    }
+
+    /// Copy conv `i`'s staged output into `dst`, its output texture (nothing where it is not
+    /// staged).
+    pub fn copy_staged(&self, encoder: &mut wgpu::CommandEncoder, i: usize, dst: &wgpu::Texture) {
+        let Some([width, height, layers]) = self.convs[i].staged else { return };
+        encoder.copy_buffer_to_texture(
+            wgpu::TexelCopyBufferInfo {
+                buffer: &self.partial,
+                layout: wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(width * 16), rows_per_image: Some(height) },
+            },
+            dst.as_image_copy(),
+            wgpu::Extent3d { width, height, depth_or_array_layers: layers },
+        );
     }
 
     /// Dispatches per frame.
