@@ -27,7 +27,7 @@
 //!   and the frame ends its compute pass there, copies the buffer into the conv's texture and
 //!   begins the next pass. The buffer lives from that conv to its copy; the next staged conv
 //!   overwrites it. On lavapipe a vec4 store into a buffer is one loop over the lanes and a
-//!   texel store of rgba32float four, and the copy is a memcpy: the 256x256 frame in 0.92-0.94x
+//!   texel store of rgba32float four, and the copy is a memcpy: the 256x256 frame in 0.92-0.95x
 //!   the time, for one buffer the size of the largest staged output (8 MiB there).
 //! - **Tiles**: on GPUs each conv's register tile, and whether it reads its sources as sampled
 //!   or storage textures, is chosen while building, by timing the candidates on the device
@@ -243,7 +243,7 @@ pub struct Options {
     pub sources: Option<SourceAccess>,
     /// Whether the F(4x4) convs write their outputs into a buffer that the frame copies into
     /// their textures ([`Kernels::stage_outputs`]). `None`: on CPU drivers, where a buffer store
-    /// costs less than a texel store (lavapipe: the 256x256 frame in 0.92-0.94x the time,
+    /// costs less than a texel store (lavapipe: the 256x256 frame in 0.92-0.95x the time,
     /// docs/PERF.md session 28).
     pub staging: Option<bool>,
 }
