@@ -61,9 +61,18 @@ fn max4(t: Source, p: vec2<i32>, layer: u32) -> vec4<f32> {
     return max(max(a, b), max(c, d));
 }
 
+// The device reads zero outside a texture (kernels::out_of_bounds_reads_zero: lavapipe, which
+// has Vulkan's robustImageAccess2, and wgpu leaves its loads unchecked there) and the plan's
+// sources have exactly the sizes their read modes imply (Kernels::pad_from_bounds), so every
+// pixel outside the level reads texels outside its source and `fetch` need not test. Without
+// the test a fetch is one load, where the test made it a branch: llvmpipe keeps the returned
+// value in a variable whose every use LLVM's coroutine pass checks against every other, and
+// runs the test's compares and masks on each fetch (docs/PERF.md, session 28).
+override OOB_ZERO: bool = false;
+
 // One channel block of a source at output-resolution pixel (x, y); zero outside (padding 1).
 fn fetch(t: Source, mode: u32, x: i32, y: i32, layer: u32) -> vec4<f32> {
-    if x < 0 || y < 0 || x >= i32(params.width) || y >= i32(params.height) {
+    if !OOB_ZERO && (x < 0 || y < 0 || x >= i32(params.width) || y >= i32(params.height)) {
         return vec4<f32>(0.0);
     }
     return read_at(t, mode, x, y, layer);

@@ -1259,3 +1259,100 @@ fn whole_pipeline_matches_cpu_on_odd_sizes() {
         }
     }
 }
+
+#[test]
+fn out_of_bounds_reads_are_zero_where_the_kernels_rely_on_it() {
+    // kernels::out_of_bounds_reads_zero lets the conv kernels read their zero padding without
+    // testing each pixel (conv_common.wgsl's OOB_ZERO). Where it says so, a texel read outside
+    // a 4 x 4 x 2 texture of sevens is zero, from a sampled and from a storage source, at each
+    // side, diagonally and far out; inside it is seven either way.
+    let g = gpu();
+    let texture = g.device.create_texture_with_data(
+        &g.queue,
+        &wgpu::TextureDescriptor {
+            label: None,
+            size: wgpu::Extent3d { width: 4, height: 4, depth_or_array_layers: 2 },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::Rgba32Float,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::STORAGE_BINDING,
+            view_formats: &[],
+        },
+        wgpu::util::TextureDataOrder::LayerMajor,
+        bytemuck::cast_slice(&[7.0f32; 4 * 4 * 2 * 4]),
+    );
+    let view = array_view(&texture);
+    let points: [[i32; 2]; 8] = [[1, 2], [-1, 0], [0, -1], [4, 0], [0, 4], [-1, -1], [4, 4], [9, -7]];
+    let coords: String = points.iter().map(|[x, y]| format!("vec2<i32>({x}, {y}), ")).collect();
+    let source = format!(
+        "@group(0) @binding(0) var sampled: texture_2d_array<f32>;
+         @group(0) @binding(1) var stored: texture_storage_2d_array<rgba32float, read>;
+         @group(0) @binding(2) var<storage, read_write> out: array<vec4<f32>>;
+         const POINTS = array<vec2<i32>, {n}>({coords});
+         @compute @workgroup_size(1)
+         fn main() {{
+             for (var i = 0u; i < {n}u; i++) {{
+                 out[2u * i] = textureLoad(sampled, POINTS[i], 1, 0);
+                 out[2u * i + 1u] = textureLoad(stored, POINTS[i], 1);
+             }}
+         }}",
+        n = points.len()
+    );
+    let module =
+        g.device.create_shader_module(wgpu::ShaderModuleDescriptor { label: None, source: wgpu::ShaderSource::Wgsl(source.into()) });
+    let pipeline = g.device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: None,
+        layout: None,
+        module: &module,
+        entry_point: Some("main"),
+        compilation_options: Default::default(),
+        cache: None,
+    });
+    let bytes = (points.len() * 2 * 16) as u64;
+    let out = g.device.create_buffer(&wgpu::BufferDescriptor {
+        label: None,
+        size: bytes,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    });
+    let read = g.device.create_buffer(&wgpu::BufferDescriptor {
+        label: None,
+        size: bytes,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let group = g.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: None,
+        layout: &pipeline.get_bind_group_layout(0),
+        entries: &[
+            wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&view) },
+            wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&view) },
+            wgpu::BindGroupEntry { binding: 2, resource: out.as_entire_binding() },
+        ],
+    });
+    let mut e = g.device.create_command_encoder(&Default::default());
+    {
+        let mut pass = e.begin_compute_pass(&Default::default());
+        pass.set_pipeline(&pipeline);
+        pass.set_bind_group(0, &group, &[]);
+        pass.dispatch_workgroups(1, 1, 1);
+    }
+    e.copy_buffer_to_buffer(&out, 0, &read, 0, bytes);
+    g.queue.submit([e.finish()]);
+    read.slice(..).map_async(wgpu::MapMode::Read, |r| r.expect("map"));
+    g.device.poll(wgpu::PollType::wait_indefinitely()).unwrap();
+    let v: Vec<f32> = bytemuck::cast_slice(&read.slice(..).get_mapped_range().unwrap()).to_vec();
+    let texel = |i: usize, kind: usize| &v[(2 * i + kind) * 4..(2 * i + kind) * 4 + 4];
+    for kind in 0..2 {
+        assert_eq!(texel(0, kind), [7.0; 4], "inside, {}", ["sampled", "storage"][kind]);
+    }
+    if !kernels::out_of_bounds_reads_zero(&g.device) {
+        return;
+    }
+    for (i, p) in points.iter().enumerate().skip(1) {
+        for kind in 0..2 {
+            assert_eq!(texel(i, kind), [0.0; 4], "{p:?} outside, {} source", ["sampled", "storage"][kind]);
+        }
+    }
+}

@@ -65,6 +65,8 @@ fn main() {
     for name in tiles {
         let tile = parse(&name);
         let mut k = Kernels::new(&g.device, kernels::Precision::F32, WeightMemory::Storage);
+        // As a Denoiser's plan does (its sources are the level's size).
+        k.pad_from_bounds();
         let spec = ConvSpec {
             name: "probe",
             width: w,

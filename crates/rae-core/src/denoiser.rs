@@ -363,6 +363,9 @@ impl Denoiser {
         }
         let graph = Graph::new(&arch);
         let mut kernels = Kernels::with_sources(device, precision, memory, default_sources);
+        // The padded levels halve exactly, so the convs may read their zero padding from
+        // outside the textures where the device reads zero there (before tuning makes any).
+        kernels.pad_from_bounds();
         let format = precision.format();
         let mut textures = Vec::new();
         let mut bytes = 0u64;

@@ -236,6 +236,20 @@ pub fn winograd_lanes_supported(device: &wgpu::Device) -> bool {
     device.features().contains(wgpu::Features::SUBGROUP) && device.adapter_info().subgroup_min_size >= 16
 }
 
+/// Whether a device reads zero at a texel outside a texture, so that the conv kernels read
+/// their zero padding without testing each pixel (conv_common.wgsl's OOB_ZERO): lavapipe.
+///
+/// WGSL lets an out-of-bounds `textureLoad` return any texel of the texture or zero, and wgpu
+/// clamps the coordinates unless the device has Vulkan's robustImageAccess2, which lavapipe
+/// (Mesa's llvmpipe) has: there wgpu leaves the loads unchecked and the driver returns zero.
+/// Other devices keep the test (GPUs: not timed without it). `tests/engine/kernels.rs` reads
+/// outside both source kinds' textures on the test device and holds this to what it finds.
+/// A plan reads its padding so only where its caller asks ([`Kernels::pad_from_bounds`]).
+pub fn out_of_bounds_reads_zero(device: &wgpu::Device) -> bool {
+    let info = device.adapter_info();
+    info.backend == wgpu::Backend::Vulkan && info.device_type == wgpu::DeviceType::Cpu && info.driver == "llvmpipe"
+}
+
 /// The enable directive of conv3x3_mma.wgsl that [`mma_source`] extends.
 pub const MMA_ENABLE: &str = "enable f16;";
 
@@ -715,6 +729,11 @@ pub struct Kernels {
     sources: SourceAccess,
     /// Plans made from here stage the outputs they can ([`Kernels::stage_outputs`]).
     staging: bool,
+    /// The device reads zero outside a texture ([`out_of_bounds_reads_zero`]).
+    reads_zero: bool,
+    /// The conv pipelines read their zero padding from outside the textures
+    /// ([`Kernels::pad_from_bounds`]).
+    oob_zero: bool,
 }
 
 impl Kernels {
@@ -821,7 +840,26 @@ impl Kernels {
             memory,
             sources,
             staging: false,
+            reads_zero: out_of_bounds_reads_zero(device),
+            oob_zero: false,
         }
+    }
+
+    /// Have the conv pipelines read their zero padding from outside the source textures,
+    /// without testing each pixel, where the device reads zero there
+    /// ([`out_of_bounds_reads_zero`], conv_common.wgsl's OOB_ZERO): one load per fetch instead
+    /// of a branch around it (lavapipe: the 256x256 frame in 0.93x the time, and the direct
+    /// tiles' pipelines compile in about half the time; docs/PERF.md, session 28).
+    ///
+    /// Only for plans whose sources have exactly the sizes their read modes imply: a pooled
+    /// source twice the level's, an upsampled one half, a pooled-and-upsampled one the level's,
+    /// each level even where a mode halves or doubles it, as the [`crate::Denoiser`]'s padded
+    /// levels are. Then every pixel outside the level reads texels outside its source; at odd
+    /// sizes an upsampled read at the right edge would land inside. Call it before any conv
+    /// pipeline is made (they are made once per variant).
+    pub fn pad_from_bounds(&mut self) {
+        assert!(self.conv.is_empty(), "pad_from_bounds after conv pipelines were made");
+        self.oob_zero = self.reads_zero;
     }
 
     /// Have the plans made from here on stage the outputs of their F(4x4) convs where a copy
@@ -976,6 +1014,8 @@ impl Kernels {
             ("SOURCE_B", if v.source_b { 1.0 } else { 0.0 }),
             ("LEAKY", if v.leaky { 1.0 } else { 0.0 }),
             ("STORE_MAX", self.precision.store_max() as f64),
+            // The Mma tiles (GPUs; emulated elsewhere) keep their tests.
+            ("OOB_ZERO", (self.oob_zero && !v.method.is_mma()) as u32 as f64),
         ];
         let (label, module, entry) = if v.method.is_mma() {
             // Split tiles split the activations too where they are f32 (f16 ones are exact).

@@ -1,0 +1,140 @@
+//! What reading the zero padding from outside the textures saves one conv
+//! ([`Kernels::pad_from_bounds`]): the same conv planned twice, testing each fetched pixel and
+//! not, timed in one process, alternating a submit of one and of the other, so that the
+//! machine's drift between runs (a fifth and more on a 2-vCPU VM) falls on both alike. Prints,
+//! per conv, each plan's median time per dispatch and the median of the per-round ratios.
+//!
+//! cargo run --release -p rae-core --example pad_cost -- [ROUNDS] [TILE ...]
+//!
+//! TILE as compile_cost takes it (wino4lanesRxB, winolanesRxB, lanesRxB, directRxB); the
+//! convs are the default network's L0 ones at 256x256: 64 -> 32 channels from two 32-channel
+//! sources, and 8 -> 32 from one.
+
+use std::time::Instant;
+
+use rae_core::Gpu;
+use rae_core::graph::Read;
+use rae_core::kernels::{self, ConvPlan, ConvSpec, Kernels, Tile, WeightMemory, blocks};
+
+/// Dispatches per timed submit.
+const REPEAT: usize = 3;
+
+/// The tile a name stands for (the kinds a CPU driver runs).
+fn parse(s: &str) -> Tile {
+    let (method, rest) =
+        ["wino4lanes", "winolanes", "lanes", "direct"].iter().find_map(|m| s.strip_prefix(m).map(|r| (*m, r))).expect("tile kind");
+    let (r, b) = rest.split_once('x').expect("RxB");
+    let (r, b): (u32, u32) = (r.parse().unwrap(), b.parse().unwrap());
+    match method {
+        "wino4lanes" => Tile::winograd4_lanes(r, b),
+        "winolanes" => Tile::winograd_lanes(r, b),
+        "direct" => Tile::new(r, b),
+        _ => Tile::lanes(r, b, 2),
+    }
+    .expect("a tile the kernels have")
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+fn main() {
+    // SAFETY: first thing in main, before any thread starts.
+    unsafe { rae_core::gpu::prefer_wide_cpu_vectors() };
+    let mut args = std::env::args().skip(1).peekable();
+    let rounds: usize = args.next_if(|a| a.parse::<usize>().is_ok()).map_or(15, |a| a.parse().unwrap());
+    let tiles: Vec<String> = args.collect();
+    let tiles = if tiles.is_empty() { vec!["wino4lanes8x4".to_string()] } else { tiles };
+    let g = Gpu::new().expect("a device");
+    println!("{}; reads zero outside: {}", g.describe(), kernels::out_of_bounds_reads_zero(&g.device));
+    println!("{:>16} {:>9} {:>12} {:>12} {:>10}", "tile", "conv", "tested ms", "bounds ms", "ratio");
+    let (w, h) = (256u32, 256u32);
+    let texture = |c: usize| {
+        let t = g.device.create_texture(&wgpu::TextureDescriptor {
+            label: None,
+            size: wgpu::Extent3d { width: w, height: h, depth_or_array_layers: blocks(c) },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: kernels::ACTIVATION_FORMAT,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::STORAGE_BINDING,
+            view_formats: &[],
+        });
+        t.create_view(&wgpu::TextureViewDescriptor { dimension: Some(wgpu::TextureViewDimension::D2Array), ..Default::default() })
+    };
+    let (a, b, out) = (texture(32), texture(32), texture(32));
+    for name in &tiles {
+        let tile = parse(name);
+        for (label, ca, cb) in [("64->32", 32usize, 32usize), ("8->32", 8, 0)] {
+            let weight = vec![0.01f32; 32 * (ca + cb) * 9];
+            let bias = vec![0.0f32; 32];
+            let spec = ConvSpec {
+                name: "probe",
+                width: w,
+                height: h,
+                ca,
+                cb,
+                cout: 32,
+                weight: &weight,
+                bias: &bias,
+                read_a: Read::Direct,
+                read_b: Read::Direct,
+                leaky: true,
+                slope: 0.1,
+                b_is_hidden: false,
+                pooled: false,
+            };
+            // The two plans: the fetch tests each pixel, and it reads outside instead.
+            let plans: Vec<_> = [false, true]
+                .into_iter()
+                .map(|pad| {
+                    let mut k = Kernels::new(&g.device, kernels::Precision::F32, WeightMemory::Storage);
+                    if pad {
+                        k.pad_from_bounds();
+                    }
+                    let plan = ConvPlan::new(&g.device, &g.queue, &mut k, &[spec], &[tile]).expect("plan");
+                    let group = plan.bind_group(&g.device, &k, 0, &a, &b, &out, None);
+                    (k, plan, group)
+                })
+                .collect();
+            let time = |i: usize| {
+                let (_, plan, group) = &plans[i];
+                let mut enc = g.device.create_command_encoder(&Default::default());
+                {
+                    let mut pass = enc.begin_compute_pass(&Default::default());
+                    for _ in 0..REPEAT {
+                        plan.record(&mut pass, 0, false, group);
+                    }
+                }
+                let t = Instant::now();
+                g.queue.submit(Some(enc.finish()));
+                g.device.poll(wgpu::PollType::wait_indefinitely()).expect("poll");
+                t.elapsed().as_secs_f64() * 1e3 / REPEAT as f64
+            };
+            // The first submit of each compiles its pipeline.
+            time(0);
+            time(1);
+            let (mut tested, mut bounds, mut ratio) = (Vec::new(), Vec::new(), Vec::new());
+            for r in 0..rounds {
+                // Alternate which goes first.
+                let (x, y) = if r % 2 == 0 { (time(0), time(1)) } else { (time(1), time(0)).rev() };
+                ratio.push(y / x);
+                tested.push(x);
+                bounds.push(y);
+            }
+            println!("{name:>16} {label:>9} {:>12.3} {:>12.3} {:>10.3}", median(tested), median(bounds), median(ratio));
+        }
+    }
+}
+
+/// Swap a pair (the second-first rounds' times back into (tested, bounds) order).
+trait Rev {
+    fn rev(self) -> Self;
+}
+
+impl Rev for (f64, f64) {
+    fn rev(self) -> Self {
+        (self.1, self.0)
+    }
+}
