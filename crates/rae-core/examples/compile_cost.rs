@@ -14,29 +14,9 @@ use std::time::Instant;
 
 use rae_core::Gpu;
 use rae_core::graph::Read;
-use rae_core::kernels::{self, ConvPlan, ConvSpec, Kernels, Tile, WeightMemory, blocks};
+use rae_core::kernels::{self, ConvPlan, ConvSpec, Kernels, WeightMemory};
 
-/// The tile a name on the command line stands for.
-fn parse(s: &str) -> Tile {
-    if let Some(c) = s.strip_prefix("mmas") {
-        return Tile::mma_split(c.parse().unwrap()).expect("an mma split tile");
-    }
-    if let Some(c) = s.strip_prefix("mma") {
-        return Tile::mma(c.parse().unwrap()).expect("an mma tile");
-    }
-    let (method, rest) =
-        ["wino4lanes", "winolanes", "lanes", "wino", "direct"].iter().find_map(|m| s.strip_prefix(m).map(|r| (*m, r))).expect("tile kind");
-    let (r, b) = rest.split_once('x').expect("RxB");
-    let (r, b): (u32, u32) = (r.parse().unwrap(), b.parse().unwrap());
-    match method {
-        "wino4lanes" => Tile::winograd4_lanes(r, b),
-        "winolanes" => Tile::winograd_lanes(r, b),
-        "wino" => Tile::winograd(r, b),
-        "direct" => Tile::new(r, b),
-        _ => Tile::lanes(r, b, 2),
-    }
-    .expect("a tile the kernels have")
-}
+mod common;
 
 fn main() {
     let tiles: Vec<String> = std::env::args().skip(1).collect();
@@ -46,24 +26,10 @@ fn main() {
     let (w, h, c) = (32u32, 32u32, 32usize);
     let weight = vec![0.01f32; 2 * c * c * 9];
     let bias = vec![0.0f32; c];
-    let texture = |layers: u32| {
-        g.device.create_texture(&wgpu::TextureDescriptor {
-            label: None,
-            size: wgpu::Extent3d { width: w, height: h, depth_or_array_layers: layers },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: kernels::ACTIVATION_FORMAT,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::STORAGE_BINDING,
-            view_formats: &[],
-        })
-    };
-    let view = |t: &wgpu::Texture| {
-        t.create_view(&wgpu::TextureViewDescriptor { dimension: Some(wgpu::TextureViewDimension::D2Array), ..Default::default() })
-    };
-    let (a, b, out) = (texture(blocks(c)), texture(blocks(c)), texture(blocks(c)));
+    let view = |c| common::activation_view(&g.device, w, h, c);
+    let (a, b, out) = (view(c), view(c), view(c));
     for name in tiles {
-        let tile = parse(&name);
+        let tile = common::parse_tile(&name);
         let mut k = Kernels::new(&g.device, kernels::Precision::F32, WeightMemory::Storage);
         // As a Denoiser's plan does (its sources are the level's size).
         k.pad_from_bounds();
@@ -85,7 +51,7 @@ fn main() {
         };
         let t0 = Instant::now();
         let plan = ConvPlan::new(&g.device, &g.queue, &mut k, &[spec], &[tile]).expect("plan");
-        let group = plan.bind_group(&g.device, &k, 0, &view(&a), &view(&b), &view(&out), None);
+        let group = plan.bind_group(&g.device, &k, 0, &a, &b, &out, None);
         let made = t0.elapsed();
         let t1 = Instant::now();
         let mut enc = g.device.create_command_encoder(&Default::default());

@@ -6,7 +6,7 @@
 //!
 //! cargo run --release -p rae-core --example pad_cost -- [ROUNDS] [TILE ...]
 //!
-//! TILE as compile_cost takes it (wino4lanesRxB, winolanesRxB, lanesRxB, directRxB); the
+//! TILE as compile_cost takes it (common::parse_tile: wino4lanesRxB, lanesRxB, ...); the
 //! convs are the default network's L0 ones at 256x256: 64 -> 32 channels from two 32-channel
 //! sources, and 8 -> 32 from one.
 
@@ -14,25 +14,12 @@ use std::time::Instant;
 
 use rae_core::Gpu;
 use rae_core::graph::Read;
-use rae_core::kernels::{self, ConvPlan, ConvSpec, Kernels, Tile, WeightMemory, blocks};
+use rae_core::kernels::{self, ConvPlan, ConvSpec, Kernels, WeightMemory};
+
+mod common;
 
 /// Dispatches per timed submit.
 const REPEAT: usize = 3;
-
-/// The tile a name stands for (the kinds a CPU driver runs).
-fn parse(s: &str) -> Tile {
-    let (method, rest) =
-        ["wino4lanes", "winolanes", "lanes", "direct"].iter().find_map(|m| s.strip_prefix(m).map(|r| (*m, r))).expect("tile kind");
-    let (r, b) = rest.split_once('x').expect("RxB");
-    let (r, b): (u32, u32) = (r.parse().unwrap(), b.parse().unwrap());
-    match method {
-        "wino4lanes" => Tile::winograd4_lanes(r, b),
-        "winolanes" => Tile::winograd_lanes(r, b),
-        "direct" => Tile::new(r, b),
-        _ => Tile::lanes(r, b, 2),
-    }
-    .expect("a tile the kernels have")
-}
 
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
@@ -50,22 +37,10 @@ fn main() {
     println!("{}; reads zero outside: {}", g.describe(), kernels::out_of_bounds_reads_zero(&g.device));
     println!("{:>16} {:>9} {:>12} {:>12} {:>10}", "tile", "conv", "tested ms", "bounds ms", "ratio");
     let (w, h) = (256u32, 256u32);
-    let texture = |c: usize| {
-        let t = g.device.create_texture(&wgpu::TextureDescriptor {
-            label: None,
-            size: wgpu::Extent3d { width: w, height: h, depth_or_array_layers: blocks(c) },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: kernels::ACTIVATION_FORMAT,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::STORAGE_BINDING,
-            view_formats: &[],
-        });
-        t.create_view(&wgpu::TextureViewDescriptor { dimension: Some(wgpu::TextureViewDimension::D2Array), ..Default::default() })
-    };
-    let (a, b, out) = (texture(32), texture(32), texture(32));
+    let view = |c| common::activation_view(&g.device, w, h, c);
+    let (a, b, out) = (view(32), view(32), view(32));
     for name in &tiles {
-        let tile = parse(name);
+        let tile = common::parse_tile(name);
         for (label, ca, cb) in [("64->32", 32usize, 32usize), ("8->32", 8, 0)] {
             let weight = vec![0.01f32; 32 * (ca + cb) * 9];
             let bias = vec![0.0f32; 32];
