@@ -848,8 +848,8 @@ impl Kernels {
     /// Have the conv pipelines read their zero padding from outside the source textures,
     /// without testing each pixel, where the device reads zero there
     /// ([`out_of_bounds_reads_zero`], conv_common.wgsl's OOB_ZERO): one load per fetch instead
-    /// of a branch around it (lavapipe: the 256x256 frame in 0.93x the time, and the direct
-    /// tiles' pipelines compile in about half the time; docs/PERF.md, session 28).
+    /// of a branch around it (lavapipe: the L0 convs in 0.93-0.98x the time, about 3% of the
+    /// 256x256 frame, and the direct16x4 pipeline compiles in 0.4x; docs/PERF.md, session 28).
     ///
     /// Only for plans whose sources have exactly the sizes their read modes imply: a pooled
     /// source twice the level's, an upsampled one half, a pooled-and-upsampled one the level's,
