@@ -150,16 +150,22 @@ fn wino4_store(m: Wino6, bias: vec4<f32>, x: u32, y0: u32, layer: u32) {
 // and a buffer store of a vec4 is one: 0.68-0.86x the time (docs/PERF.md, sessions 25 and 28).
 override OUT_BUFFER: bool = false;
 
+// The four pixels of a row from pixel `i` of the staged buffer on, in 32-bit words (where the
+// device has 64-bit integers, kernels::lanes_module_source calls conv3x3_stage64.wgsl's
+// `stage_row64` instead: half the store loops).
+fn stage_row(i: u32, a: vec4<f32>, b: vec4<f32>, c: vec4<f32>, d: vec4<f32>) {
+    partial[i] = a;
+    partial[i + 1u] = b;
+    partial[i + 2u] = c;
+    partial[i + 3u] = d;
+}
+
 // One output row of a 4x4 tile at (x .. x + 3, y), columns past the right edge dropped.
 fn wino4_row(x: u32, y: u32, layer: u32, a: vec4<f32>, b: vec4<f32>, c: vec4<f32>, d: vec4<f32>) {
     let w = params.width;
     if OUT_BUFFER {
         // A staged level is a multiple of 16 wide, so the row's four pixels are inside.
-        let i = (layer * params.height + y) * w + x;
-        partial[i] = activate(a);
-        partial[i + 1u] = activate(b);
-        partial[i + 2u] = activate(c);
-        partial[i + 3u] = activate(d);
+        stage_row((layer * params.height + y) * w + x, activate(a), activate(b), activate(c), activate(d));
     } else {
         textureStore(dst, vec2<u32>(x, y), layer, activate(a));
         if x + 1u < w { textureStore(dst, vec2<u32>(x + 1u, y), layer, activate(b)); }

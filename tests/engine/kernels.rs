@@ -1356,3 +1356,93 @@ fn out_of_bounds_reads_are_zero_where_the_kernels_rely_on_it() {
         }
     }
 }
+
+#[test]
+fn staged_outputs_are_the_unstaged_ones_bit_for_bit() {
+    // Kernels::stage_outputs: an F(4x4) conv on a level a multiple of 16 wide writes the plan's
+    // buffer, and the copy into its texture (ConvPlan::copy_staged) gives the texels the texture
+    // store gives, in 32-bit words and (kernels::wide_staged_stores) in 64-bit ones. A 48 x 19
+    // level (the last tile row half outside), two sources, 9 outputs (a last block of one
+    // channel), and its pooled output, which stays a texel store.
+    let g = gpu();
+    let dev = &g.device;
+    if !kernels::winograd_lanes_supported(dev) {
+        return;
+    }
+    let (w, h, cout) = (48usize, 19usize, 9usize);
+    let (a, b) = (tensor(8, h, w, 960), tensor(5, h, w, 961));
+    let weight = noise(cout * 13 * 9, 962);
+    let bias = noise(cout, 963);
+    let (ta, tb) = (upload(&a), upload(&b));
+    // (staged, 32-bit words): unstaged, staged in words, staged in 64-bit words where the
+    // device stores them so.
+    let wide = kernels::wide_staged_stores(dev);
+    let ways: Vec<(bool, bool)> =
+        [(false, false), (true, true), (true, false)].into_iter().filter(|&(s, narrow)| !s || narrow || wide).collect();
+    let outputs: Vec<(Vec<f32>, Vec<f32>)> = ways
+        .iter()
+        .map(|&(staged, narrow)| {
+            let mut k = Kernels::new(dev, kernels::Precision::F32, WeightMemory::Storage);
+            if staged {
+                k.stage_outputs();
+            }
+            if narrow {
+                k.stage_in_32_bit_words();
+            }
+            let spec = ConvSpec {
+                name: "staged",
+                width: w as u32,
+                height: h as u32,
+                ca: a.c,
+                cb: b.c,
+                cout,
+                weight: &weight,
+                bias: &bias,
+                read_a: Read::Direct,
+                read_b: Read::Direct,
+                leaky: true,
+                slope: 0.1,
+                b_is_hidden: false,
+                pooled: true,
+            };
+            let plan = ConvPlan::new(dev, &g.queue, &mut k, &[spec], &[Tile::CPU_WINOGRAD4]).unwrap();
+            assert_eq!(plan.staged(0), staged, "staged {staged}");
+            assert!(plan.pools(0));
+            let output = |w: usize, h: usize| {
+                dev.create_texture(&wgpu::TextureDescriptor {
+                    label: None,
+                    size: wgpu::Extent3d { width: w as u32, height: h as u32, depth_or_array_layers: blocks(cout) },
+                    mip_level_count: 1,
+                    sample_count: 1,
+                    dimension: wgpu::TextureDimension::D2,
+                    format: kernels::ACTIVATION_FORMAT,
+                    usage: wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC | wgpu::TextureUsages::COPY_DST,
+                    view_formats: &[],
+                })
+            };
+            let (out, pooled) = (output(w, h), output(w / 2, h / 2));
+            let group = plan.bind_group(dev, &k, 0, &array_view(&ta), &array_view(&tb), &array_view(&out), Some(&array_view(&pooled)));
+            let mut enc = dev.create_command_encoder(&Default::default());
+            {
+                let mut pass = enc.begin_compute_pass(&Default::default());
+                plan.record(&mut pass, 0, false, &group);
+            }
+            plan.copy_staged(&mut enc, 0, &out);
+            g.queue.submit(Some(enc.finish()));
+            (read_texture(dev, &g.queue, &out).unwrap(), read_texture(dev, &g.queue, &pooled).unwrap())
+        })
+        .collect();
+    let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    assert!(outputs[0].0.iter().any(|&v| v != 0.0), "the conv wrote its output");
+    for (way, (out, pooled)) in ways.iter().zip(&outputs).skip(1) {
+        assert_eq!(bits(out), bits(&outputs[0].0), "output staged, 32-bit words: {}", way.1);
+        assert_eq!(bits(pooled), bits(&outputs[0].1), "pooled output staged, 32-bit words: {}", way.1);
+    }
+    let cpu = dev.adapter_info().device_type == wgpu::DeviceType::Cpu;
+    assert_eq!(outputs.len(), if wide { 3 } else { 2 });
+    assert_eq!(
+        wide,
+        cpu && dev.features().contains(wgpu::Features::SHADER_INT64),
+        "64-bit staged stores on CPU drivers with 64-bit integers"
+    );
+}

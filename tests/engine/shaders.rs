@@ -18,7 +18,7 @@ fn every_shader_validates_with_naga() {
     assert!(SHADERS.len() >= 3);
     // The sources as written (conv3x3_rows.wgsl, conv3x3_wino.wgsl and conv3x3_wino4.wgsl inside conv3x3.wgsl,
     // the only way they are used), and the rewrites kernels::Kernels::new makes (f16 storage textures, storage-buffer
-    // weights, storage-texture sources; no subgroups, validated without the capability).
+    // weights, storage-texture sources, 64-bit staged stores; no subgroups, validated without the capability).
     // The conv kernels as modules are made: with conv_common.wgsl appended.
     let conv = conv_module_source("conv3x3");
     let conv = conv.as_str();
@@ -31,10 +31,15 @@ fn every_shader_validates_with_naga() {
     assert!(!prep_without_subgroups.contains("subgroupMax("), "no subgroup operation is left in prep");
     let rewritten = [
         ("prep (without subgroups)", prep_without_subgroups),
-        ("conv3x3 (lanes tiles)", lanes_module_source(conv, SourceAccess::Sampled)),
+        ("conv3x3 (lanes tiles)", lanes_module_source(conv, SourceAccess::Sampled, false)),
         (
             "conv3x3 (storage sources, lanes tiles, f16)",
-            lanes_module_source(&storage_sources, SourceAccess::Storage).replace("rgba32float", "rgba16float"),
+            lanes_module_source(&storage_sources, SourceAccess::Storage, false).replace("rgba32float", "rgba16float"),
+        ),
+        // The staged stores in 64-bit words (conv3x3_stage64.wgsl in place of stage_row).
+        (
+            "conv3x3 (storage sources, lanes tiles, 64-bit staged stores)",
+            lanes_module_source(&storage_sources, SourceAccess::Storage, true),
         ),
         ("conv3x3 (f16, storage weights)", conv.replace("rgba32float", "rgba16float").replace(UNIFORM_WEIGHTS, STORAGE_WEIGHTS)),
         ("conv3x3 (without subgroups)", without_subgroups),
@@ -51,7 +56,9 @@ fn every_shader_validates_with_naga() {
     ];
     let all = SHADERS
         .iter()
-        .filter(|(n, _)| !["conv3x3_rows", "conv3x3_wino", "conv3x3_wino4", "conv3x3_mma_coop", "conv_common"].contains(n))
+        .filter(|(n, _)| {
+            !["conv3x3_rows", "conv3x3_wino", "conv3x3_wino4", "conv3x3_stage64", "conv3x3_mma_coop", "conv_common"].contains(n)
+        })
         .map(|&(n, _)| (n, conv_module_source(n)))
         .chain(rewritten)
         .chain(mma_rewritten);

@@ -102,7 +102,7 @@ fn rank(info: &wgpu::AdapterInfo) -> (u8, u8) {
 impl Gpu {
     /// Open the adapter named by `WGPU_ADAPTER_NAME` (a case-insensitive substring, e.g.
     /// `llvmpipe` for lavapipe) or else the best one, with the optional features rae uses
-    /// (SHADER_F16, TIMESTAMP_QUERY, SUBGROUP) enabled where the adapter has them.
+    /// (SHADER_F16, TIMESTAMP_QUERY, SUBGROUP, SHADER_INT64) enabled where the adapter has them.
     pub fn new() -> Result<Self> {
         let wanted = std::env::var("WGPU_ADAPTER_NAME").ok().filter(|s| !s.is_empty());
         let all = adapters();
@@ -124,7 +124,8 @@ impl Gpu {
             | wgpu::Features::TIMESTAMP_QUERY
             | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS
             | wgpu::Features::TIMESTAMP_QUERY_INSIDE_PASSES
-            | wgpu::Features::SUBGROUP;
+            | wgpu::Features::SUBGROUP
+            | wgpu::Features::SHADER_INT64;
         // RAE_MATRIX_UNITS=0 leaves them off: Mma tiles then run emulated, for comparison.
         let matrix_units = has_matrix_units(&adapter) && std::env::var(MATRIX_UNITS_VAR).map_or(true, |v| v != "0");
         if matrix_units {

@@ -13,6 +13,7 @@ pub const SHADERS: &[(&str, &str)] = &[
     ("conv3x3_rows", include_str!("../../../shaders/conv3x3_rows.wgsl")),
     ("conv3x3_wino", include_str!("../../../shaders/conv3x3_wino.wgsl")),
     ("conv3x3_wino4", include_str!("../../../shaders/conv3x3_wino4.wgsl")),
+    ("conv3x3_stage64", include_str!("../../../shaders/conv3x3_stage64.wgsl")),
     ("conv3x3_mma", include_str!("../../../shaders/conv3x3_mma.wgsl")),
     ("conv3x3_mma_coop", include_str!("../../../shaders/conv3x3_mma_coop.wgsl")),
     ("conv_common", include_str!("../../../shaders/conv_common.wgsl")),
@@ -199,14 +200,37 @@ pub const STORAGE_WEIGHT_TEXELS: [(&str, &str); 2] = [
 /// `WEIGHT_TEXELS_WIDTH`): within every device's 2D limit, and a row holds a few input blocks.
 pub const WEIGHT_TEXELS_WIDTH: u32 = 4096;
 
+/// The rewrite of conv3x3_wino4.wgsl whose staged stores are 64-bit words
+/// ([`wide_staged_stores`]): its one call of `stage_row` becomes conv3x3_stage64.wgsl's
+/// `stage_row64`, which the module then holds.
+pub const WIDE_STAGED_STORES: [(&str, &str); 1] = [("        stage_row(", "        stage_row64(")];
+
+/// Whether the staged outputs ([`Kernels::stage_outputs`]) are stored in 64-bit words
+/// (conv3x3_stage64.wgsl): on CPU drivers whose device has [`wgpu::Features::SHADER_INT64`]
+/// enabled ([`crate::Gpu`] asks for it where the adapter has it).
+///
+/// Lavapipe stores a buffer word by word in a loop over the subgroup's lanes, one loop per
+/// store of up to four words; two floats to a word halve the loops for the same bytes. The
+/// staged F(4x4) convs took 0.89-0.95x the time with them, the staged stores being 25-60% of
+/// such a conv (docs/PERF.md, session 29). GPUs store vectors and keep the 32-bit words.
+pub fn wide_staged_stores(device: &wgpu::Device) -> bool {
+    device.features().contains(wgpu::Features::SHADER_INT64) && device.adapter_info().device_type == wgpu::DeviceType::Cpu
+}
+
 /// The conv module `conv` (conv3x3.wgsl as [`Kernels`] rewrites it for sources read as
 /// `access` says) as the lanes tiles run it: its [`ROWS_STUB`] replaced by conv3x3_rows.wgsl
 /// (two-column lanes tiles), conv3x3_wino.wgsl (`winograd_lanes`) and conv3x3_wino4.wgsl
-/// (`winograd4_lanes`, its weight texture read as the sources are, [`STORAGE_WEIGHT_TEXELS`]).
-pub fn lanes_module_source(conv: &str, access: SourceAccess) -> String {
+/// (`winograd4_lanes`, its weight texture read as the sources are, [`STORAGE_WEIGHT_TEXELS`];
+/// with `wide_stores`, its staged stores in 64-bit words, [`WIDE_STAGED_STORES`]).
+pub fn lanes_module_source(conv: &str, access: SourceAccess, wide_stores: bool) -> String {
     assert!(conv.contains(ROWS_STUB), "conv3x3.wgsl has kernels::ROWS_STUB");
     let wino4 = shader_source("conv3x3_wino4").to_string();
     let wino4 = if access == SourceAccess::Storage { rewrite(wino4, "conv3x3_wino4.wgsl", &STORAGE_WEIGHT_TEXELS) } else { wino4 };
+    let wino4 = if wide_stores {
+        format!("{}\n{}", rewrite(wino4, "conv3x3_wino4.wgsl", &WIDE_STAGED_STORES), shader_source("conv3x3_stage64"))
+    } else {
+        wino4
+    };
     conv.replace(ROWS_STUB, &format!("{}\n{}\n{}", shader_source("conv3x3_rows"), shader_source("conv3x3_wino"), wino4))
 }
 
@@ -734,6 +758,9 @@ pub struct Kernels {
     /// The conv pipelines read their zero padding from outside the textures
     /// ([`Kernels::pad_from_bounds`]).
     oob_zero: bool,
+    /// The lanes module stores staged outputs in 64-bit words ([`wide_staged_stores`], unless
+    /// [`Kernels::stage_in_32_bit_words`]).
+    wide_stores: bool,
 }
 
 impl Kernels {
@@ -842,7 +869,16 @@ impl Kernels {
             staging: false,
             reads_zero: out_of_bounds_reads_zero(device),
             oob_zero: false,
+            wide_stores: wide_staged_stores(device),
         }
+    }
+
+    /// Store staged outputs in 32-bit words even where [`wide_staged_stores`] holds: for
+    /// comparing the two (`cargo run --release -p rae-core --example staged_cost`). Call it
+    /// before any conv pipeline is made.
+    pub fn stage_in_32_bit_words(&mut self) {
+        assert!(self.conv.is_empty(), "stage_in_32_bit_words after conv pipelines were made");
+        self.wide_stores = false;
     }
 
     /// Have the conv pipelines read their zero padding from outside the source textures,
@@ -976,7 +1012,8 @@ impl Kernels {
             );
             let text = if need_main || need_rows { self.conv_text(access, memory) } else { String::new() };
             let mma = need_mma.then(|| shader_module(device, "conv3x3_mma", self.mma_text(access)));
-            let rows = need_rows.then(|| shader_module(device, "conv3x3 (lanes tiles)", lanes_module_source(&text, access)));
+            let rows =
+                need_rows.then(|| shader_module(device, "conv3x3 (lanes tiles)", lanes_module_source(&text, access, self.wide_stores)));
             let main = need_main.then(|| shader_module(device, "conv3x3", text));
             let m = &mut self.modules[conv_slot(access, memory)];
             m.main = m.main.take().or(main);
@@ -1970,7 +2007,9 @@ impl ConvPlan {
             weights: init("conv weights", &weights, weight_usage),
             partial: device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("conv partial sums"),
-                size: partial.max(16),
+                // Never empty: every conv binds it, the 64-bit staged stores as one 32-byte word
+                // at least (conv3x3_stage64.wgsl), where the conv does not use it.
+                size: partial.max(32),
                 usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
                 mapped_at_creation: false,
             }),

@@ -1,0 +1,113 @@
+//! What storing the staged outputs in 64-bit words saves one conv
+//! ([`kernels::wide_staged_stores`]): the same staged F(4x4) conv planned twice, storing 32-bit
+//! and 64-bit words, timed in one process, alternating a submit of one and of the other, as
+//! `pad_cost` does. Prints, per conv, each plan's median time per dispatch and the median of
+//! the per-round ratios. The copies into the textures are not timed: they are the same bytes.
+//!
+//! cargo run --release -p rae-core --example staged_cost -- [ROUNDS] [TILE]
+//!
+//! TILE as compile_cost takes it, an F(4x4) one (wino4lanesRxB; default wino4lanes8x4, the
+//! CPU drivers' tile on the largest levels).
+//!
+//! The convs are the default network's L0 ones at 256x256: 64 -> 32 channels from two
+//! 32-channel sources, 32 -> 32 from one with its pooled output, and 8 -> 32 from one.
+
+use std::time::Instant;
+
+use rae_core::Gpu;
+use rae_core::graph::Read;
+use rae_core::kernels::{self, ConvPlan, ConvSpec, Kernels, WeightMemory};
+
+mod common;
+
+/// Dispatches per timed submit.
+const REPEAT: usize = 3;
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+fn main() {
+    // SAFETY: first thing in main, before any thread starts.
+    unsafe { rae_core::gpu::prefer_wide_cpu_vectors() };
+    let rounds: usize = std::env::args().nth(1).map_or(15, |a| a.parse().expect("ROUNDS"));
+    let tile = common::parse_tile(&std::env::args().nth(2).unwrap_or_else(|| "wino4lanes8x4".into()));
+    let g = Gpu::new().expect("a device");
+    println!("{}; 64-bit staged stores: {}", g.describe(), kernels::wide_staged_stores(&g.device));
+    if !kernels::wide_staged_stores(&g.device) {
+        return;
+    }
+    println!("{:>16} {:>9} {:>12} {:>12} {:>10}", "tile", "conv", "32-bit ms", "64-bit ms", "ratio");
+    let (w, h) = (256u32, 256u32);
+    let view = |w, h, c| common::activation_view(&g.device, w, h, c);
+    let (a, b, out, pooled) = (view(w, h, 32), view(w, h, 32), view(w, h, 32), view(w / 2, h / 2, 32));
+    for (label, ca, cb, pool) in [("64->32", 32usize, 32usize, false), ("32->32+pool", 32, 0, true), ("8->32", 8, 0, false)] {
+        let weight: Vec<f32> = (0..32 * (ca + cb) * 9).map(|i| (i % 101) as f32 * 1e-3 - 0.05).collect();
+        let bias = vec![0.01f32; 32];
+        let spec = ConvSpec {
+            name: "probe",
+            width: w,
+            height: h,
+            ca,
+            cb,
+            cout: 32,
+            weight: &weight,
+            bias: &bias,
+            read_a: Read::Direct,
+            read_b: Read::Direct,
+            leaky: true,
+            slope: 0.1,
+            b_is_hidden: false,
+            pooled: pool,
+        };
+        // The two plans, staged as the Denoiser stages them: 32-bit words, and 64-bit ones.
+        let plans: Vec<_> = [true, false]
+            .into_iter()
+            .map(|narrow| {
+                let mut k = Kernels::new(&g.device, kernels::Precision::F32, WeightMemory::Storage);
+                k.pad_from_bounds();
+                k.stage_outputs();
+                if narrow {
+                    k.stage_in_32_bit_words();
+                }
+                let plan = ConvPlan::new(&g.device, &g.queue, &mut k, &[spec], &[tile]).expect("plan");
+                assert!(plan.staged(0), "a staged conv");
+                let group = plan.bind_group(&g.device, &k, 0, &a, &b, &out, pool.then_some(&pooled));
+                (k, plan, group)
+            })
+            .collect();
+        let time = |i: usize| {
+            let (_, plan, group) = &plans[i];
+            let mut enc = g.device.create_command_encoder(&Default::default());
+            {
+                let mut pass = enc.begin_compute_pass(&Default::default());
+                for _ in 0..REPEAT {
+                    plan.record(&mut pass, 0, false, group);
+                }
+            }
+            let t = Instant::now();
+            g.queue.submit(Some(enc.finish()));
+            g.device.poll(wgpu::PollType::wait_indefinitely()).expect("poll");
+            t.elapsed().as_secs_f64() * 1e3 / REPEAT as f64
+        };
+        // The first submit of each compiles its pipeline.
+        time(0);
+        time(1);
+        let (mut narrow, mut wide, mut ratio) = (Vec::new(), Vec::new(), Vec::new());
+        for r in 0..rounds {
+            // Alternate which goes first.
+            let (x, y) = if r % 2 == 0 {
+                let x = time(0);
+                (x, time(1))
+            } else {
+                let y = time(1);
+                (time(0), y)
+            };
+            ratio.push(y / x);
+            narrow.push(x);
+            wide.push(y);
+        }
+        println!("{:>16} {label:>11} {:>12.3} {:>12.3} {:>10.3}", tile.to_string(), median(narrow), median(wide), median(ratio));
+    }
+}
