@@ -195,8 +195,10 @@ fn window6(t: Source, mode: u32, layer: u32, x: i32, y0: i32) -> Window6 {
 // position's. The body is unrolled per OB, the overrides dropping the others: 36 x 4 x 2
 // products of a 4x4 and a vec4 at most (the 8 transformed tiles, 288 vec4s, stay in the stack
 // between blocks), in three basic blocks of two tile rows each (`once`: one block took twice
-// the compile time). It is the kernel's only copy of that body: one loop runs over
+// the compile time). As written it is the kernel's only copy of that body: one loop runs over
 // both sources' blocks, the window alone chosen per source, so LLVM compiles the body once.
+// The module of two-source convs runs it from a loop per source instead
+// (kernels::TWO_SOURCE_LOOPS: lavapipe fetched both windows for every block).
 fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<function, Wino6>, m03: ptr<function, Wino6>, m10: ptr<function, Wino6>, m11: ptr<function, Wino6>, m12: ptr<function, Wino6>, m13: ptr<function, Wino6>, cb: u32, w: u32, x: i32, y0: i32) {
     var k: Window6;
     if !SOURCE_B || cb < params.cin4_a {

@@ -31,15 +31,21 @@ fn every_shader_validates_with_naga() {
     assert!(!prep_without_subgroups.contains("subgroupMax("), "no subgroup operation is left in prep");
     let rewritten = [
         ("prep (without subgroups)", prep_without_subgroups),
-        ("conv3x3 (lanes tiles)", lanes_module_source(conv, SourceAccess::Sampled, false)),
+        ("conv3x3 (lanes tiles)", lanes_module_source(conv, SourceAccess::Sampled, false, false)),
         (
             "conv3x3 (storage sources, lanes tiles, f16)",
-            lanes_module_source(&storage_sources, SourceAccess::Storage, false).replace("rgba32float", "rgba16float"),
+            lanes_module_source(&storage_sources, SourceAccess::Storage, false, false).replace("rgba32float", "rgba16float"),
         ),
         // The staged stores in 64-bit words (conv3x3_stage64.wgsl in place of stage_row).
         (
             "conv3x3 (storage sources, lanes tiles, 64-bit staged stores)",
-            lanes_module_source(&storage_sources, SourceAccess::Storage, true),
+            lanes_module_source(&storage_sources, SourceAccess::Storage, true, false),
+        ),
+        // Two sources: the F(4x4) step in a loop per source (kernels::TWO_SOURCE_LOOPS).
+        ("conv3x3 (lanes tiles, two sources)", lanes_module_source(conv, SourceAccess::Sampled, false, true)),
+        (
+            "conv3x3 (storage sources, lanes tiles, two sources, 64-bit staged stores)",
+            lanes_module_source(&storage_sources, SourceAccess::Storage, true, true),
         ),
         ("conv3x3 (f16, storage weights)", conv.replace("rgba32float", "rgba16float").replace(UNIFORM_WEIGHTS, STORAGE_WEIGHTS)),
         ("conv3x3 (without subgroups)", without_subgroups),

@@ -217,15 +217,39 @@ pub fn wide_staged_stores(device: &wgpu::Device) -> bool {
     device.features().contains(wgpu::Features::SHADER_INT64) && device.adapter_info().device_type == wgpu::DeviceType::Cpu
 }
 
+/// The rewrite of conv3x3_wino4.wgsl for convs of two sources: `wino4_step` takes whether
+/// its block is source b's as an argument, a constant at each of its two calls, one loop per
+/// source, where the kernel as written runs one loop over both sources' blocks and chooses the
+/// window per block.
+///
+/// Lavapipe runs both sides of an `if` under a mask, so the one loop fetched both windows for
+/// every block; two loops fetch one, and LLVM compiles the step's body twice (the 8x4 tile's
+/// two-source pipeline in 9.2 s instead of 7.1). The two-source L0 convs took 0.90-0.96x the
+/// time (docs/PERF.md, session 29). Convs of one source keep the kernel as written: their
+/// module is another ([`Kernels`] makes one of each).
+pub const TWO_SOURCE_LOOPS: [(&str, &str); 3] = [
+    (
+        "m13: ptr<function, Wino6>, cb: u32, w: u32, x: i32, y0: i32) {",
+        "m13: ptr<function, Wino6>, cb: u32, w: u32, x: i32, y0: i32, from_b: bool) {",
+    ),
+    ("    if !SOURCE_B || cb < params.cin4_a {\n        k = window6(src_a", "    if !from_b {\n        k = window6(src_a"),
+    (
+        "    for (var c = 0u; c < blocks; c++) {\n        wino4_step(&m00, &m01, &m02, &m03, &m10, &m11, &m12, &m13, c, w, xi, yi);\n    }",
+        "    for (var c = 0u; c < params.cin4_a; c++) {\n        wino4_step(&m00, &m01, &m02, &m03, &m10, &m11, &m12, &m13, c, w, xi, yi, false);\n    }\n    for (var c = params.cin4_a; c < blocks; c++) {\n        wino4_step(&m00, &m01, &m02, &m03, &m10, &m11, &m12, &m13, c, w, xi, yi, true);\n    }",
+    ),
+];
+
 /// The conv module `conv` (conv3x3.wgsl as [`Kernels`] rewrites it for sources read as
 /// `access` says) as the lanes tiles run it: its [`ROWS_STUB`] replaced by conv3x3_rows.wgsl
 /// (two-column lanes tiles), conv3x3_wino.wgsl (`winograd_lanes`) and conv3x3_wino4.wgsl
 /// (`winograd4_lanes`, its weight texture read as the sources are, [`STORAGE_WEIGHT_TEXELS`];
-/// with `wide_stores`, its staged stores in 64-bit words, [`WIDE_STAGED_STORES`]).
-pub fn lanes_module_source(conv: &str, access: SourceAccess, wide_stores: bool) -> String {
+/// with `wide_stores`, its staged stores in 64-bit words, [`WIDE_STAGED_STORES`]; with
+/// `two_sources`, for convs of two sources, [`TWO_SOURCE_LOOPS`]).
+pub fn lanes_module_source(conv: &str, access: SourceAccess, wide_stores: bool, two_sources: bool) -> String {
     assert!(conv.contains(ROWS_STUB), "conv3x3.wgsl has kernels::ROWS_STUB");
     let wino4 = shader_source("conv3x3_wino4").to_string();
     let wino4 = if access == SourceAccess::Storage { rewrite(wino4, "conv3x3_wino4.wgsl", &STORAGE_WEIGHT_TEXELS) } else { wino4 };
+    let wino4 = if two_sources { rewrite(wino4, "conv3x3_wino4.wgsl", &TWO_SOURCE_LOOPS) } else { wino4 };
     let wino4 = if wide_stores {
         format!("{}\n{}", rewrite(wino4, "conv3x3_wino4.wgsl", &WIDE_STAGED_STORES), shader_source("conv3x3_stage64"))
     } else {
@@ -707,8 +731,12 @@ fn conv_slot(access: SourceAccess, memory: WeightMemory) -> usize {
 struct ConvModules {
     /// conv3x3.wgsl as rewritten for the precision, memory, device and access.
     main: Option<wgpu::ShaderModule>,
-    /// The conv module with conv3x3_rows.wgsl (two-column lanes tiles, [`ROWS_STUB`]).
+    /// The conv module with conv3x3_rows.wgsl (two-column lanes tiles, [`ROWS_STUB`]), for
+    /// convs of one source.
     rows: Option<wgpu::ShaderModule>,
+    /// The same for convs of two sources: its F(4x4) step in a loop per source
+    /// ([`TWO_SOURCE_LOOPS`]).
+    rows_b: Option<wgpu::ShaderModule>,
     /// conv3x3_mma.wgsl ([`mma_source`]) as rewritten for the precision and access.
     mma: Option<wgpu::ShaderModule>,
 }
@@ -1005,19 +1033,25 @@ impl Kernels {
         for (access, memory) in CONV_SLOTS {
             let of_slot = || missing.iter().filter(|v| v.sources == access && v.memory == memory);
             let m = &self.modules[conv_slot(access, memory)];
-            let (need_main, need_rows, need_mma) = (
+            let (need_main, need_rows, need_rows_b, need_mma) = (
                 m.main.is_none() && of_slot().any(|v| !v.method.is_mma() && !v.runs_rows()),
-                m.rows.is_none() && of_slot().any(|v| v.runs_rows()),
+                m.rows.is_none() && of_slot().any(|v| v.runs_rows() && !v.source_b),
+                m.rows_b.is_none() && of_slot().any(|v| v.runs_rows() && v.source_b),
                 m.mma.is_none() && of_slot().any(|v| v.method.is_mma()),
             );
-            let text = if need_main || need_rows { self.conv_text(access, memory) } else { String::new() };
+            let text = if need_main || need_rows || need_rows_b { self.conv_text(access, memory) } else { String::new() };
             let mma = need_mma.then(|| shader_module(device, "conv3x3_mma", self.mma_text(access)));
-            let rows =
-                need_rows.then(|| shader_module(device, "conv3x3 (lanes tiles)", lanes_module_source(&text, access, self.wide_stores)));
+            let lanes = |two_sources: bool| {
+                let label = if two_sources { "conv3x3 (lanes tiles, two sources)" } else { "conv3x3 (lanes tiles)" };
+                shader_module(device, label, lanes_module_source(&text, access, self.wide_stores, two_sources))
+            };
+            let rows = need_rows.then(|| lanes(false));
+            let rows_b = need_rows_b.then(|| lanes(true));
             let main = need_main.then(|| shader_module(device, "conv3x3", text));
             let m = &mut self.modules[conv_slot(access, memory)];
             m.main = m.main.take().or(main);
             m.rows = m.rows.take().or(rows);
+            m.rows_b = m.rows_b.take().or(rows_b);
             m.mma = m.mma.take().or(mma);
         }
         let threads = std::thread::available_parallelism().map_or(1, |n| n.get()).min(missing.len());
@@ -1087,7 +1121,12 @@ impl Kernels {
                 constants.push(("WEIGHT_TEXELS_WIDTH", WEIGHT_TEXELS_WIDTH as f64));
                 constants.push(("OUT_BUFFER", v.staged as u32 as f64));
             }
-            let module = if v.runs_rows() { modules.rows.as_ref() } else { modules.main.as_ref() }.expect("made by prepare");
+            let module = match (v.runs_rows(), v.source_b) {
+                (true, false) => modules.rows.as_ref(),
+                (true, true) => modules.rows_b.as_ref(),
+                _ => modules.main.as_ref(),
+            }
+            .expect("made by prepare");
             ("conv3x3", module, if v.reduce { "reduce" } else { v.method.entry_point() })
         };
         device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
