@@ -28,7 +28,9 @@
 //!   begins the next pass. The buffer lives from that conv to its copy; the next staged conv
 //!   overwrites it. On lavapipe a vec4 store into a buffer is one loop over the lanes and a
 //!   texel store of rgba32float four, and the copy is a memcpy: the 256x256 frame in 0.92-0.95x
-//!   the time, for one buffer the size of the largest staged output (8 MiB there).
+//!   the time, for one buffer the size of the largest staged output (8 MiB there). Where the
+//!   device has 64-bit integers the staged stores pack two floats to a word, half the loops
+//!   ([`crate::kernels::wide_staged_stores`]).
 //! - **Tiles**: on GPUs each conv's register tile, and whether it reads its sources as sampled
 //!   or storage textures, is chosen while building, by timing the candidates on the device
 //!   ([`TileChoice::Tuned`], [`Options::sources`]); the candidates' plans are dropped after.
