@@ -49,6 +49,21 @@ fn upload(t: &Chw) -> wgpu::Texture {
     )
 }
 
+/// A conv's `w` x `h` output texture of `cout` channels: written by the conv, or by the copy
+/// of a staged output ([`ConvPlan::copy_staged`]), and read back.
+fn output_texture(w: usize, h: usize, cout: usize) -> wgpu::Texture {
+    gpu().device.create_texture(&wgpu::TextureDescriptor {
+        label: None,
+        size: wgpu::Extent3d { width: w as u32, height: h as u32, depth_or_array_layers: blocks(cout) },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: kernels::ACTIVATION_FORMAT,
+        usage: wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC | wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
+    })
+}
+
 fn array_view(t: &wgpu::Texture) -> wgpu::TextureView {
     t.create_view(&wgpu::TextureViewDescriptor { dimension: Some(wgpu::TextureViewDimension::D2Array), ..Default::default() })
 }
@@ -132,20 +147,8 @@ fn gpu_conv_pooled(
     assert_eq!(plan.sources(), [sources]);
     let ta = upload(a.0);
     let tb = upload(b.map_or(&Chw::zeros(1, 1, 1), |b| b.0));
-    let output = |w: usize, h: usize| {
-        dev.create_texture(&wgpu::TextureDescriptor {
-            label: None,
-            size: wgpu::Extent3d { width: w as u32, height: h as u32, depth_or_array_layers: blocks(cout) },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: kernels::ACTIVATION_FORMAT,
-            usage: wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC,
-            view_formats: &[],
-        })
-    };
-    let out = output(w, h);
-    let pool_out = plan.pools(0).then(|| output(w / 2, h / 2));
+    let out = output_texture(w, h, cout);
+    let pool_out = plan.pools(0).then(|| output_texture(w / 2, h / 2, cout));
     let pool_view = pool_out.as_ref().map(array_view);
     let group = plan.bind_group(dev, &kernels, 0, &array_view(&ta), &array_view(&tb), &array_view(&out), pool_view.as_ref());
     let mut enc = dev.create_command_encoder(&Default::default());
@@ -1410,19 +1413,7 @@ fn staged_outputs_are_the_unstaged_ones_bit_for_bit() {
             let plan = ConvPlan::new(dev, &g.queue, &mut k, &[spec], &[tile]).unwrap();
             assert_eq!(plan.staged(0), staged, "staged {staged}");
             assert!(plan.pools(0));
-            let output = |w: usize, h: usize| {
-                dev.create_texture(&wgpu::TextureDescriptor {
-                    label: None,
-                    size: wgpu::Extent3d { width: w as u32, height: h as u32, depth_or_array_layers: blocks(cout) },
-                    mip_level_count: 1,
-                    sample_count: 1,
-                    dimension: wgpu::TextureDimension::D2,
-                    format: kernels::ACTIVATION_FORMAT,
-                    usage: wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC | wgpu::TextureUsages::COPY_DST,
-                    view_formats: &[],
-                })
-            };
-            let (out, pooled) = (output(w, h), output(w / 2, h / 2));
+            let (out, pooled) = (output_texture(w, h, cout), output_texture(w / 2, h / 2, cout));
             let group = plan.bind_group(dev, &k, 0, &array_view(&ta), &array_view(&tb), &array_view(&out), Some(&array_view(&pooled)));
             let mut enc = dev.create_command_encoder(&Default::default());
             {

@@ -12,8 +12,6 @@
 //! The convs are the default network's L0 ones at 256x256: 64 -> 32 channels from two
 //! 32-channel sources, 32 -> 32 from one with its pooled output, and 8 -> 32 from one.
 
-use std::time::Instant;
-
 use rae_core::Gpu;
 use rae_core::graph::Read;
 use rae_core::kernels::{self, ConvPlan, ConvSpec, Kernels, WeightMemory};
@@ -22,11 +20,6 @@ mod common;
 
 /// Dispatches per timed submit.
 const REPEAT: usize = 3;
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
 
 fn main() {
     // SAFETY: first thing in main, before any thread starts.
@@ -77,37 +70,11 @@ fn main() {
                 (k, plan, group)
             })
             .collect();
-        let time = |i: usize| {
-            let (_, plan, group) = &plans[i];
-            let mut enc = g.device.create_command_encoder(&Default::default());
-            {
-                let mut pass = enc.begin_compute_pass(&Default::default());
-                for _ in 0..REPEAT {
-                    plan.record(&mut pass, 0, false, group);
-                }
-            }
-            let t = Instant::now();
-            g.queue.submit(Some(enc.finish()));
-            g.device.poll(wgpu::PollType::wait_indefinitely()).expect("poll");
-            t.elapsed().as_secs_f64() * 1e3 / REPEAT as f64
-        };
+        let time = |i: usize| common::time_dispatches(&g, &plans[i].1, &plans[i].2, REPEAT);
         // The first submit of each compiles its pipeline.
         time(0);
         time(1);
-        let (mut narrow, mut wide, mut ratio) = (Vec::new(), Vec::new(), Vec::new());
-        for r in 0..rounds {
-            // Alternate which goes first.
-            let (x, y) = if r % 2 == 0 {
-                let x = time(0);
-                (x, time(1))
-            } else {
-                let y = time(1);
-                (time(0), y)
-            };
-            ratio.push(y / x);
-            narrow.push(x);
-            wide.push(y);
-        }
-        println!("{:>16} {label:>11} {:>12.3} {:>12.3} {:>10.3}", tile.to_string(), median(narrow), median(wide), median(ratio));
+        let (narrow, wide, ratio) = common::alternate(rounds, time);
+        println!("{:>16} {label:>11} {:>12.3} {:>12.3} {:>10.3}", tile.to_string(), narrow, wide, ratio);
     }
 }

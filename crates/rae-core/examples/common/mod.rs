@@ -1,5 +1,8 @@
-//! What the conv examples (compile_cost, pad_cost) share: tile names on the command line and
-//! the activation textures a conv is bound to.
+//! What the conv examples (compile_cost, pad_cost, staged_cost) share: tile names on the command line,
+//! the activation textures a conv is bound to, and timing two plans side by side.
+
+// Each example uses some of these.
+#![allow(dead_code)]
 
 use rae_core::kernels::{self, Tile, blocks};
 
@@ -39,4 +42,46 @@ pub fn activation_view(device: &wgpu::Device, w: u32, h: u32, channels: usize) -
         view_formats: &[],
     });
     t.create_view(&wgpu::TextureViewDescriptor { dimension: Some(wgpu::TextureViewDimension::D2Array), ..Default::default() })
+}
+
+/// Milliseconds per dispatch of conv 0 of `plan`, from one submit of `repeat` of them waited
+/// on (lavapipe compiles a pipeline at its first dispatch: time each plan once first).
+pub fn time_dispatches(g: &rae_core::Gpu, plan: &kernels::ConvPlan, group: &wgpu::BindGroup, repeat: usize) -> f64 {
+    let mut enc = g.device.create_command_encoder(&Default::default());
+    {
+        let mut pass = enc.begin_compute_pass(&Default::default());
+        for _ in 0..repeat {
+            plan.record(&mut pass, 0, false, group);
+        }
+    }
+    let t = std::time::Instant::now();
+    g.queue.submit(Some(enc.finish()));
+    g.device.poll(wgpu::PollType::wait_indefinitely()).expect("poll");
+    t.elapsed().as_secs_f64() * 1e3 / repeat as f64
+}
+
+/// Two things timed by `time(0)` and `time(1)` in `rounds` rounds, which goes first alternating,
+/// so that the machine's drift falls on both alike: the median of each one's times and of the
+/// per-round ratios time(1) / time(0).
+pub fn alternate(rounds: usize, mut time: impl FnMut(usize) -> f64) -> (f64, f64, f64) {
+    let (mut first, mut second, mut ratio) = (Vec::new(), Vec::new(), Vec::new());
+    for r in 0..rounds {
+        let (x, y) = if r % 2 == 0 {
+            let x = time(0);
+            (x, time(1))
+        } else {
+            let y = time(1);
+            (time(0), y)
+        };
+        ratio.push(y / x);
+        first.push(x);
+        second.push(y);
+    }
+    (median(first), median(second), median(ratio))
+}
+
+/// The median of some times.
+pub fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
 }
