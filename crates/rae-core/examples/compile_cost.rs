@@ -13,8 +13,7 @@
 use std::time::Instant;
 
 use rae_core::Gpu;
-use rae_core::graph::Read;
-use rae_core::kernels::{self, ConvPlan, ConvSpec, Kernels, WeightMemory};
+use rae_core::kernels::{self, ConvPlan, Kernels, WeightMemory};
 
 mod common;
 
@@ -33,22 +32,7 @@ fn main() {
         let mut k = Kernels::new(&g.device, kernels::Precision::F32, WeightMemory::Storage);
         // As a Denoiser's plan does (its sources are the level's size).
         k.pad_from_bounds();
-        let spec = ConvSpec {
-            name: "probe",
-            width: w,
-            height: h,
-            ca: c,
-            cb: c,
-            cout: c,
-            weight: &weight,
-            bias: &bias,
-            read_a: Read::Direct,
-            read_b: Read::Direct,
-            leaky: true,
-            slope: 0.1,
-            b_is_hidden: false,
-            pooled: false,
-        };
+        let spec = common::probe_spec(w, h, c, c, &weight, &bias, false);
         let t0 = Instant::now();
         let plan = ConvPlan::new(&g.device, &g.queue, &mut k, &[spec], &[tile]).expect("plan");
         let group = plan.bind_group(&g.device, &k, 0, &a, &b, &out, None);

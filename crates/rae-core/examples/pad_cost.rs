@@ -11,8 +11,7 @@
 //! sources, and 8 -> 32 from one.
 
 use rae_core::Gpu;
-use rae_core::graph::Read;
-use rae_core::kernels::{self, ConvPlan, ConvSpec, Kernels, WeightMemory};
+use rae_core::kernels::{self, ConvPlan, Kernels, WeightMemory};
 
 mod common;
 
@@ -37,22 +36,7 @@ fn main() {
         for (label, ca, cb) in [("64->32", 32usize, 32usize), ("8->32", 8, 0)] {
             let weight = vec![0.01f32; 32 * (ca + cb) * 9];
             let bias = vec![0.0f32; 32];
-            let spec = ConvSpec {
-                name: "probe",
-                width: w,
-                height: h,
-                ca,
-                cb,
-                cout: 32,
-                weight: &weight,
-                bias: &bias,
-                read_a: Read::Direct,
-                read_b: Read::Direct,
-                leaky: true,
-                slope: 0.1,
-                b_is_hidden: false,
-                pooled: false,
-            };
+            let spec = common::probe_spec(w, h, ca, cb, &weight, &bias, false);
             // The two plans: the fetch tests each pixel, and it reads outside instead.
             let plans: Vec<_> = [false, true]
                 .into_iter()

@@ -13,8 +13,7 @@
 //! 32-channel sources, 32 -> 32 from one with its pooled output, and 8 -> 32 from one.
 
 use rae_core::Gpu;
-use rae_core::graph::Read;
-use rae_core::kernels::{self, ConvPlan, ConvSpec, Kernels, WeightMemory};
+use rae_core::kernels::{self, ConvPlan, Kernels, WeightMemory};
 
 mod common;
 
@@ -38,22 +37,7 @@ fn main() {
     for (label, ca, cb, pool) in [("64->32", 32usize, 32usize, false), ("32->32+pool", 32, 0, true), ("8->32", 8, 0, false)] {
         let weight: Vec<f32> = (0..32 * (ca + cb) * 9).map(|i| (i % 101) as f32 * 1e-3 - 0.05).collect();
         let bias = vec![0.01f32; 32];
-        let spec = ConvSpec {
-            name: "probe",
-            width: w,
-            height: h,
-            ca,
-            cb,
-            cout: 32,
-            weight: &weight,
-            bias: &bias,
-            read_a: Read::Direct,
-            read_b: Read::Direct,
-            leaky: true,
-            slope: 0.1,
-            b_is_hidden: false,
-            pooled: pool,
-        };
+        let spec = common::probe_spec(w, h, ca, cb, &weight, &bias, pool);
         // The two plans, staged as the Denoiser stages them: 32-bit words, and 64-bit ones.
         let plans: Vec<_> = [true, false]
             .into_iter()

@@ -85,3 +85,24 @@ pub fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
     v[v.len() / 2]
 }
+
+/// The probe conv the examples time: `w` x `h`, cat(a, b) of `ca` + `cb` channels read
+/// directly into `bias.len()` LeakyReLU outputs, max-pooled too where `pooled`.
+pub fn probe_spec<'a>(w: u32, h: u32, ca: usize, cb: usize, weight: &'a [f32], bias: &'a [f32], pooled: bool) -> kernels::ConvSpec<'a> {
+    kernels::ConvSpec {
+        name: "probe",
+        width: w,
+        height: h,
+        ca,
+        cb,
+        cout: bias.len(),
+        weight,
+        bias,
+        read_a: rae_core::graph::Read::Direct,
+        read_b: rae_core::graph::Read::Direct,
+        leaky: true,
+        slope: 0.1,
+        b_is_hidden: false,
+        pooled,
+    }
+}
