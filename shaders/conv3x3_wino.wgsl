@@ -1,8 +1,9 @@
 // conv3x3.wgsl's Winograd F(2x2, 3x3) with its weights loaded across the subgroup: the entry
 // point `winograd_lanes` (kernels::Method::WinogradLanes), for CPU drivers with subgroups of at
-// least 16 lanes. Appended, with conv3x3_rows.wgsl, to the conv module that runs two-column lanes
+// least 8 lanes. Appended, with conv3x3_rows.wgsl, to the conv module that runs two-column lanes
 // tiles; it uses conv3x3.wgsl's declarations (Quad, Wino, wino_v, wino_store, mac, lane, the
-// overrides) and conv3x3_rows.wgsl's Column.
+// overrides), conv3x3_rows.wgsl's Column and the gathers (Gather, gather, ob<OB>_<k>) of
+// conv3x3_gather16.wgsl or, on subgroups of 8 lanes, conv3x3_gather8.wgsl.
 //
 // An invocation computes ROWS / 2 stacked 2x2 output tiles (ROWS = 4 or 8) of 2 columns for OB
 // output blocks (1, 2 or 4). Each input block costs 4 columns of ROWS + 2 fetched texels, their
@@ -16,83 +17,42 @@
 // out as conv3x3.wgsl's `winograd` reads them from its buffer (input block cb, position p,
 // input lane l, output block j at w + ((cb * 16 + p) * 4 + l) * OB + j, w =
 // params.weight_texel + group z * group_stride); one input block's 64 x OB vec4s are loaded
-// 16 at a time, lane k loading the k-th (`WinoGather`), and each position's matrix is taken
-// from the lanes by subgroupBroadcast. The sums run in `winograd`'s
+// 16 at a time, lane k loading the k-th (`WinoGather`; in two loads on 8 lanes), and each
+// position's matrix is taken from the lanes by subgroupBroadcast. The sums run in `winograd`'s
 // order, so a tile's outputs are bit for bit those of `winograd` with the same OB.
 
 // One input block's transformed weights spread over the lanes: vec4 16 i + k in lane k of g<i>
 // (OB = 1 uses g0..g3, OB = 2 g0..g7).
 struct WinoGather {
-    g0: vec4<f32>, g1: vec4<f32>, g2: vec4<f32>, g3: vec4<f32>,
-    g4: vec4<f32>, g5: vec4<f32>, g6: vec4<f32>, g7: vec4<f32>,
-    g8: vec4<f32>, g9: vec4<f32>, g10: vec4<f32>, g11: vec4<f32>,
-    g12: vec4<f32>, g13: vec4<f32>, g14: vec4<f32>, g15: vec4<f32>,
+    g0: Gather, g1: Gather, g2: Gather, g3: Gather,
+    g4: Gather, g5: Gather, g6: Gather, g7: Gather,
+    g8: Gather, g9: Gather, g10: Gather, g11: Gather,
+    g12: Gather, g13: Gather, g14: Gather, g15: Gather,
 }
 
 fn wino_gather(base: u32) -> WinoGather {
     var s: WinoGather;
-    s.g0 = weight_texel(base + lane);
-    s.g1 = weight_texel(base + 16u + lane);
-    s.g2 = weight_texel(base + 32u + lane);
-    s.g3 = weight_texel(base + 48u + lane);
+    s.g0 = gather(base);
+    s.g1 = gather(base + 16u);
+    s.g2 = gather(base + 32u);
+    s.g3 = gather(base + 48u);
     if OB > 1u {
-        s.g4 = weight_texel(base + 64u + lane);
-        s.g5 = weight_texel(base + 80u + lane);
-        s.g6 = weight_texel(base + 96u + lane);
-        s.g7 = weight_texel(base + 112u + lane);
+        s.g4 = gather(base + 64u);
+        s.g5 = gather(base + 80u);
+        s.g6 = gather(base + 96u);
+        s.g7 = gather(base + 112u);
     }
     if OB > 2u {
-        s.g8 = weight_texel(base + 128u + lane);
-        s.g9 = weight_texel(base + 144u + lane);
-        s.g10 = weight_texel(base + 160u + lane);
-        s.g11 = weight_texel(base + 176u + lane);
-        s.g12 = weight_texel(base + 192u + lane);
-        s.g13 = weight_texel(base + 208u + lane);
-        s.g14 = weight_texel(base + 224u + lane);
-        s.g15 = weight_texel(base + 240u + lane);
+        s.g8 = gather(base + 128u);
+        s.g9 = gather(base + 144u);
+        s.g10 = gather(base + 160u);
+        s.g11 = gather(base + 176u);
+        s.g12 = gather(base + 192u);
+        s.g13 = gather(base + 208u);
+        s.g14 = gather(base + 224u);
+        s.g15 = gather(base + 240u);
     }
     return s;
-}
-
-// The 4x4 of position p from its gather: with OB = 1 the matrix of p sits in lanes 4 (p % 4) ..
-// + 3 of g<p / 4>; with OB = 2 block j's in lanes 8 (p % 2) + j + 0, 2, 4, 6 of g<p / 2>; with
-// OB = 4 block j's in lanes j + 0, 4, 8, 12 of g<p>.
-fn ob1_0(a: vec4<f32>) -> mat4x4<f32> {
-    return mat4x4<f32>(subgroupBroadcast(a, 0u), subgroupBroadcast(a, 1u), subgroupBroadcast(a, 2u), subgroupBroadcast(a, 3u));
-}
-fn ob1_1(a: vec4<f32>) -> mat4x4<f32> {
-    return mat4x4<f32>(subgroupBroadcast(a, 4u), subgroupBroadcast(a, 5u), subgroupBroadcast(a, 6u), subgroupBroadcast(a, 7u));
-}
-fn ob1_2(a: vec4<f32>) -> mat4x4<f32> {
-    return mat4x4<f32>(subgroupBroadcast(a, 8u), subgroupBroadcast(a, 9u), subgroupBroadcast(a, 10u), subgroupBroadcast(a, 11u));
-}
-fn ob1_3(a: vec4<f32>) -> mat4x4<f32> {
-    return mat4x4<f32>(subgroupBroadcast(a, 12u), subgroupBroadcast(a, 13u), subgroupBroadcast(a, 14u), subgroupBroadcast(a, 15u));
-}
-fn ob2_00(a: vec4<f32>) -> mat4x4<f32> {
-    return mat4x4<f32>(subgroupBroadcast(a, 0u), subgroupBroadcast(a, 2u), subgroupBroadcast(a, 4u), subgroupBroadcast(a, 6u));
-}
-fn ob2_01(a: vec4<f32>) -> mat4x4<f32> {
-    return mat4x4<f32>(subgroupBroadcast(a, 1u), subgroupBroadcast(a, 3u), subgroupBroadcast(a, 5u), subgroupBroadcast(a, 7u));
-}
-fn ob2_10(a: vec4<f32>) -> mat4x4<f32> {
-    return mat4x4<f32>(subgroupBroadcast(a, 8u), subgroupBroadcast(a, 10u), subgroupBroadcast(a, 12u), subgroupBroadcast(a, 14u));
-}
-fn ob2_11(a: vec4<f32>) -> mat4x4<f32> {
-    return mat4x4<f32>(subgroupBroadcast(a, 9u), subgroupBroadcast(a, 11u), subgroupBroadcast(a, 13u), subgroupBroadcast(a, 15u));
-}
-
-fn ob4_0(a: vec4<f32>) -> mat4x4<f32> {
-    return mat4x4<f32>(subgroupBroadcast(a, 0u), subgroupBroadcast(a, 4u), subgroupBroadcast(a, 8u), subgroupBroadcast(a, 12u));
-}
-fn ob4_1(a: vec4<f32>) -> mat4x4<f32> {
-    return mat4x4<f32>(subgroupBroadcast(a, 1u), subgroupBroadcast(a, 5u), subgroupBroadcast(a, 9u), subgroupBroadcast(a, 13u));
-}
-fn ob4_2(a: vec4<f32>) -> mat4x4<f32> {
-    return mat4x4<f32>(subgroupBroadcast(a, 2u), subgroupBroadcast(a, 6u), subgroupBroadcast(a, 10u), subgroupBroadcast(a, 14u));
-}
-fn ob4_3(a: vec4<f32>) -> mat4x4<f32> {
-    return mat4x4<f32>(subgroupBroadcast(a, 3u), subgroupBroadcast(a, 7u), subgroupBroadcast(a, 11u), subgroupBroadcast(a, 15u));
 }
 
 // Input row i of the window (columns x - 1 .. x + 2) times B.

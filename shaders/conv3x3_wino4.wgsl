@@ -1,8 +1,9 @@
 // Winograd F(4x4, 3x3) with its weights loaded across the subgroup: the entry point
 // `winograd4_lanes` (kernels::Method::Winograd4Lanes), for CPU drivers with subgroups of at
-// least 16 lanes. Appended, with conv3x3_rows.wgsl and conv3x3_wino.wgsl, to the conv module
-// that runs two-column lanes tiles; it uses their declarations (Quad, mac, lane, Column, the
-// ob<OB>_<k> broadcasts, the overrides).
+// least 8 lanes. Appended, with conv3x3_rows.wgsl, conv3x3_wino.wgsl and the gathers
+// (conv3x3_gather16.wgsl, or conv3x3_gather8.wgsl on 8 lanes), to the conv module that runs
+// two-column lanes tiles; it uses their declarations (Quad, mac, lane, Column, Gather, gather,
+// the ob<OB>_<k> broadcasts, the overrides).
 //
 // An invocation computes ROWS / 4 stacked 4x4 output tiles (ROWS = 4 or 8) of 4 columns for OB
 // output blocks (1, 2 or 4). Each input block costs 6 columns of ROWS + 2 fetched texels, their
@@ -19,8 +20,8 @@
 // time from a storage buffer (docs/PERF.md, session 23). They sit as `winograd_lanes` reads them
 // with 36 positions for 16: input block cb, position p = 6 i + c, input lane l, output block j at
 // texel w + ((cb * 36 + p) * 4 + l) * OB + j (w = params.weight_texel + group z * group_stride),
-// then OB biases; each 16 of them are loaded one per lane just before their positions'
-// products and taken from the lanes by subgroupBroadcast (conv3x3_wino.wgsl's ob1_*, ob2_*, ob4_*).
+// then OB biases; each 16 of them are gathered over the lanes (`gather`) just before their
+// positions' products and taken from the lanes by subgroupBroadcast (the ob1_*, ob2_*, ob4_*).
 //
 // With points 0, 1, -1, 2, -2 and infinity (Lavin and Gray, 2016):
 //   B^T = [4 0 -5 0 1 0; 0 -4 -4 1 1 0; 0 4 -4 -1 1 0; 0 -2 -1 2 1 0; 0 2 -1 -2 1 0; 0 4 0 -5 0 1]
@@ -235,7 +236,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
         // block of its own for LLVM (conv_common.wgsl's `once`).
         loop {
             {
-            let g = weight_texel(base + 0u + lane);
+            let g = gather(base + 0u);
             { let u = ob1_0(g);
               (*m00).r0.c0 = mac((*m00).r0.c0, u, v0.r0.c0);
               if ROWS > 4u { (*m10).r0.c0 = mac((*m10).r0.c0, u, v1.r0.c0); } }
@@ -250,7 +251,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
               if ROWS > 4u { (*m10).r0.c3 = mac((*m10).r0.c3, u, v1.r0.c3); } }
             }
             {
-            let g = weight_texel(base + 16u + lane);
+            let g = gather(base + 16u);
             { let u = ob1_0(g);
               (*m00).r0.c4 = mac((*m00).r0.c4, u, v0.r0.c4);
               if ROWS > 4u { (*m10).r0.c4 = mac((*m10).r0.c4, u, v1.r0.c4); } }
@@ -265,7 +266,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
               if ROWS > 4u { (*m10).r1.c1 = mac((*m10).r1.c1, u, v1.r1.c1); } }
             }
             {
-            let g = weight_texel(base + 32u + lane);
+            let g = gather(base + 32u);
             { let u = ob1_0(g);
               (*m00).r1.c2 = mac((*m00).r1.c2, u, v0.r1.c2);
               if ROWS > 4u { (*m10).r1.c2 = mac((*m10).r1.c2, u, v1.r1.c2); } }
@@ -283,7 +284,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
         }
         loop {
             {
-            let g = weight_texel(base + 48u + lane);
+            let g = gather(base + 48u);
             { let u = ob1_0(g);
               (*m00).r2.c0 = mac((*m00).r2.c0, u, v0.r2.c0);
               if ROWS > 4u { (*m10).r2.c0 = mac((*m10).r2.c0, u, v1.r2.c0); } }
@@ -298,7 +299,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
               if ROWS > 4u { (*m10).r2.c3 = mac((*m10).r2.c3, u, v1.r2.c3); } }
             }
             {
-            let g = weight_texel(base + 64u + lane);
+            let g = gather(base + 64u);
             { let u = ob1_0(g);
               (*m00).r2.c4 = mac((*m00).r2.c4, u, v0.r2.c4);
               if ROWS > 4u { (*m10).r2.c4 = mac((*m10).r2.c4, u, v1.r2.c4); } }
@@ -313,7 +314,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
               if ROWS > 4u { (*m10).r3.c1 = mac((*m10).r3.c1, u, v1.r3.c1); } }
             }
             {
-            let g = weight_texel(base + 80u + lane);
+            let g = gather(base + 80u);
             { let u = ob1_0(g);
               (*m00).r3.c2 = mac((*m00).r3.c2, u, v0.r3.c2);
               if ROWS > 4u { (*m10).r3.c2 = mac((*m10).r3.c2, u, v1.r3.c2); } }
@@ -331,7 +332,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
         }
         loop {
             {
-            let g = weight_texel(base + 96u + lane);
+            let g = gather(base + 96u);
             { let u = ob1_0(g);
               (*m00).r4.c0 = mac((*m00).r4.c0, u, v0.r4.c0);
               if ROWS > 4u { (*m10).r4.c0 = mac((*m10).r4.c0, u, v1.r4.c0); } }
@@ -346,7 +347,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
               if ROWS > 4u { (*m10).r4.c3 = mac((*m10).r4.c3, u, v1.r4.c3); } }
             }
             {
-            let g = weight_texel(base + 112u + lane);
+            let g = gather(base + 112u);
             { let u = ob1_0(g);
               (*m00).r4.c4 = mac((*m00).r4.c4, u, v0.r4.c4);
               if ROWS > 4u { (*m10).r4.c4 = mac((*m10).r4.c4, u, v1.r4.c4); } }
@@ -361,7 +362,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
               if ROWS > 4u { (*m10).r5.c1 = mac((*m10).r5.c1, u, v1.r5.c1); } }
             }
             {
-            let g = weight_texel(base + 128u + lane);
+            let g = gather(base + 128u);
             { let u = ob1_0(g);
               (*m00).r5.c2 = mac((*m00).r5.c2, u, v0.r5.c2);
               if ROWS > 4u { (*m10).r5.c2 = mac((*m10).r5.c2, u, v1.r5.c2); } }
@@ -382,7 +383,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
         // block of its own for LLVM (conv_common.wgsl's `once`).
         loop {
             {
-            let g = weight_texel(base + 0u + lane);
+            let g = gather(base + 0u);
             { let u = ob2_00(g);
               (*m00).r0.c0 = mac((*m00).r0.c0, u, v0.r0.c0);
               if ROWS > 4u { (*m10).r0.c0 = mac((*m10).r0.c0, u, v1.r0.c0); } }
@@ -397,7 +398,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
               if ROWS > 4u { (*m11).r0.c1 = mac((*m11).r0.c1, u, v1.r0.c1); } }
             }
             {
-            let g = weight_texel(base + 16u + lane);
+            let g = gather(base + 16u);
             { let u = ob2_00(g);
               (*m00).r0.c2 = mac((*m00).r0.c2, u, v0.r0.c2);
               if ROWS > 4u { (*m10).r0.c2 = mac((*m10).r0.c2, u, v1.r0.c2); } }
@@ -412,7 +413,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
               if ROWS > 4u { (*m11).r0.c3 = mac((*m11).r0.c3, u, v1.r0.c3); } }
             }
             {
-            let g = weight_texel(base + 32u + lane);
+            let g = gather(base + 32u);
             { let u = ob2_00(g);
               (*m00).r0.c4 = mac((*m00).r0.c4, u, v0.r0.c4);
               if ROWS > 4u { (*m10).r0.c4 = mac((*m10).r0.c4, u, v1.r0.c4); } }
@@ -427,7 +428,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
               if ROWS > 4u { (*m11).r0.c5 = mac((*m11).r0.c5, u, v1.r0.c5); } }
             }
             {
-            let g = weight_texel(base + 48u + lane);
+            let g = gather(base + 48u);
             { let u = ob2_00(g);
               (*m00).r1.c0 = mac((*m00).r1.c0, u, v0.r1.c0);
               if ROWS > 4u { (*m10).r1.c0 = mac((*m10).r1.c0, u, v1.r1.c0); } }
@@ -442,7 +443,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
               if ROWS > 4u { (*m11).r1.c1 = mac((*m11).r1.c1, u, v1.r1.c1); } }
             }
             {
-            let g = weight_texel(base + 64u + lane);
+            let g = gather(base + 64u);
             { let u = ob2_00(g);
               (*m00).r1.c2 = mac((*m00).r1.c2, u, v0.r1.c2);
               if ROWS > 4u { (*m10).r1.c2 = mac((*m10).r1.c2, u, v1.r1.c2); } }
@@ -457,7 +458,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
               if ROWS > 4u { (*m11).r1.c3 = mac((*m11).r1.c3, u, v1.r1.c3); } }
             }
             {
-            let g = weight_texel(base + 80u + lane);
+            let g = gather(base + 80u);
             { let u = ob2_00(g);
               (*m00).r1.c4 = mac((*m00).r1.c4, u, v0.r1.c4);
               if ROWS > 4u { (*m10).r1.c4 = mac((*m10).r1.c4, u, v1.r1.c4); } }
@@ -475,7 +476,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
         }
         loop {
             {
-            let g = weight_texel(base + 96u + lane);
+            let g = gather(base + 96u);
             { let u = ob2_00(g);
               (*m00).r2.c0 = mac((*m00).r2.c0, u, v0.r2.c0);
               if ROWS > 4u { (*m10).r2.c0 = mac((*m10).r2.c0, u, v1.r2.c0); } }
@@ -490,7 +491,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
               if ROWS > 4u { (*m11).r2.c1 = mac((*m11).r2.c1, u, v1.r2.c1); } }
             }
             {
-            let g = weight_texel(base + 112u + lane);
+            let g = gather(base + 112u);
             { let u = ob2_00(g);
               (*m00).r2.c2 = mac((*m00).r2.c2, u, v0.r2.c2);
               if ROWS > 4u { (*m10).r2.c2 = mac((*m10).r2.c2, u, v1.r2.c2); } }
@@ -505,7 +506,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
               if ROWS > 4u { (*m11).r2.c3 = mac((*m11).r2.c3, u, v1.r2.c3); } }
             }
             {
-            let g = weight_texel(base + 128u + lane);
+            let g = gather(base + 128u);
             { let u = ob2_00(g);
               (*m00).r2.c4 = mac((*m00).r2.c4, u, v0.r2.c4);
               if ROWS > 4u { (*m10).r2.c4 = mac((*m10).r2.c4, u, v1.r2.c4); } }
@@ -520,7 +521,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
               if ROWS > 4u { (*m11).r2.c5 = mac((*m11).r2.c5, u, v1.r2.c5); } }
             }
             {
-            let g = weight_texel(base + 144u + lane);
+            let g = gather(base + 144u);
             { let u = ob2_00(g);
               (*m00).r3.c0 = mac((*m00).r3.c0, u, v0.r3.c0);
               if ROWS > 4u { (*m10).r3.c0 = mac((*m10).r3.c0, u, v1.r3.c0); } }
@@ -535,7 +536,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
               if ROWS > 4u { (*m11).r3.c1 = mac((*m11).r3.c1, u, v1.r3.c1); } }
             }
             {
-            let g = weight_texel(base + 160u + lane);
+            let g = gather(base + 160u);
             { let u = ob2_00(g);
               (*m00).r3.c2 = mac((*m00).r3.c2, u, v0.r3.c2);
               if ROWS > 4u { (*m10).r3.c2 = mac((*m10).r3.c2, u, v1.r3.c2); } }
@@ -550,7 +551,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
               if ROWS > 4u { (*m11).r3.c3 = mac((*m11).r3.c3, u, v1.r3.c3); } }
             }
             {
-            let g = weight_texel(base + 176u + lane);
+            let g = gather(base + 176u);
             { let u = ob2_00(g);
               (*m00).r3.c4 = mac((*m00).r3.c4, u, v0.r3.c4);
               if ROWS > 4u { (*m10).r3.c4 = mac((*m10).r3.c4, u, v1.r3.c4); } }
@@ -568,7 +569,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
         }
         loop {
             {
-            let g = weight_texel(base + 192u + lane);
+            let g = gather(base + 192u);
             { let u = ob2_00(g);
               (*m00).r4.c0 = mac((*m00).r4.c0, u, v0.r4.c0);
               if ROWS > 4u { (*m10).r4.c0 = mac((*m10).r4.c0, u, v1.r4.c0); } }
@@ -583,7 +584,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
               if ROWS > 4u { (*m11).r4.c1 = mac((*m11).r4.c1, u, v1.r4.c1); } }
             }
             {
-            let g = weight_texel(base + 208u + lane);
+            let g = gather(base + 208u);
             { let u = ob2_00(g);
               (*m00).r4.c2 = mac((*m00).r4.c2, u, v0.r4.c2);
               if ROWS > 4u { (*m10).r4.c2 = mac((*m10).r4.c2, u, v1.r4.c2); } }
@@ -598,7 +599,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
               if ROWS > 4u { (*m11).r4.c3 = mac((*m11).r4.c3, u, v1.r4.c3); } }
             }
             {
-            let g = weight_texel(base + 224u + lane);
+            let g = gather(base + 224u);
             { let u = ob2_00(g);
               (*m00).r4.c4 = mac((*m00).r4.c4, u, v0.r4.c4);
               if ROWS > 4u { (*m10).r4.c4 = mac((*m10).r4.c4, u, v1.r4.c4); } }
@@ -613,7 +614,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
               if ROWS > 4u { (*m11).r4.c5 = mac((*m11).r4.c5, u, v1.r4.c5); } }
             }
             {
-            let g = weight_texel(base + 240u + lane);
+            let g = gather(base + 240u);
             { let u = ob2_00(g);
               (*m00).r5.c0 = mac((*m00).r5.c0, u, v0.r5.c0);
               if ROWS > 4u { (*m10).r5.c0 = mac((*m10).r5.c0, u, v1.r5.c0); } }
@@ -628,7 +629,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
               if ROWS > 4u { (*m11).r5.c1 = mac((*m11).r5.c1, u, v1.r5.c1); } }
             }
             {
-            let g = weight_texel(base + 256u + lane);
+            let g = gather(base + 256u);
             { let u = ob2_00(g);
               (*m00).r5.c2 = mac((*m00).r5.c2, u, v0.r5.c2);
               if ROWS > 4u { (*m10).r5.c2 = mac((*m10).r5.c2, u, v1.r5.c2); } }
@@ -643,7 +644,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
               if ROWS > 4u { (*m11).r5.c3 = mac((*m11).r5.c3, u, v1.r5.c3); } }
             }
             {
-            let g = weight_texel(base + 272u + lane);
+            let g = gather(base + 272u);
             { let u = ob2_00(g);
               (*m00).r5.c4 = mac((*m00).r5.c4, u, v0.r5.c4);
               if ROWS > 4u { (*m10).r5.c4 = mac((*m10).r5.c4, u, v1.r5.c4); } }
@@ -664,7 +665,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
         // block of its own for LLVM (conv_common.wgsl's `once`).
         loop {
             {
-            let g = weight_texel(base + 0u + lane);
+            let g = gather(base + 0u);
             { let u = ob4_0(g);
               (*m00).r0.c0 = mac((*m00).r0.c0, u, v0.r0.c0);
               if ROWS > 4u { (*m10).r0.c0 = mac((*m10).r0.c0, u, v1.r0.c0); } }
@@ -679,7 +680,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
               if ROWS > 4u { (*m13).r0.c0 = mac((*m13).r0.c0, u, v1.r0.c0); } }
             }
             {
-            let g = weight_texel(base + 16u + lane);
+            let g = gather(base + 16u);
             { let u = ob4_0(g);
               (*m00).r0.c1 = mac((*m00).r0.c1, u, v0.r0.c1);
               if ROWS > 4u { (*m10).r0.c1 = mac((*m10).r0.c1, u, v1.r0.c1); } }
@@ -694,7 +695,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
               if ROWS > 4u { (*m13).r0.c1 = mac((*m13).r0.c1, u, v1.r0.c1); } }
             }
             {
-            let g = weight_texel(base + 32u + lane);
+            let g = gather(base + 32u);
             { let u = ob4_0(g);
               (*m00).r0.c2 = mac((*m00).r0.c2, u, v0.r0.c2);
               if ROWS > 4u { (*m10).r0.c2 = mac((*m10).r0.c2, u, v1.r0.c2); } }
@@ -709,7 +710,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
               if ROWS > 4u { (*m13).r0.c2 = mac((*m13).r0.c2, u, v1.r0.c2); } }
             }
             {
-            let g = weight_texel(base + 48u + lane);
+            let g = gather(base + 48u);
             { let u = ob4_0(g);
               (*m00).r0.c3 = mac((*m00).r0.c3, u, v0.r0.c3);
               if ROWS > 4u { (*m10).r0.c3 = mac((*m10).r0.c3, u, v1.r0.c3); } }
@@ -724,7 +725,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
               if ROWS > 4u { (*m13).r0.c3 = mac((*m13).r0.c3, u, v1.r0.c3); } }
             }
             {
-            let g = weight_texel(base + 64u + lane);
+            let g = gather(base + 64u);
             { let u = ob4_0(g);
               (*m00).r0.c4 = mac((*m00).r0.c4, u, v0.r0.c4);
               if ROWS > 4u { (*m10).r0.c4 = mac((*m10).r0.c4, u, v1.r0.c4); } }
@@ -739,7 +740,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
               if ROWS > 4u { (*m13).r0.c4 = mac((*m13).r0.c4, u, v1.r0.c4); } }
             }
             {
-            let g = weight_texel(base + 80u + lane);
+            let g = gather(base + 80u);
             { let u = ob4_0(g);
               (*m00).r0.c5 = mac((*m00).r0.c5, u, v0.r0.c5);
               if ROWS > 4u { (*m10).r0.c5 = mac((*m10).r0.c5, u, v1.r0.c5); } }
@@ -754,7 +755,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
               if ROWS > 4u { (*m13).r0.c5 = mac((*m13).r0.c5, u, v1.r0.c5); } }
             }
             {
-            let g = weight_texel(base + 96u + lane);
+            let g = gather(base + 96u);
             { let u = ob4_0(g);
               (*m00).r1.c0 = mac((*m00).r1.c0, u, v0.r1.c0);
               if ROWS > 4u { (*m10).r1.c0 = mac((*m10).r1.c0, u, v1.r1.c0); } }
@@ -769,7 +770,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
               if ROWS > 4u { (*m13).r1.c0 = mac((*m13).r1.c0, u, v1.r1.c0); } }
             }
             {
-            let g = weight_texel(base + 112u + lane);
+            let g = gather(base + 112u);
             { let u = ob4_0(g);
               (*m00).r1.c1 = mac((*m00).r1.c1, u, v0.r1.c1);
               if ROWS > 4u { (*m10).r1.c1 = mac((*m10).r1.c1, u, v1.r1.c1); } }
@@ -784,7 +785,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
               if ROWS > 4u { (*m13).r1.c1 = mac((*m13).r1.c1, u, v1.r1.c1); } }
             }
             {
-            let g = weight_texel(base + 128u + lane);
+            let g = gather(base + 128u);
             { let u = ob4_0(g);
               (*m00).r1.c2 = mac((*m00).r1.c2, u, v0.r1.c2);
               if ROWS > 4u { (*m10).r1.c2 = mac((*m10).r1.c2, u, v1.r1.c2); } }
@@ -799,7 +800,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
               if ROWS > 4u { (*m13).r1.c2 = mac((*m13).r1.c2, u, v1.r1.c2); } }
             }
             {
-            let g = weight_texel(base + 144u + lane);
+            let g = gather(base + 144u);
             { let u = ob4_0(g);
               (*m00).r1.c3 = mac((*m00).r1.c3, u, v0.r1.c3);
               if ROWS > 4u { (*m10).r1.c3 = mac((*m10).r1.c3, u, v1.r1.c3); } }
@@ -814,7 +815,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
               if ROWS > 4u { (*m13).r1.c3 = mac((*m13).r1.c3, u, v1.r1.c3); } }
             }
             {
-            let g = weight_texel(base + 160u + lane);
+            let g = gather(base + 160u);
             { let u = ob4_0(g);
               (*m00).r1.c4 = mac((*m00).r1.c4, u, v0.r1.c4);
               if ROWS > 4u { (*m10).r1.c4 = mac((*m10).r1.c4, u, v1.r1.c4); } }
@@ -829,7 +830,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
               if ROWS > 4u { (*m13).r1.c4 = mac((*m13).r1.c4, u, v1.r1.c4); } }
             }
             {
-            let g = weight_texel(base + 176u + lane);
+            let g = gather(base + 176u);
             { let u = ob4_0(g);
               (*m00).r1.c5 = mac((*m00).r1.c5, u, v0.r1.c5);
               if ROWS > 4u { (*m10).r1.c5 = mac((*m10).r1.c5, u, v1.r1.c5); } }
@@ -847,7 +848,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
         }
         loop {
             {
-            let g = weight_texel(base + 192u + lane);
+            let g = gather(base + 192u);
             { let u = ob4_0(g);
               (*m00).r2.c0 = mac((*m00).r2.c0, u, v0.r2.c0);
               if ROWS > 4u { (*m10).r2.c0 = mac((*m10).r2.c0, u, v1.r2.c0); } }
@@ -862,7 +863,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
               if ROWS > 4u { (*m13).r2.c0 = mac((*m13).r2.c0, u, v1.r2.c0); } }
             }
             {
-            let g = weight_texel(base + 208u + lane);
+            let g = gather(base + 208u);
             { let u = ob4_0(g);
               (*m00).r2.c1 = mac((*m00).r2.c1, u, v0.r2.c1);
               if ROWS > 4u { (*m10).r2.c1 = mac((*m10).r2.c1, u, v1.r2.c1); } }
@@ -877,7 +878,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
               if ROWS > 4u { (*m13).r2.c1 = mac((*m13).r2.c1, u, v1.r2.c1); } }
             }
             {
-            let g = weight_texel(base + 224u + lane);
+            let g = gather(base + 224u);
             { let u = ob4_0(g);
               (*m00).r2.c2 = mac((*m00).r2.c2, u, v0.r2.c2);
               if ROWS > 4u { (*m10).r2.c2 = mac((*m10).r2.c2, u, v1.r2.c2); } }
@@ -892,7 +893,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
               if ROWS > 4u { (*m13).r2.c2 = mac((*m13).r2.c2, u, v1.r2.c2); } }
             }
             {
-            let g = weight_texel(base + 240u + lane);
+            let g = gather(base + 240u);
             { let u = ob4_0(g);
               (*m00).r2.c3 = mac((*m00).r2.c3, u, v0.r2.c3);
               if ROWS > 4u { (*m10).r2.c3 = mac((*m10).r2.c3, u, v1.r2.c3); } }
@@ -907,7 +908,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
               if ROWS > 4u { (*m13).r2.c3 = mac((*m13).r2.c3, u, v1.r2.c3); } }
             }
             {
-            let g = weight_texel(base + 256u + lane);
+            let g = gather(base + 256u);
             { let u = ob4_0(g);
               (*m00).r2.c4 = mac((*m00).r2.c4, u, v0.r2.c4);
               if ROWS > 4u { (*m10).r2.c4 = mac((*m10).r2.c4, u, v1.r2.c4); } }
@@ -922,7 +923,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
               if ROWS > 4u { (*m13).r2.c4 = mac((*m13).r2.c4, u, v1.r2.c4); } }
             }
             {
-            let g = weight_texel(base + 272u + lane);
+            let g = gather(base + 272u);
             { let u = ob4_0(g);
               (*m00).r2.c5 = mac((*m00).r2.c5, u, v0.r2.c5);
               if ROWS > 4u { (*m10).r2.c5 = mac((*m10).r2.c5, u, v1.r2.c5); } }
@@ -937,7 +938,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
               if ROWS > 4u { (*m13).r2.c5 = mac((*m13).r2.c5, u, v1.r2.c5); } }
             }
             {
-            let g = weight_texel(base + 288u + lane);
+            let g = gather(base + 288u);
             { let u = ob4_0(g);
               (*m00).r3.c0 = mac((*m00).r3.c0, u, v0.r3.c0);
               if ROWS > 4u { (*m10).r3.c0 = mac((*m10).r3.c0, u, v1.r3.c0); } }
@@ -952,7 +953,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
               if ROWS > 4u { (*m13).r3.c0 = mac((*m13).r3.c0, u, v1.r3.c0); } }
             }
             {
-            let g = weight_texel(base + 304u + lane);
+            let g = gather(base + 304u);
             { let u = ob4_0(g);
               (*m00).r3.c1 = mac((*m00).r3.c1, u, v0.r3.c1);
               if ROWS > 4u { (*m10).r3.c1 = mac((*m10).r3.c1, u, v1.r3.c1); } }
@@ -967,7 +968,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
               if ROWS > 4u { (*m13).r3.c1 = mac((*m13).r3.c1, u, v1.r3.c1); } }
             }
             {
-            let g = weight_texel(base + 320u + lane);
+            let g = gather(base + 320u);
             { let u = ob4_0(g);
               (*m00).r3.c2 = mac((*m00).r3.c2, u, v0.r3.c2);
               if ROWS > 4u { (*m10).r3.c2 = mac((*m10).r3.c2, u, v1.r3.c2); } }
@@ -982,7 +983,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
               if ROWS > 4u { (*m13).r3.c2 = mac((*m13).r3.c2, u, v1.r3.c2); } }
             }
             {
-            let g = weight_texel(base + 336u + lane);
+            let g = gather(base + 336u);
             { let u = ob4_0(g);
               (*m00).r3.c3 = mac((*m00).r3.c3, u, v0.r3.c3);
               if ROWS > 4u { (*m10).r3.c3 = mac((*m10).r3.c3, u, v1.r3.c3); } }
@@ -997,7 +998,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
               if ROWS > 4u { (*m13).r3.c3 = mac((*m13).r3.c3, u, v1.r3.c3); } }
             }
             {
-            let g = weight_texel(base + 352u + lane);
+            let g = gather(base + 352u);
             { let u = ob4_0(g);
               (*m00).r3.c4 = mac((*m00).r3.c4, u, v0.r3.c4);
               if ROWS > 4u { (*m10).r3.c4 = mac((*m10).r3.c4, u, v1.r3.c4); } }
@@ -1012,7 +1013,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
               if ROWS > 4u { (*m13).r3.c4 = mac((*m13).r3.c4, u, v1.r3.c4); } }
             }
             {
-            let g = weight_texel(base + 368u + lane);
+            let g = gather(base + 368u);
             { let u = ob4_0(g);
               (*m00).r3.c5 = mac((*m00).r3.c5, u, v0.r3.c5);
               if ROWS > 4u { (*m10).r3.c5 = mac((*m10).r3.c5, u, v1.r3.c5); } }
@@ -1030,7 +1031,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
         }
         loop {
             {
-            let g = weight_texel(base + 384u + lane);
+            let g = gather(base + 384u);
             { let u = ob4_0(g);
               (*m00).r4.c0 = mac((*m00).r4.c0, u, v0.r4.c0);
               if ROWS > 4u { (*m10).r4.c0 = mac((*m10).r4.c0, u, v1.r4.c0); } }
@@ -1045,7 +1046,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
               if ROWS > 4u { (*m13).r4.c0 = mac((*m13).r4.c0, u, v1.r4.c0); } }
             }
             {
-            let g = weight_texel(base + 400u + lane);
+            let g = gather(base + 400u);
             { let u = ob4_0(g);
               (*m00).r4.c1 = mac((*m00).r4.c1, u, v0.r4.c1);
               if ROWS > 4u { (*m10).r4.c1 = mac((*m10).r4.c1, u, v1.r4.c1); } }
@@ -1060,7 +1061,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
               if ROWS > 4u { (*m13).r4.c1 = mac((*m13).r4.c1, u, v1.r4.c1); } }
             }
             {
-            let g = weight_texel(base + 416u + lane);
+            let g = gather(base + 416u);
             { let u = ob4_0(g);
               (*m00).r4.c2 = mac((*m00).r4.c2, u, v0.r4.c2);
               if ROWS > 4u { (*m10).r4.c2 = mac((*m10).r4.c2, u, v1.r4.c2); } }
@@ -1075,7 +1076,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
               if ROWS > 4u { (*m13).r4.c2 = mac((*m13).r4.c2, u, v1.r4.c2); } }
             }
             {
-            let g = weight_texel(base + 432u + lane);
+            let g = gather(base + 432u);
             { let u = ob4_0(g);
               (*m00).r4.c3 = mac((*m00).r4.c3, u, v0.r4.c3);
               if ROWS > 4u { (*m10).r4.c3 = mac((*m10).r4.c3, u, v1.r4.c3); } }
@@ -1090,7 +1091,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
               if ROWS > 4u { (*m13).r4.c3 = mac((*m13).r4.c3, u, v1.r4.c3); } }
             }
             {
-            let g = weight_texel(base + 448u + lane);
+            let g = gather(base + 448u);
             { let u = ob4_0(g);
               (*m00).r4.c4 = mac((*m00).r4.c4, u, v0.r4.c4);
               if ROWS > 4u { (*m10).r4.c4 = mac((*m10).r4.c4, u, v1.r4.c4); } }
@@ -1105,7 +1106,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
               if ROWS > 4u { (*m13).r4.c4 = mac((*m13).r4.c4, u, v1.r4.c4); } }
             }
             {
-            let g = weight_texel(base + 464u + lane);
+            let g = gather(base + 464u);
             { let u = ob4_0(g);
               (*m00).r4.c5 = mac((*m00).r4.c5, u, v0.r4.c5);
               if ROWS > 4u { (*m10).r4.c5 = mac((*m10).r4.c5, u, v1.r4.c5); } }
@@ -1120,7 +1121,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
               if ROWS > 4u { (*m13).r4.c5 = mac((*m13).r4.c5, u, v1.r4.c5); } }
             }
             {
-            let g = weight_texel(base + 480u + lane);
+            let g = gather(base + 480u);
             { let u = ob4_0(g);
               (*m00).r5.c0 = mac((*m00).r5.c0, u, v0.r5.c0);
               if ROWS > 4u { (*m10).r5.c0 = mac((*m10).r5.c0, u, v1.r5.c0); } }
@@ -1135,7 +1136,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
               if ROWS > 4u { (*m13).r5.c0 = mac((*m13).r5.c0, u, v1.r5.c0); } }
             }
             {
-            let g = weight_texel(base + 496u + lane);
+            let g = gather(base + 496u);
             { let u = ob4_0(g);
               (*m00).r5.c1 = mac((*m00).r5.c1, u, v0.r5.c1);
               if ROWS > 4u { (*m10).r5.c1 = mac((*m10).r5.c1, u, v1.r5.c1); } }
@@ -1150,7 +1151,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
               if ROWS > 4u { (*m13).r5.c1 = mac((*m13).r5.c1, u, v1.r5.c1); } }
             }
             {
-            let g = weight_texel(base + 512u + lane);
+            let g = gather(base + 512u);
             { let u = ob4_0(g);
               (*m00).r5.c2 = mac((*m00).r5.c2, u, v0.r5.c2);
               if ROWS > 4u { (*m10).r5.c2 = mac((*m10).r5.c2, u, v1.r5.c2); } }
@@ -1165,7 +1166,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
               if ROWS > 4u { (*m13).r5.c2 = mac((*m13).r5.c2, u, v1.r5.c2); } }
             }
             {
-            let g = weight_texel(base + 528u + lane);
+            let g = gather(base + 528u);
             { let u = ob4_0(g);
               (*m00).r5.c3 = mac((*m00).r5.c3, u, v0.r5.c3);
               if ROWS > 4u { (*m10).r5.c3 = mac((*m10).r5.c3, u, v1.r5.c3); } }
@@ -1180,7 +1181,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
               if ROWS > 4u { (*m13).r5.c3 = mac((*m13).r5.c3, u, v1.r5.c3); } }
             }
             {
-            let g = weight_texel(base + 544u + lane);
+            let g = gather(base + 544u);
             { let u = ob4_0(g);
               (*m00).r5.c4 = mac((*m00).r5.c4, u, v0.r5.c4);
               if ROWS > 4u { (*m10).r5.c4 = mac((*m10).r5.c4, u, v1.r5.c4); } }
@@ -1195,7 +1196,7 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
               if ROWS > 4u { (*m13).r5.c4 = mac((*m13).r5.c4, u, v1.r5.c4); } }
             }
             {
-            let g = weight_texel(base + 560u + lane);
+            let g = gather(base + 560u);
             { let u = ob4_0(g);
               (*m00).r5.c5 = mac((*m00).r5.c5, u, v0.r5.c5);
               if ROWS > 4u { (*m10).r5.c5 = mac((*m10).r5.c5, u, v1.r5.c5); } }

@@ -1,8 +1,9 @@
 //! Every WGSL file parses and validates with naga: no GPU needed, a broken shader fails here.
 
 use rae_core::kernels::{
-    MMA_ENABLE, MMA_PREFETCH_TEXELS, MMA_SPLIT_PIXELS, MMA_WORKGROUP_BYTES, PREP_WITHOUT_SUBGROUPS, ROWS_STUB, SHADERS, STORAGE_SOURCES,
-    STORAGE_WEIGHTS, SourceAccess, UNIFORM_WEIGHTS, WITHOUT_SUBGROUPS, conv_module_source, lanes_module_source, mma_source, shader_source,
+    LanesModule, MMA_ENABLE, MMA_PREFETCH_TEXELS, MMA_SPLIT_PIXELS, MMA_WORKGROUP_BYTES, PREP_WITHOUT_SUBGROUPS, ROWS_STUB, SHADERS,
+    STORAGE_SOURCES, STORAGE_WEIGHTS, SourceAccess, UNIFORM_WEIGHTS, WITHOUT_SUBGROUPS, conv_module_source, lanes_module_source,
+    mma_source, shader_source,
 };
 
 /// `src` (from `file`) with each of `rewrites` made, each of which must find its text.
@@ -31,21 +32,41 @@ fn every_shader_validates_with_naga() {
     assert!(!prep_without_subgroups.contains("subgroupMax("), "no subgroup operation is left in prep");
     let rewritten = [
         ("prep (without subgroups)", prep_without_subgroups),
-        ("conv3x3 (lanes tiles)", lanes_module_source(conv, SourceAccess::Sampled, false, false)),
+        ("conv3x3 (lanes tiles)", lanes_module_source(conv, SourceAccess::Sampled, LanesModule::default())),
         (
             "conv3x3 (storage sources, lanes tiles, f16)",
-            lanes_module_source(&storage_sources, SourceAccess::Storage, false, false).replace("rgba32float", "rgba16float"),
+            lanes_module_source(&storage_sources, SourceAccess::Storage, LanesModule::default()).replace("rgba32float", "rgba16float"),
         ),
         // The staged stores in 64-bit words (conv3x3_stage64.wgsl in place of stage_row).
         (
             "conv3x3 (storage sources, lanes tiles, 64-bit staged stores)",
-            lanes_module_source(&storage_sources, SourceAccess::Storage, true, false),
+            lanes_module_source(&storage_sources, SourceAccess::Storage, LanesModule { wide_stores: true, ..Default::default() }),
         ),
         // Two sources: the F(4x4) step in a loop per source (kernels::TWO_SOURCE_LOOPS).
-        ("conv3x3 (lanes tiles, two sources)", lanes_module_source(conv, SourceAccess::Sampled, false, true)),
+        (
+            "conv3x3 (lanes tiles, two sources)",
+            lanes_module_source(conv, SourceAccess::Sampled, LanesModule { two_sources: true, ..Default::default() }),
+        ),
         (
             "conv3x3 (storage sources, lanes tiles, two sources, 64-bit staged stores)",
-            lanes_module_source(&storage_sources, SourceAccess::Storage, true, true),
+            lanes_module_source(
+                &storage_sources,
+                SourceAccess::Storage,
+                LanesModule { wide_stores: true, two_sources: true, ..Default::default() },
+            ),
+        ),
+        // Gathers for 8-lane subgroups (conv3x3_gather8.wgsl in place of conv3x3_gather16.wgsl).
+        (
+            "conv3x3 (storage sources, lanes tiles, two sources, 64-bit staged stores, 8-lane gathers)",
+            lanes_module_source(
+                &storage_sources,
+                SourceAccess::Storage,
+                LanesModule { wide_stores: true, two_sources: true, gathers8: true },
+            ),
+        ),
+        (
+            "conv3x3 (lanes tiles, 8-lane gathers)",
+            lanes_module_source(conv, SourceAccess::Sampled, LanesModule { gathers8: true, ..Default::default() }),
         ),
         ("conv3x3 (f16, storage weights)", conv.replace("rgba32float", "rgba16float").replace(UNIFORM_WEIGHTS, STORAGE_WEIGHTS)),
         ("conv3x3 (without subgroups)", without_subgroups),
@@ -63,7 +84,17 @@ fn every_shader_validates_with_naga() {
     let all = SHADERS
         .iter()
         .filter(|(n, _)| {
-            !["conv3x3_rows", "conv3x3_wino", "conv3x3_wino4", "conv3x3_stage64", "conv3x3_mma_coop", "conv_common"].contains(n)
+            ![
+                "conv3x3_rows",
+                "conv3x3_wino",
+                "conv3x3_wino4",
+                "conv3x3_gather16",
+                "conv3x3_gather8",
+                "conv3x3_stage64",
+                "conv3x3_mma_coop",
+                "conv_common",
+            ]
+            .contains(n)
         })
         .map(|&(n, _)| (n, conv_module_source(n)))
         .chain(rewritten)

@@ -185,7 +185,7 @@ pub const MMA_SPLIT_TILES: [Tile; 4] = [
 pub const TUNE_TILES_LANES: [Tile; 2] = [Tile::CPU_LANES, Tile { rows: 4, ..Tile::CPU_LANES }];
 
 /// [`TUNE_TILES_LANES`], [`Tile::CPU_WINOGRAD`] and [`Tile::CPU_WINOGRAD4`]: what
-/// [`TileChoice::Tuned`] times on CPU drivers with subgroups of 16 lanes
+/// [`TileChoice::Tuned`] times on CPU drivers with subgroups of 8 lanes or more
 /// ([`crate::kernels::winograd_lanes_supported`]).
 pub const TUNE_TILES_LANES_WINOGRAD: [Tile; 4] =
     [Tile::CPU_LANES, Tile { rows: 4, ..Tile::CPU_LANES }, Tile::CPU_WINOGRAD, Tile::CPU_WINOGRAD4];

@@ -13,6 +13,8 @@ pub const SHADERS: &[(&str, &str)] = &[
     ("conv3x3_rows", include_str!("../../../shaders/conv3x3_rows.wgsl")),
     ("conv3x3_wino", include_str!("../../../shaders/conv3x3_wino.wgsl")),
     ("conv3x3_wino4", include_str!("../../../shaders/conv3x3_wino4.wgsl")),
+    ("conv3x3_gather16", include_str!("../../../shaders/conv3x3_gather16.wgsl")),
+    ("conv3x3_gather8", include_str!("../../../shaders/conv3x3_gather8.wgsl")),
     ("conv3x3_stage64", include_str!("../../../shaders/conv3x3_stage64.wgsl")),
     ("conv3x3_mma", include_str!("../../../shaders/conv3x3_mma.wgsl")),
     ("conv3x3_mma_coop", include_str!("../../../shaders/conv3x3_mma_coop.wgsl")),
@@ -239,23 +241,46 @@ pub const TWO_SOURCE_LOOPS: [(&str, &str); 3] = [
     ),
 ];
 
+/// Which lanes module a conv's pipeline is made from ([`lanes_module_source`]): what the
+/// device and the conv take beyond the source access.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct LanesModule {
+    /// Staged stores in 64-bit words ([`WIDE_STAGED_STORES`], [`wide_staged_stores`]).
+    pub wide_stores: bool,
+    /// For convs of two sources: a loop per source ([`TWO_SOURCE_LOOPS`]).
+    pub two_sources: bool,
+    /// The Winograd kernels' gathers for 8-lane subgroups (conv3x3_gather8.wgsl) instead of 16
+    /// (conv3x3_gather16.wgsl): [`narrow_gathers`].
+    pub gathers8: bool,
+}
+
 /// The conv module `conv` (conv3x3.wgsl as [`Kernels`] rewrites it for sources read as
 /// `access` says) as the lanes tiles run it: its [`ROWS_STUB`] replaced by conv3x3_rows.wgsl
-/// (two-column lanes tiles), conv3x3_wino.wgsl (`winograd_lanes`) and conv3x3_wino4.wgsl
-/// (`winograd4_lanes`, its weight texture read as the sources are, [`STORAGE_WEIGHT_TEXELS`];
-/// with `wide_stores`, its staged stores in 64-bit words, [`WIDE_STAGED_STORES`]; with
-/// `two_sources`, for convs of two sources, [`TWO_SOURCE_LOOPS`]).
-pub fn lanes_module_source(conv: &str, access: SourceAccess, wide_stores: bool, two_sources: bool) -> String {
+/// (two-column lanes tiles), conv3x3_wino.wgsl (`winograd_lanes`), conv3x3_wino4.wgsl
+/// (`winograd4_lanes`, its weight texture read as the sources are, [`STORAGE_WEIGHT_TEXELS`])
+/// and the two Winograd kernels' gathers (conv3x3_gather16.wgsl, or conv3x3_gather8.wgsl with
+/// `variant.gathers8`); with `variant.wide_stores`, the staged stores in 64-bit words
+/// ([`WIDE_STAGED_STORES`]); with `variant.two_sources`, for convs of two sources,
+/// [`TWO_SOURCE_LOOPS`].
+pub fn lanes_module_source(conv: &str, access: SourceAccess, variant: LanesModule) -> String {
     assert!(conv.contains(ROWS_STUB), "conv3x3.wgsl has kernels::ROWS_STUB");
     let wino4 = shader_source("conv3x3_wino4").to_string();
     let wino4 = if access == SourceAccess::Storage { rewrite(wino4, "conv3x3_wino4.wgsl", &STORAGE_WEIGHT_TEXELS) } else { wino4 };
-    let wino4 = if two_sources { rewrite(wino4, "conv3x3_wino4.wgsl", &TWO_SOURCE_LOOPS) } else { wino4 };
-    let wino4 = if wide_stores {
+    let wino4 = if variant.two_sources { rewrite(wino4, "conv3x3_wino4.wgsl", &TWO_SOURCE_LOOPS) } else { wino4 };
+    let wino4 = if variant.wide_stores {
         format!("{}\n{}", rewrite(wino4, "conv3x3_wino4.wgsl", &WIDE_STAGED_STORES), shader_source("conv3x3_stage64"))
     } else {
         wino4
     };
-    conv.replace(ROWS_STUB, &format!("{}\n{}\n{}", shader_source("conv3x3_rows"), shader_source("conv3x3_wino"), wino4))
+    let gathers = shader_source(if variant.gathers8 { "conv3x3_gather8" } else { "conv3x3_gather16" });
+    conv.replace(ROWS_STUB, &format!("{}\n{}\n{}\n{}", shader_source("conv3x3_rows"), shader_source("conv3x3_wino"), gathers, wino4))
+}
+
+/// Whether the Winograd lanes kernels take conv3x3_gather8.wgsl's gathers on `device`: its
+/// subgroups may have fewer than 16 lanes (lavapipe without AVX-512: 8). A gather of 16 vec4s
+/// is then two loads of 8; on 16 lanes or more one ([`LanesModule::gathers8`]).
+pub fn narrow_gathers(device: &wgpu::Device) -> bool {
+    device.adapter_info().subgroup_min_size < 16
 }
 
 /// The rewrites of conv3x3.wgsl for devices without [`wgpu::Features::SUBGROUP`] (naga refuses
@@ -278,10 +303,11 @@ pub fn lanes_supported(device: &wgpu::Device) -> bool {
     device.features().contains(wgpu::Features::SUBGROUP) && device.adapter_info().subgroup_min_size >= 8
 }
 
-/// Whether a device runs [`Method::WinogradLanes`]: it has subgroups of at least 16 lanes (one
-/// input block's transformed weights are loaded 16 vec4s at a time).
+/// Whether a device runs [`Method::WinogradLanes`] and [`Method::Winograd4Lanes`]: it has
+/// subgroups of at least 8 lanes (one input block's transformed weights are loaded 16 vec4s at a
+/// time, in two loads where the subgroups have fewer than 16 lanes: [`narrow_gathers`]).
 pub fn winograd_lanes_supported(device: &wgpu::Device) -> bool {
-    device.features().contains(wgpu::Features::SUBGROUP) && device.adapter_info().subgroup_min_size >= 16
+    lanes_supported(device)
 }
 
 /// Whether a device reads zero at a texel outside a texture, so that the conv kernels read
@@ -637,11 +663,11 @@ pub enum Method {
     Lanes,
     /// `winograd_lanes` (conv3x3_wino.wgsl): [`Method::Winograd`] with each weight vec4 loaded
     /// by one lane of the subgroup, from the plan's weight texture, and broadcast to the others
-    /// (subgroups of at least 16 lanes, [`winograd_lanes_supported`]), for CPU drivers.
+    /// (subgroups of at least 8 lanes, [`winograd_lanes_supported`]), for CPU drivers.
     WinogradLanes,
     /// `winograd4_lanes` (conv3x3_wino4.wgsl): Winograd F(4x4, 3x3), 36 multiplies per 4x4
     /// outputs and channel pair for 144, with its weights loaded across the subgroup as
-    /// [`Method::WinogradLanes`] loads them (subgroups of at least 16 lanes), for CPU drivers.
+    /// [`Method::WinogradLanes`] loads them (subgroups of at least 8 lanes), for CPU drivers.
     Winograd4Lanes,
     /// conv3x3_mma.wgsl: an implicit matrix product in 16 x 16 x 16 tiles of f16 products
     /// summed in f32, in the device's matrix units (tensor cores, [`matrix_units_supported`])
@@ -688,7 +714,7 @@ impl Method {
     }
 
     /// Whether this is Winograd with its weights across the subgroup ([`Method::WinogradLanes`],
-    /// [`Method::Winograd4Lanes`]): subgroups of at least 16 lanes, weights from the plan's
+    /// [`Method::Winograd4Lanes`]): subgroups of at least 8 lanes, weights from the plan's
     /// weight texture (binding 7, whatever the weight memory), the output pooled in the conv
     /// where the plan asks.
     pub fn is_winograd_lanes(self) -> bool {
@@ -789,6 +815,9 @@ pub struct Kernels {
     /// The lanes module stores staged outputs in 64-bit words ([`wide_staged_stores`], unless
     /// [`Kernels::stage_in_32_bit_words`]).
     wide_stores: bool,
+    /// The Winograd lanes kernels gather for 8-lane subgroups ([`narrow_gathers`], or
+    /// [`Kernels::gather_in_8_lanes`]).
+    gathers8: bool,
 }
 
 impl Kernels {
@@ -898,7 +927,16 @@ impl Kernels {
             reads_zero: out_of_bounds_reads_zero(device),
             oob_zero: false,
             wide_stores: wide_staged_stores(device),
+            gathers8: narrow_gathers(device),
         }
+    }
+
+    /// Gather the Winograd lanes kernels' weights in loads of 8 lanes (conv3x3_gather8.wgsl) even
+    /// where the subgroups have 16 or more: for holding the two to each other on one device
+    /// (tests/engine/kernels.rs). Call it before any conv pipeline is made.
+    pub fn gather_in_8_lanes(&mut self) {
+        assert!(self.conv.is_empty(), "gather_in_8_lanes after conv pipelines were made");
+        self.gathers8 = true;
     }
 
     /// Store staged outputs in 32-bit words even where [`wide_staged_stores`] holds: for
@@ -1043,7 +1081,11 @@ impl Kernels {
             let mma = need_mma.then(|| shader_module(device, "conv3x3_mma", self.mma_text(access)));
             let lanes = |two_sources: bool| {
                 let label = if two_sources { "conv3x3 (lanes tiles, two sources)" } else { "conv3x3 (lanes tiles)" };
-                shader_module(device, label, lanes_module_source(&text, access, self.wide_stores, two_sources))
+                shader_module(
+                    device,
+                    label,
+                    lanes_module_source(&text, access, LanesModule { wide_stores: self.wide_stores, two_sources, gathers8: self.gathers8 }),
+                )
             };
             let rows = need_rows.then(|| lanes(false));
             let rows_b = need_rows_b.then(|| lanes(true));
@@ -1759,7 +1801,7 @@ impl ConvPlan {
         let narrow = |t: &&Tile| match t.method {
             Method::Lanes => (!lanes_supported(device)).then_some(("weights across lanes", 8)),
             Method::WinogradLanes | Method::Winograd4Lanes => {
-                (!winograd_lanes_supported(device)).then_some(("Winograd weights across lanes", 16))
+                (!winograd_lanes_supported(device)).then_some(("Winograd weights across lanes", 8))
             }
             _ => None,
         };
