@@ -121,12 +121,12 @@ enum Command {
         /// the subgroup, devices with subgroups of 8 or more lanes; 4 blocks also in 2 columns,
         /// two columns at most 8 rows, e.g. lanes8x2w2), winoROWSxBLOCKS[gGROUPX] (Winograd
         /// F(2x2, 3x3); rows 2, 4), winolanesROWSxBLOCKS[gGROUPX] (Winograd with weights
-        /// across the subgroup, devices with 16-lane subgroups; rows 4, 8; blocks 1, 2, 4) or
+        /// across the subgroup, devices with subgroups of 8 or more lanes; rows 4, 8; blocks 1, 2, 4) or
         /// wino4lanesROWSxBLOCKS[gGROUPX] (Winograd F(4x4, 3x3) in 4 columns, weights from a
         /// texture across the subgroup, the same devices; rows 4, 8; blocks 1, 2, 4) for one
         /// tile everywhere, `tuned` (each conv timed with every candidate on this device while
-        /// building; on CPU drivers with subgroups lanes8x2w2, lanes4x2w2 and, with 16-lane
-        /// subgroups, winolanes8x4 and wino4lanes8x4), or `auto` (tuned-mma on GPUs; on CPU
+        /// building; on CPU drivers with subgroups of 8 or more lanes lanes8x2w2, lanes4x2w2,
+        /// winolanes8x4 and wino4lanes8x4), or `auto` (tuned-mma on GPUs; on CPU
         /// drivers wino4lanes8x4 on levels of 32x32 and more, winolanes8x4 for convs of 32+
         /// channels between those and 8x8, lanes8x2w2 for the others, lanes4x2w2 on levels of
         /// at most 8x8, or 16x4 without subgroups: what `denoise` uses). `mma16`, `mma32`, `mma48`, `mma64`: the matrix-unit kernel (f16
