@@ -604,22 +604,7 @@ fn gathers_in_8_lanes_are_the_16_lane_ones_bit_for_bit() {
         Tile::winograd_lanes(4, 4).expect("an F(2x2) tile"),
         Tile::winograd4_lanes(4, 1).expect("an F(4x4) tile"),
     ];
-    let spec = ConvSpec {
-        name: "gathers",
-        width: w as u32,
-        height: h as u32,
-        ca: a.c,
-        cb: b.c,
-        cout,
-        weight: &weight,
-        bias: &bias,
-        read_a: Read::Direct,
-        read_b: Read::Direct,
-        leaky: true,
-        slope: 0.1,
-        b_is_hidden: false,
-        pooled: false,
-    };
+    let spec = ConvSpec { cb: b.c, ..one_source_spec("gathers", w as u32, h as u32, a.c, &weight, &bias) };
     // Each tile's output texels, with the gathers in loads of 8 lanes or of 16.
     let run = |in_8_lanes: bool| -> Vec<Vec<u32>> {
         let mut k = Kernels::new(dev, kernels::Precision::F32, WeightMemory::Storage);
@@ -1453,22 +1438,7 @@ fn staged_outputs_are_the_unstaged_ones_bit_for_bit() {
             if narrow {
                 k.stage_in_32_bit_words();
             }
-            let spec = ConvSpec {
-                name: "staged",
-                width: w as u32,
-                height: h as u32,
-                ca: a.c,
-                cb: 0,
-                cout,
-                weight: &weight,
-                bias: &bias,
-                read_a: Read::Direct,
-                read_b: Read::Direct,
-                leaky: true,
-                slope: 0.1,
-                b_is_hidden: false,
-                pooled: true,
-            };
+            let spec = ConvSpec { pooled: true, ..one_source_spec("staged", w as u32, h as u32, a.c, &weight, &bias) };
             let tile = Tile::winograd4_lanes(4, 2).expect("an F(4x4) tile");
             let plan = ConvPlan::new(dev, &g.queue, &mut k, &[spec], &[tile]).unwrap();
             assert_eq!(plan.staged(0), staged, "staged {staged}");
