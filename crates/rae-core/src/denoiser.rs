@@ -139,7 +139,7 @@ pub enum TileChoice {
     /// One tile for every conv (smaller where a level or a conv is smaller).
     Fixed(Tile),
     /// Time every conv with each of [`TUNE_TILES`] on this device while building
-    /// ([`TUNE_TILES_LANES`] on CPU drivers with subgroups), and keep the fastest per conv: big
+    /// ([`TUNE_TILES_LANES_WINOGRAD`] on CPU drivers with subgroups), and keep the fastest per conv: big
     /// levels want tall tiles (fewer weight loads), deep levels want small ones (enough
     /// invocations to fill the GPU).
     Tuned,
@@ -490,14 +490,11 @@ impl Denoiser {
         let mma = kernels.matrix_units()
             && memory == WeightMemory::Storage
             && device.limits().max_compute_workgroup_storage_size >= MMA_WORKGROUP_BYTES;
-        // CPU drivers with subgroups tune among lanes tiles: the direct ones take about twice
-        // as long there.
+        // CPU drivers with subgroups of 8 lanes or more tune among the lanes tiles, Winograd's
+        // among them (they run wherever the direct lanes tiles do): the direct ones take about
+        // twice as long there.
         let lanes = device_type == wgpu::DeviceType::Cpu && Tile::cpu(device) == Tile::CPU_LANES;
-        let base: &[Tile] = match (lanes, crate::kernels::winograd_lanes_supported(device)) {
-            (true, true) => &TUNE_TILES_LANES_WINOGRAD,
-            (true, false) => &TUNE_TILES_LANES,
-            (false, _) => &TUNE_TILES,
-        };
+        let base: &[Tile] = if lanes { &TUNE_TILES_LANES_WINOGRAD } else { &TUNE_TILES };
         let candidates = tuning_candidates(tiles, precision, mma, base);
         let (tiles, conv_sources, tuning): (Vec<Tile>, Vec<SourceAccess>, Vec<Vec<Finalist>>) = match tiles {
             TileChoice::Fixed(t) => fixed(t),
