@@ -61,7 +61,8 @@ enum Command {
         /// Conv register tile, as `bench --tile` takes it (one): `auto` (tuned on GPUs; on CPU
         /// drivers wino4lanes8x4 on levels of 32x32 and more, winolanes8x4 for convs of 32+
         /// channels between those and 8x8, lanes8x2w2 for the others, lanes4x2w2 on levels of at
-        /// most 8x8), `tuned`, or a fixed tile. On lavapipe `lanes4x2w2` compiles into an empty
+        /// most 8x8; where subgroups have 8 lanes wino4lanes4x4, and winolanes4x4 for every conv
+        /// of 32+ channels below 32x32), `tuned`, or a fixed tile. On lavapipe `lanes4x2w2` compiles into an empty
         /// shader cache sooner for slower frames.
         #[arg(long, default_value = "auto")]
         tile: String,
@@ -126,10 +127,12 @@ enum Command {
         /// texture across the subgroup, the same devices; rows 4, 8; blocks 1, 2, 4) for one
         /// tile everywhere, `tuned` (each conv timed with every candidate on this device while
         /// building; on CPU drivers with subgroups of 8 or more lanes lanes8x2w2, lanes4x2w2,
-        /// winolanes8x4 and wino4lanes8x4), or `auto` (tuned-mma on GPUs; on CPU
-        /// drivers wino4lanes8x4 on levels of 32x32 and more, winolanes8x4 for convs of 32+
-        /// channels between those and 8x8, lanes8x2w2 for the others, lanes4x2w2 on levels of
-        /// at most 8x8, or 16x4 without subgroups: what `denoise` uses). `mma16`, `mma32`, `mma48`, `mma64`: the matrix-unit kernel (f16
+        /// winolanes8x4, winolanes4x4, wino4lanes8x4 and wino4lanes4x4), or `auto` (tuned-mma
+        /// on GPUs; on CPU drivers wino4lanes8x4 on levels of 32x32 and more, winolanes8x4 for
+        /// convs of 32+ channels between those and 8x8, lanes8x2w2 for the others, lanes4x2w2 on
+        /// levels of at most 8x8; where subgroups have 8 lanes wino4lanes4x4, and winolanes4x4
+        /// for every conv of 32+ channels below 32x32; 16x4 without subgroups: what `denoise`
+        /// uses). `mma16`, `mma32`, `mma48`, `mma64`: the matrix-unit kernel (f16
         /// products summed in f32, 16 to 64 output channels per workgroup; tensor cores where
         /// wgpu's cooperative matrices have 16x16x16 f16 -> f32, emulated and slow elsewhere;
         /// storage weights and SHADER_F16); `mma16x3` to `mma64x3`: the same with every operand

@@ -184,11 +184,19 @@ pub const MMA_SPLIT_TILES: [Tile; 4] = [
 /// one) at 256x256 kept only these two (docs/PERF.md, session 21).
 pub const TUNE_TILES_LANES: [Tile; 2] = [Tile::CPU_LANES, Tile { rows: 4, ..Tile::CPU_LANES }];
 
-/// [`TUNE_TILES_LANES`], [`Tile::CPU_WINOGRAD`] and [`Tile::CPU_WINOGRAD4`]: what
-/// [`TileChoice::Tuned`] times on CPU drivers with subgroups of 8 lanes or more
-/// ([`crate::kernels::winograd_lanes_supported`]).
-pub const TUNE_TILES_LANES_WINOGRAD: [Tile; 4] =
-    [Tile::CPU_LANES, Tile { rows: 4, ..Tile::CPU_LANES }, Tile::CPU_WINOGRAD, Tile::CPU_WINOGRAD4];
+/// [`TUNE_TILES_LANES`] and the CPU drivers' Winograd tiles of 8 and 4 rows
+/// ([`Tile::CPU_WINOGRAD`], [`Tile::CPU_WINOGRAD_SHORT`], [`Tile::CPU_WINOGRAD4`],
+/// [`Tile::CPU_WINOGRAD4_SHORT`]): what [`TileChoice::Tuned`] times on CPU drivers with subgroups
+/// of 8 lanes or more ([`crate::kernels::winograd_lanes_supported`]); every tile
+/// [`Tile::cpu_for`] gives there is among them.
+pub const TUNE_TILES_LANES_WINOGRAD: [Tile; 6] = [
+    Tile::CPU_LANES,
+    Tile { rows: 4, ..Tile::CPU_LANES },
+    Tile::CPU_WINOGRAD,
+    Tile::CPU_WINOGRAD_SHORT,
+    Tile::CPU_WINOGRAD4,
+    Tile::CPU_WINOGRAD4_SHORT,
+];
 
 /// The tiles [`TileChoice::Tuned`] times on GPUs (and CPU drivers without subgroups).
 pub const TUNE_TILES: [Tile; 33] = [

@@ -1257,6 +1257,21 @@ impl Tile {
     /// pixels, 1.3-1.7x (docs/PERF.md, session 23). Its rounding is within the golden tolerance.
     pub const CPU_WINOGRAD4: Tile = Tile { rows: 8, blocks: 4, cols: 4, group_x: WORKGROUP, method: Method::Winograd4Lanes, split: 1 };
 
+    /// The CPU drivers' F(2x2) Winograd tile where subgroups have 8 lanes ([`narrow_gathers`]:
+    /// lavapipe without AVX-512), on every conv of [`CPU_WINOGRAD_MIN_BLOCKS`] or more below
+    /// [`CPU_WINOGRAD4_MIN_PIXELS`]: [`Tile::CPU_WINOGRAD`] in two stacked 2x2 output tiles (4
+    /// rows) instead of four. On the Zen 3 of session 31 (256-bit vectors) the 256x256 frame's
+    /// bottleneck (8 x 8) took half the time of `lanes4x2w2`'s, its 16 x 16 convs less than
+    /// `winolanes8x4`'s, and the 64x64 frame 0.8x (docs/PERF.md, session 31).
+    pub const CPU_WINOGRAD_SHORT: Tile = Tile { rows: 4, ..Tile::CPU_WINOGRAD };
+
+    /// The CPU drivers' F(4x4) tile where subgroups have 8 lanes ([`narrow_gathers`]):
+    /// [`Tile::CPU_WINOGRAD4`] in one 4x4 output tile (4 rows) instead of two. At 8 lanes the
+    /// two-tile one's accumulators and two-load gathers made it slower to run (tuning on the
+    /// Zen 3 of session 31 never kept it over this one or `wino4lanes8x2`) and 2.3x as slow to
+    /// compile (30 s a pipeline into an empty shader cache, against 13; `compile_cost`).
+    pub const CPU_WINOGRAD4_SHORT: Tile = Tile { rows: 4, ..Tile::CPU_WINOGRAD4 };
+
     /// The tile of CPU drivers on `device`: [`Tile::CPU_LANES`] where the device has subgroups
     /// of 8 or more lanes ([`lanes_supported`]), else [`Tile::CPU`].
     pub fn cpu(device: &wgpu::Device) -> Tile {
@@ -1267,7 +1282,10 @@ impl Tile {
     /// `height` level: [`Tile::cpu`]; where that is [`Tile::CPU_LANES`], 4 rows instead of 8 on
     /// levels of at most [`CPU_SHORT_TILE_MAX_PIXELS`], and [`Tile::CPU_WINOGRAD`] above them
     /// for convs of at least [`CPU_WINOGRAD_MIN_BLOCKS`] where the device runs it
-    /// ([`winograd_lanes_supported`]).
+    /// ([`winograd_lanes_supported`]). Where subgroups have 8 lanes ([`narrow_gathers`]) both
+    /// Winograd tiles take 4 rows ([`Tile::CPU_WINOGRAD4_SHORT`], [`Tile::CPU_WINOGRAD_SHORT`]),
+    /// and the F(2x2) one every conv of at least [`CPU_WINOGRAD_MIN_BLOCKS`] below
+    /// [`CPU_WINOGRAD4_MIN_PIXELS`], down to 1 x 1 (the 8 x 8 rule was measured at 16 lanes).
     ///
     /// An 8 x 8 level is 4 invocations of 8 rows x 2 columns per output group, so 4 of a
     /// subgroup's 16 lanes have pixels, and the others still load weights for them. At 4 rows
@@ -1276,13 +1294,16 @@ impl Tile {
     /// session 21).
     pub fn cpu_for(device: &wgpu::Device, width: u32, height: u32, in_blocks: u32) -> Tile {
         let tile = Tile::cpu(device);
+        let (winograd, narrow) = (winograd_lanes_supported(device), narrow_gathers(device));
         if tile != Tile::CPU_LANES {
             tile
+        } else if winograd && width * height >= CPU_WINOGRAD4_MIN_PIXELS {
+            if narrow { Tile::CPU_WINOGRAD4_SHORT } else { Tile::CPU_WINOGRAD4 }
+        } else if winograd && narrow && in_blocks >= CPU_WINOGRAD_MIN_BLOCKS {
+            Tile::CPU_WINOGRAD_SHORT
         } else if width * height <= CPU_SHORT_TILE_MAX_PIXELS {
             Tile { rows: 4, ..tile }
-        } else if width * height >= CPU_WINOGRAD4_MIN_PIXELS && winograd_lanes_supported(device) {
-            Tile::CPU_WINOGRAD4
-        } else if in_blocks >= CPU_WINOGRAD_MIN_BLOCKS && winograd_lanes_supported(device) {
+        } else if in_blocks >= CPU_WINOGRAD_MIN_BLOCKS && winograd {
             Tile::CPU_WINOGRAD
         } else {
             tile
