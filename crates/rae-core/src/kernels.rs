@@ -1261,8 +1261,9 @@ impl Tile {
     /// lavapipe without AVX-512), on every conv of [`CPU_WINOGRAD_MIN_BLOCKS`] or more below
     /// [`CPU_WINOGRAD4_MIN_PIXELS`]: [`Tile::CPU_WINOGRAD`] in two stacked 2x2 output tiles (4
     /// rows) instead of four. On the Zen 3 of session 31 (256-bit vectors) the 256x256 frame's
-    /// bottleneck (8 x 8) took half the time of `lanes4x2w2`'s, its 16 x 16 convs less than
-    /// `winolanes8x4`'s, and the 64x64 frame 0.8x (docs/PERF.md, session 31).
+    /// bottleneck (8 x 8) took half the time of `lanes4x2w2`'s and its 16 x 16 convs less than
+    /// `winolanes8x4`'s; with [`Tile::CPU_WINOGRAD4_SHORT`] the 64x64 frame took 0.71x the
+    /// time resident, the 256x256 one 0.89x (docs/PERF.md, session 31).
     pub const CPU_WINOGRAD_SHORT: Tile = Tile { rows: 4, ..Tile::CPU_WINOGRAD };
 
     /// The CPU drivers' F(4x4) tile where subgroups have 8 lanes ([`narrow_gathers`]):
