@@ -554,9 +554,9 @@ fn conv_winograd4_lanes_tiles_match_cpu_and_pool_their_output() {
         (w4(8, 1), WeightMemory::Storage),
         (w4(4, 2), WeightMemory::Uniform),
     ];
-    // On 8 lanes (conv3x3_gather8.wgsl) one case per output-block count and the 4-block tile of
-    // each height: every broadcast of the 8-lane gathers, without the two slow compiles left
-    // (an F(4x4) pipeline takes LLVM 13-30 s there).
+    // On 8 lanes (conv3x3_gather8.wgsl) the first four cases: every output-block count (every
+    // broadcast of the 8-lane gathers) and the 4-block tile of each height, without the last
+    // two cases' compiles (an F(4x4) pipeline takes LLVM 6-30 s there, `compile_cost`).
     let narrow = kernels::narrow_gathers(&g.device);
     for (i, (tile, memory)) in cases.into_iter().enumerate().take(if narrow { 4 } else { cases.len() }) {
         assert_eq!((tile.cols, tile.taps()), (4, 36));

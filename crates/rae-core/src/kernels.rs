@@ -1268,9 +1268,9 @@ impl Tile {
 
     /// The CPU drivers' F(4x4) tile where subgroups have 8 lanes ([`narrow_gathers`]):
     /// [`Tile::CPU_WINOGRAD4`] in one 4x4 output tile (4 rows) instead of two. At 8 lanes the
-    /// two-tile one's accumulators and two-load gathers made it slower to run (tuning on the
-    /// Zen 3 of session 31 never kept it over this one or `wino4lanes8x2`) and 2.3x as slow to
-    /// compile (30 s a pipeline into an empty shader cache, against 13; `compile_cost`).
+    /// two-tile one ran no faster (tuning on the Zen 3 of session 31 never kept it over this one
+    /// or `wino4lanes8x2`) and took 2.3x as long to compile (30 s a pipeline into an empty
+    /// shader cache, against 13; `compile_cost`).
     pub const CPU_WINOGRAD4_SHORT: Tile = Tile { rows: 4, ..Tile::CPU_WINOGRAD4 };
 
     /// The tile of CPU drivers on `device`: [`Tile::CPU_LANES`] where the device has subgroups
