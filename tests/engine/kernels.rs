@@ -526,8 +526,8 @@ fn conv_winograd_lanes_tiles_match_cpu_and_the_winograd_tiles() {
     // Its pooled output is the 2x2 max of its output, bit for bit (the pool pass's).
     pools_as_the_pool_pass(wl(8, 4), 850);
     assert_eq!(wl(8, 2).to_string(), "winolanes8x2");
-    assert_eq!(Tile::CPU_WINOGRAD, wl(8, 4), "the CPU drivers' Winograd tile is one the kernel has");
-    assert_eq!(Tile::CPU_WINOGRAD_SHORT, wl(4, 4), "and their 8-lane one");
+    assert_eq!(Tile::CPU_WINOGRAD, wl(4, 4), "the CPU drivers' Winograd tile is one the kernel has");
+    assert_eq!(Tile::CPU_WINOGRAD_TALL, wl(8, 4), "and its tall one");
     assert_eq!(Tile::winograd_lanes(2, 1), None);
     assert_eq!(Tile::winograd_lanes(16, 1), None);
     assert_eq!(Tile::winograd_lanes(8, 3), None);
@@ -562,8 +562,8 @@ fn conv_winograd4_lanes_tiles_match_cpu_and_pool_their_output() {
         assert_eq!((tile.cols, tile.taps()), (4, 36));
         check_conv_case(i, 900 + 3 * i as u64, tile, memory);
     }
-    // The device's own F(4x4) tile for the rest (Tile::cpu_for: 4 rows on 8 lanes).
-    let cpu = if narrow { Tile::CPU_WINOGRAD4_SHORT } else { Tile::CPU_WINOGRAD4 };
+    // The CPU drivers' own F(4x4) tile (Tile::cpu_for) for the rest.
+    let cpu = Tile::CPU_WINOGRAD4;
     // One row (a deep level of a small frame), and 30 input blocks with uniform weights, more
     // than a 64 KiB chunk holds of them: the texture has no chunk limit.
     check_conv_tile((tensor(9, 1, 11, 930), Read::Direct), None, 8, true, 11, 1, 931, cpu, WeightMemory::Storage);
@@ -582,8 +582,8 @@ fn conv_winograd4_lanes_tiles_match_cpu_and_pool_their_output() {
     // half outside the level.
     pools_as_the_pool_pass(cpu, 950);
     assert_eq!(w4(8, 4).to_string(), "wino4lanes8x4");
-    assert_eq!(Tile::CPU_WINOGRAD4, w4(8, 4), "the CPU drivers' F(4x4) tile is one the kernel has");
-    assert_eq!(Tile::CPU_WINOGRAD4_SHORT, w4(4, 4), "and their 8-lane one");
+    assert_eq!(Tile::CPU_WINOGRAD4, w4(4, 4), "the CPU drivers' F(4x4) tile is one the kernel has");
+    assert_eq!(Tile::CPU_WINOGRAD4_TALL, w4(8, 4), "and its tall one");
     assert_eq!(Tile::winograd4_lanes(2, 1), None);
     assert_eq!(Tile::winograd4_lanes(16, 1), None);
     assert_eq!(Tile::winograd4_lanes(8, 3), None);

@@ -83,11 +83,10 @@ fn weights_chosen_by_level_give_the_frames_of_uniform_chunks() {
 #[test]
 fn cpu_tiles_by_level_and_width_follow_the_rule() {
     // Left to choose, a CPU driver with subgroups runs 4-row lanes tiles on levels of at most
-    // 8x8 pixels (the 64x64 golden's L3); where 8-lane subgroups allow, Winograd F(4x4) lanes
-    // tiles on levels of 32x32 and more (L0, L1) and F(2x2) ones between for convs of 32
-    // channels and more (L2); and 8-row lanes tiles for the others. On 8 lanes both Winograd
-    // tiles have 4 rows, and the F(2x2) one takes every conv of 32 channels and more below
-    // 32x32 (L2, L3).
+    // 8x8 pixels (the 64x64 golden's L3); where 8-lane subgroups allow, 4-row Winograd F(4x4)
+    // lanes tiles on levels of 32x32 and more (L0, L1) and 4-row F(2x2) ones between for convs
+    // of 32 channels and more (L2); and 8-row lanes tiles for the others. On 8 lanes the F(2x2)
+    // one takes every conv of 32 channels and more below 32x32 (L2, L3 and deeper).
     // The 4- and 8-row direct tiles take the same sums in the same order, so with Winograd
     // only where it is chosen the frames stay bit for bit those of the rule's tiles; against
     // the 8-row tile everywhere they differ by Winograd's rounding alone.
@@ -120,15 +119,13 @@ fn cpu_tiles_by_level_and_width_follow_the_rule() {
     for (n, t) in auto.graph().nodes.iter().zip(auto.conv_tiles()) {
         let (w, h) = (golden.width >> n.level, golden.height >> n.level);
         let in_blocks = blocks(n.a.channels) + n.b.map_or(0, |b| blocks(b.channels));
-        let winograd_rows = if narrow { 4 } else { 8 };
+        let small = w * h <= CPU_SHORT_TILE_MAX_PIXELS;
         let want = if wino && w * h >= CPU_WINOGRAD4_MIN_PIXELS {
-            (Method::Winograd4Lanes, rows_per_invocation(h, winograd_rows).max(4))
-        } else if wino && narrow && in_blocks >= CPU_WINOGRAD_MIN_BLOCKS {
+            (Method::Winograd4Lanes, 4)
+        } else if wino && in_blocks >= CPU_WINOGRAD_MIN_BLOCKS && (narrow || !small) {
             (Method::WinogradLanes, rows_per_invocation(h, 4))
-        } else if w * h <= CPU_SHORT_TILE_MAX_PIXELS {
+        } else if small {
             (Method::Lanes, rows_per_invocation(h, 4))
-        } else if wino && in_blocks >= CPU_WINOGRAD_MIN_BLOCKS {
-            (Method::WinogradLanes, rows_per_invocation(h, 8))
         } else {
             (Method::Lanes, rows_per_invocation(h, 8))
         };

@@ -59,11 +59,11 @@ enum Command {
         #[arg(long)]
         csv: Option<PathBuf>,
         /// Conv register tile, as `bench --tile` takes it (one): `auto` (tuned on GPUs; on CPU
-        /// drivers wino4lanes8x4 on levels of 32x32 and more, winolanes8x4 for convs of 32+
-        /// channels between those and 8x8, lanes8x2w2 for the others, lanes4x2w2 on levels of at
-        /// most 8x8; where subgroups have 8 lanes wino4lanes4x4, and winolanes4x4 for every conv
-        /// of 32+ channels below 32x32), `tuned`, or a fixed tile. On lavapipe `lanes4x2w2` compiles into an empty
-        /// shader cache sooner for slower frames.
+        /// drivers wino4lanes4x4 on levels of 32x32 and more, winolanes4x4 for convs of 32+
+        /// channels below those (down to 16x16 on 16-lane subgroups, to 1x1 on 8-lane ones),
+        /// lanes8x2w2 for the others, lanes4x2w2 on levels of at most 8x8), `tuned`, or a fixed
+        /// tile. On lavapipe `lanes4x2w2` compiles into an empty shader cache sooner for slower
+        /// frames.
         #[arg(long, default_value = "auto")]
         tile: String,
         /// On CPU drivers, do not compile kernels on a second device while a slow first frame
@@ -128,11 +128,10 @@ enum Command {
         /// tile everywhere, `tuned` (each conv timed with every candidate on this device while
         /// building; on CPU drivers with subgroups of 8 or more lanes lanes8x2w2, lanes4x2w2,
         /// winolanes8x4, winolanes4x4, wino4lanes8x4 and wino4lanes4x4), or `auto` (tuned-mma
-        /// on GPUs; on CPU drivers wino4lanes8x4 on levels of 32x32 and more, winolanes8x4 for
-        /// convs of 32+ channels between those and 8x8, lanes8x2w2 for the others, lanes4x2w2 on
-        /// levels of at most 8x8; where subgroups have 8 lanes wino4lanes4x4, and winolanes4x4
-        /// for every conv of 32+ channels below 32x32; 16x4 without subgroups: what `denoise`
-        /// uses). `mma16`, `mma32`, `mma48`, `mma64`: the matrix-unit kernel (f16
+        /// on GPUs; on CPU drivers wino4lanes4x4 on levels of 32x32 and more, winolanes4x4 for
+        /// convs of 32+ channels below those (down to 16x16 on 16-lane subgroups, to 1x1 on
+        /// 8-lane ones), lanes8x2w2 for the others, lanes4x2w2 on levels of at most 8x8; 16x4
+        /// without subgroups: what `denoise` uses). `mma16`, `mma32`, `mma48`, `mma64`: the matrix-unit kernel (f16
         /// products summed in f32, 16 to 64 output channels per workgroup; tensor cores where
         /// wgpu's cooperative matrices have 16x16x16 f16 -> f32, emulated and slow elsewhere;
         /// storage weights and SHADER_F16); `mma16x3` to `mma64x3`: the same with every operand

@@ -131,9 +131,9 @@ pub enum TileChoice {
     /// [`TileChoice::TunedMma`] on GPUs that have timestamps inside passes (that is
     /// [`TileChoice::Tuned`] where the device has no matrix units), [`Tile::cpu_for`] each
     /// conv's level on CPU drivers (lavapipe compiles each variant for seconds, and its tiles
-    /// are known: Winograd 8 x 2 with weights across the subgroup for convs of 32 channels
-    /// and more, direct 8 x 2 in two columns for the others, 4 rows on the smallest levels),
-    /// the default tile elsewhere.
+    /// are known: Winograd F(4x4) and F(2x2) in 4 rows with weights across the subgroup, direct
+    /// 8 x 2 in two columns for the convs of fewer than 32 channels below 32 x 32, 4 rows on
+    /// the smallest levels), the default tile elsewhere.
     #[default]
     Auto,
     /// One tile for every conv (smaller where a level or a conv is smaller).
@@ -184,18 +184,18 @@ pub const MMA_SPLIT_TILES: [Tile; 4] = [
 /// one) at 256x256 kept only these two (docs/PERF.md, session 21).
 pub const TUNE_TILES_LANES: [Tile; 2] = [Tile::CPU_LANES, Tile { rows: 4, ..Tile::CPU_LANES }];
 
-/// [`TUNE_TILES_LANES`] and the CPU drivers' Winograd tiles of 8 and 4 rows
-/// ([`Tile::CPU_WINOGRAD`], [`Tile::CPU_WINOGRAD_SHORT`], [`Tile::CPU_WINOGRAD4`],
-/// [`Tile::CPU_WINOGRAD4_SHORT`]): what [`TileChoice::Tuned`] times on CPU drivers with subgroups
+/// [`TUNE_TILES_LANES`] and the CPU drivers' Winograd tiles of 4 and 8 rows
+/// ([`Tile::CPU_WINOGRAD`], [`Tile::CPU_WINOGRAD_TALL`], [`Tile::CPU_WINOGRAD4`],
+/// [`Tile::CPU_WINOGRAD4_TALL`]): what [`TileChoice::Tuned`] times on CPU drivers with subgroups
 /// of 8 lanes or more ([`crate::kernels::winograd_lanes_supported`]); every tile
 /// [`Tile::cpu_for`] gives there is among them.
 pub const TUNE_TILES_LANES_WINOGRAD: [Tile; 6] = [
     Tile::CPU_LANES,
     Tile { rows: 4, ..Tile::CPU_LANES },
     Tile::CPU_WINOGRAD,
-    Tile::CPU_WINOGRAD_SHORT,
+    Tile::CPU_WINOGRAD_TALL,
     Tile::CPU_WINOGRAD4,
-    Tile::CPU_WINOGRAD4_SHORT,
+    Tile::CPU_WINOGRAD4_TALL,
 ];
 
 /// The tiles [`TileChoice::Tuned`] times on GPUs (and CPU drivers without subgroups).

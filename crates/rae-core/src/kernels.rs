@@ -1236,42 +1236,45 @@ impl Tile {
     /// per machine and driver (docs/PERF.md, session 11).
     pub const CPU_LANES: Tile = Tile { rows: 8, blocks: 2, cols: 2, group_x: WORKGROUP, method: Method::Lanes, split: 1 };
 
-    /// The CPU drivers' Winograd tile: F(2x2, 3x3) in four stacked 2x2 output tiles (8 rows x
+    /// The CPU drivers' Winograd tile: F(2x2, 3x3) in two stacked 2x2 output tiles (4 rows x
     /// 2 columns) x 4 blocks, weights loaded across the subgroup ([`Method::WinogradLanes`]).
     /// It takes 256 multiply-adds per 4 outputs and input block where [`Tile::CPU_LANES`] takes
-    /// 576, and 40 texel fetches per 16 outputs x 16 channels where that takes 40 per 16 x 8.
-    /// On lavapipe (Zen 5, 512-bit vectors) the 256x256 frame's big convs of 32 input channels
-    /// and more took about 0.8x the time of `lanes8x2w2` (docs/PERF.md, session 22). Its weights
-    /// are texels of the plan's weight texture since session 23 (a 64 KiB uniform chunk held
-    /// four blocks of 16 weights per channel pair only up to 15 input blocks). The rounding is
-    /// Winograd's: within the golden tolerance.
-    pub const CPU_WINOGRAD: Tile = Tile { rows: 8, blocks: 4, cols: 2, group_x: WORKGROUP, method: Method::WinogradLanes, split: 1 };
+    /// 576. On lavapipe (Zen 5, 512-bit vectors) the 256x256 frame's big convs of 32 input
+    /// channels and more took about 0.8x the time of `lanes8x2w2` in four stacked tiles
+    /// (docs/PERF.md, session 22). Two stacked tiles were faster still on the 16 x 16 and 8 x 8
+    /// levels: on the Zen 3 of session 31 (8 lanes) its bottleneck took half the time of
+    /// `lanes4x2w2`'s and its 16 x 16 convs less than `winolanes8x4`'s; on the Zen 4 of session
+    /// 32 (16 lanes) tuning kept it or `lanes4x2w2` on every 16 x 16 conv, never `winolanes8x4`,
+    /// and it compiles in 0.4x the time. Its weights are texels of the plan's weight texture
+    /// (since session 23: a 64 KiB uniform chunk held four blocks of 16 weights per channel pair
+    /// only up to 15 input blocks). The rounding is Winograd's: within the golden tolerance.
+    pub const CPU_WINOGRAD: Tile = Tile { rows: 4, blocks: 4, cols: 2, group_x: WORKGROUP, method: Method::WinogradLanes, split: 1 };
 
-    /// The CPU drivers' F(4x4, 3x3) tile: two stacked 4x4 output tiles (8 rows x 4 columns) x 4
-    /// blocks, weights loaded across the subgroup from the plan's weight texture
+    /// [`Tile::CPU_WINOGRAD`] in four stacked 2x2 output tiles (8 rows): the CPU drivers' tile
+    /// on 16 x 16 levels from session 22 to 31, a [`TileChoice::Tuned`] candidate since.
+    ///
+    /// [`TileChoice::Tuned`]: crate::TileChoice::Tuned
+    pub const CPU_WINOGRAD_TALL: Tile = Tile { rows: 8, ..Tile::CPU_WINOGRAD };
+
+    /// The CPU drivers' F(4x4, 3x3) tile: one 4x4 output tile (4 rows x 4 columns) x 4 blocks,
+    /// weights loaded across the subgroup from the plan's weight texture
     /// ([`Method::Winograd4Lanes`]). It takes 144 multiply-adds per 16 outputs and input block
-    /// where [`Tile::CPU_WINOGRAD`] takes 256, and 60 texel fetches per 32 outputs x 16 channels
-    /// where that takes 40 per 16. On lavapipe (Zen 5, 512-bit vectors) the 256x256 frame's
-    /// convs on levels of 32 x 32 and more took 0.6-0.9x the time of [`Tile::CPU_WINOGRAD`]'s
-    /// (storage weights) and `lanes8x2w2`'s; on 16 x 16 levels, where a subgroup covers half its
-    /// pixels, 1.3-1.7x (docs/PERF.md, session 23). Its rounding is within the golden tolerance.
-    pub const CPU_WINOGRAD4: Tile = Tile { rows: 8, blocks: 4, cols: 4, group_x: WORKGROUP, method: Method::Winograd4Lanes, split: 1 };
+    /// where [`Tile::CPU_WINOGRAD`] takes 256. On lavapipe (Zen 5, 512-bit vectors) the 256x256
+    /// frame's convs on levels of 32 x 32 and more took 0.6-0.9x the time of the F(2x2) tile's
+    /// and `lanes8x2w2`'s; on 16 x 16 levels, where a subgroup covers half its pixels, 1.3-1.7x
+    /// (docs/PERF.md, session 23). Against two stacked 4x4 tiles ([`Tile::CPU_WINOGRAD4_TALL`],
+    /// the tile until session 31) it took 0.965x the 256x256 frame time and 0.93x the 512x512
+    /// one on the Zen 4 of session 32 at 16 lanes; at 8 lanes (the Zen 3 of session 31) tuning
+    /// never kept the tall one. It compiles in about half the time: 5.7 s a pipeline into an
+    /// empty shader cache against 11.8 at 16 lanes, 13 s against 30 at 8 (`compile_cost`). Its
+    /// rounding is within the golden tolerance.
+    pub const CPU_WINOGRAD4: Tile = Tile { rows: 4, blocks: 4, cols: 4, group_x: WORKGROUP, method: Method::Winograd4Lanes, split: 1 };
 
-    /// The CPU drivers' F(2x2) Winograd tile where subgroups have 8 lanes ([`narrow_gathers`]:
-    /// lavapipe without AVX-512), on every conv of [`CPU_WINOGRAD_MIN_BLOCKS`] or more below
-    /// [`CPU_WINOGRAD4_MIN_PIXELS`]: [`Tile::CPU_WINOGRAD`] in two stacked 2x2 output tiles (4
-    /// rows) instead of four. On the Zen 3 of session 31 (256-bit vectors) the 256x256 frame's
-    /// bottleneck (8 x 8) took half the time of `lanes4x2w2`'s and its 16 x 16 convs less than
-    /// `winolanes8x4`'s; with [`Tile::CPU_WINOGRAD4_SHORT`] the 64x64 frame took 0.71x the
-    /// time resident, the 256x256 one 0.89x (docs/PERF.md, session 31).
-    pub const CPU_WINOGRAD_SHORT: Tile = Tile { rows: 4, ..Tile::CPU_WINOGRAD };
-
-    /// The CPU drivers' F(4x4) tile where subgroups have 8 lanes ([`narrow_gathers`]):
-    /// [`Tile::CPU_WINOGRAD4`] in one 4x4 output tile (4 rows) instead of two. At 8 lanes the
-    /// two-tile one ran no faster (tuning on the Zen 3 of session 31 never kept it over this one
-    /// or `wino4lanes8x2`) and took 2.3x as long to compile (30 s a pipeline into an empty
-    /// shader cache, against 13; `compile_cost`).
-    pub const CPU_WINOGRAD4_SHORT: Tile = Tile { rows: 4, ..Tile::CPU_WINOGRAD4 };
+    /// [`Tile::CPU_WINOGRAD4`] in two stacked 4x4 output tiles (8 rows): the CPU drivers' tile on
+    /// levels of 32 x 32 and more from session 23 to 31, a [`TileChoice::Tuned`] candidate since.
+    ///
+    /// [`TileChoice::Tuned`]: crate::TileChoice::Tuned
+    pub const CPU_WINOGRAD4_TALL: Tile = Tile { rows: 8, ..Tile::CPU_WINOGRAD4 };
 
     /// The tile of CPU drivers on `device`: [`Tile::CPU_LANES`] where the device has subgroups
     /// of 8 or more lanes ([`lanes_supported`]), else [`Tile::CPU`].
@@ -1280,32 +1283,32 @@ impl Tile {
     }
 
     /// The tile of CPU drivers for a conv reading `in_blocks` input blocks on a `width` x
-    /// `height` level: [`Tile::cpu`]; where that is [`Tile::CPU_LANES`], 4 rows instead of 8 on
-    /// levels of at most [`CPU_SHORT_TILE_MAX_PIXELS`], and [`Tile::CPU_WINOGRAD`] above them
-    /// for convs of at least [`CPU_WINOGRAD_MIN_BLOCKS`] where the device runs it
-    /// ([`winograd_lanes_supported`]). Where subgroups have 8 lanes ([`narrow_gathers`]) both
-    /// Winograd tiles take 4 rows ([`Tile::CPU_WINOGRAD4_SHORT`], [`Tile::CPU_WINOGRAD_SHORT`]),
-    /// and the F(2x2) one every conv of at least [`CPU_WINOGRAD_MIN_BLOCKS`] below
-    /// [`CPU_WINOGRAD4_MIN_PIXELS`], down to 1 x 1 (the 8 x 8 rule was measured at 16 lanes).
+    /// `height` level: [`Tile::cpu`]; where that is [`Tile::CPU_LANES`] and the device runs the
+    /// Winograd lanes tiles ([`winograd_lanes_supported`]), [`Tile::CPU_WINOGRAD4`] on levels of
+    /// at least [`CPU_WINOGRAD4_MIN_PIXELS`] and [`Tile::CPU_WINOGRAD`] below them for convs of
+    /// at least [`CPU_WINOGRAD_MIN_BLOCKS`]: down to 1 x 1 where subgroups have 8 lanes
+    /// ([`narrow_gathers`]), above [`CPU_SHORT_TILE_MAX_PIXELS`] where they have 16. The rest
+    /// take [`Tile::CPU_LANES`], in 4 rows instead of 8 on levels of at most
+    /// [`CPU_SHORT_TILE_MAX_PIXELS`].
     ///
     /// An 8 x 8 level is 4 invocations of 8 rows x 2 columns per output group, so 4 of a
     /// subgroup's 16 lanes have pixels, and the others still load weights for them. At 4 rows
     /// twice as many lanes work: the 256x256 frame's bottleneck convs (8 x 8, storage weights)
-    /// took 0.72x the time. On 16 x 16 levels the 8 rows were faster still (docs/PERF.md,
-    /// session 21).
+    /// took 0.72x the time (docs/PERF.md, session 21). At 16 lanes tuning kept `lanes4x2w2`
+    /// there over [`Tile::CPU_WINOGRAD`] (by 4-18%, session 32); at 8 lanes the Winograd tile
+    /// took half its time (session 31).
     pub fn cpu_for(device: &wgpu::Device, width: u32, height: u32, in_blocks: u32) -> Tile {
         let tile = Tile::cpu(device);
         let (winograd, narrow) = (winograd_lanes_supported(device), narrow_gathers(device));
+        let pixels = width * height;
         if tile != Tile::CPU_LANES {
             tile
-        } else if winograd && width * height >= CPU_WINOGRAD4_MIN_PIXELS {
-            if narrow { Tile::CPU_WINOGRAD4_SHORT } else { Tile::CPU_WINOGRAD4 }
-        } else if winograd && narrow && in_blocks >= CPU_WINOGRAD_MIN_BLOCKS {
-            Tile::CPU_WINOGRAD_SHORT
-        } else if width * height <= CPU_SHORT_TILE_MAX_PIXELS {
-            Tile { rows: 4, ..tile }
-        } else if in_blocks >= CPU_WINOGRAD_MIN_BLOCKS && winograd {
+        } else if winograd && pixels >= CPU_WINOGRAD4_MIN_PIXELS {
+            Tile::CPU_WINOGRAD4
+        } else if winograd && in_blocks >= CPU_WINOGRAD_MIN_BLOCKS && (narrow || pixels > CPU_SHORT_TILE_MAX_PIXELS) {
             Tile::CPU_WINOGRAD
+        } else if pixels <= CPU_SHORT_TILE_MAX_PIXELS {
+            Tile { rows: 4, ..tile }
         } else {
             tile
         }
