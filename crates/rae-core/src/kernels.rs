@@ -1264,11 +1264,11 @@ impl Tile {
     /// and `lanes8x2w2`'s; on 16 x 16 levels, where a subgroup covers half its pixels, 1.3-1.7x
     /// (docs/PERF.md, session 23). Against two stacked 4x4 tiles ([`Tile::CPU_WINOGRAD4_TALL`],
     /// the tile until session 31), one tile on every conv and frames alternating in one
-    /// process, it took 0.965-0.999x the 256x256 frame time, 0.93x the 512x512 one and
-    /// 0.98-1.02x the 1280x720 one on the Zen 4 of session 32 at 16 lanes; at 8 lanes (the Zen 3
-    /// of session 31) tuning never kept the tall one. It compiles in about half the time: 5.7 s a pipeline into an
-    /// empty shader cache against 11.8 at 16 lanes, 13 s against 30 at 8 (`compile_cost`). Its
-    /// rounding is within the golden tolerance.
+    /// process, it took 0.91x the 128x128 frame time, 0.965-0.999x the 256x256 one, 0.93x the
+    /// 512x512 one and 0.98-1.02x the 1280x720 one on the Zen 4 of session 32 at 16 lanes; at
+    /// 8 lanes (the Zen 3 of session 31) tuning never kept the tall one. It compiles in about
+    /// half the time: 5.7 s a pipeline into an empty shader cache against 11.8 at 16 lanes,
+    /// 13 s against 30 at 8 (`compile_cost`). Its rounding is within the golden tolerance.
     pub const CPU_WINOGRAD4: Tile = Tile { rows: 4, blocks: 4, cols: 4, group_x: WORKGROUP, method: Method::Winograd4Lanes, split: 1 };
 
     /// [`Tile::CPU_WINOGRAD4`] in two stacked 4x4 output tiles (8 rows): the CPU drivers' tile on
