@@ -103,9 +103,14 @@ enum Command {
         /// Frame sizes, WxH.
         #[arg(long, value_delimiter = ',', default_value = "256x256,512x512,1280x720", value_parser = parse_size)]
         sizes: Vec<(u32, u32)>,
-        /// Timed frames per size (after 2 warm-up frames).
+        /// Timed frames per size (after the warm-up frames).
         #[arg(long, default_value_t = 10)]
         frames: usize,
+        /// Untimed frames before the timed ones, in each timed run (host to host, resident,
+        /// interleaved): the first frame compiles on drivers that compile at first use
+        /// (lavapipe), and caches and clocks settle. 0 times the first frames too.
+        #[arg(long, default_value_t = 2)]
+        warmup: usize,
         /// Also time every stage with GPU timestamp queries and print a table per size.
         #[arg(long)]
         layers: bool,
@@ -293,12 +298,12 @@ fn median(v: &mut [f64]) -> f64 {
     v[v.len() / 2]
 }
 
-fn bench(path: &Path, sizes: &[(u32, u32)], frames: usize, layers: bool, sweep: &Sweep, peak: Option<f64>) -> Result<()> {
+fn bench(path: &Path, sizes: &[(u32, u32)], frames: usize, warmup: usize, layers: bool, sweep: &Sweep, peak: Option<f64>) -> Result<()> {
     let weights = Weights::load(path)?;
     let gpu = Gpu::new()?;
     let flop_px = 2.0 * Graph::new(&weights.arch).macs_per_pixel();
     let resident = gpu.device.features().contains(wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS);
-    println!("adapter: {}; weights: {}; {frames} timed frames after 2 warm-up", gpu.describe(), path.display());
+    println!("adapter: {}; weights: {}; {frames} timed frames after {warmup} warm-up", gpu.describe(), path.display());
     // Both precisions run everywhere: f16 is rgba16float storage (core WebGPU), arithmetic f32.
     println!(
         "total = upload + gpu + download: a frame from host slices to host slices (gpu: submit to done, the host<->device copies included)"
@@ -356,7 +361,7 @@ fn bench(path: &Path, sizes: &[(u32, u32)], frames: usize, layers: bool, sweep: 
             let mut d = Denoiser::with_options(&gpu.device, &gpu.queue, &weights, w, h, options)
                 .with_context(|| format!("building the reference denoiser at {s}"))?;
             let mut out = vec![0.0; 3 * n];
-            for _ in 0..2 + frames.max(1) {
+            for _ in 0..warmup + frames.max(1) {
                 d.denoise_into(&frame, &mut out)?;
             }
             out
@@ -381,7 +386,7 @@ fn bench(path: &Path, sizes: &[(u32, u32)], frames: usize, layers: bool, sweep: 
             };
             let build_s = built.elapsed().as_secs_f64();
             let mut out = vec![0.0; 3 * n];
-            for _ in 0..2 {
+            for _ in 0..warmup {
                 d.denoise_into(&frame, &mut out)?;
             }
             let (mut total, mut up, mut gpu_t, mut down) = (vec![], vec![], vec![], vec![]);
@@ -396,7 +401,7 @@ fn bench(path: &Path, sizes: &[(u32, u32)], frames: usize, layers: bool, sweep: 
             let (pw, ph) = d.padded_size();
             let g = median(&mut gpu_t);
             let err = relative_difference(&out, &reference);
-            let timed = if resident { Some(resident_frames(&gpu, &mut d, &frame, frames.max(1))?) } else { None };
+            let timed = if resident { Some(resident_frames(&gpu, &mut d, &frame, frames.max(1), warmup)?) } else { None };
             let rate_ms = timed.map_or(g, |(r, _)| r);
             let gflops = flop_px * (pw * ph) as f64 / (rate_ms * 1e-3) / 1e9;
             // What the denoiser holds (frames allocate nothing, so it is the peak); where the
@@ -475,12 +480,12 @@ fn bench_buffers(w: u32, h: u32) -> (Vec<f32>, Vec<f32>) {
 /// and timed round-robin, one frame each per round, so that slow and fast spells of a shared
 /// machine fall on all of them alike; the ratio column is the median over rounds of each
 /// round's time over the first combination's in that round.
-fn bench_interleaved(path: &Path, sizes: &[(u32, u32)], rounds: usize, sweep: &Sweep) -> Result<()> {
+fn bench_interleaved(path: &Path, sizes: &[(u32, u32)], rounds: usize, warmup: usize, sweep: &Sweep) -> Result<()> {
     let weights = Weights::load(path)?;
     let gpu = Gpu::new()?;
     let rounds = rounds.max(1);
     println!(
-        "adapter: {}; weights: {}; interleaved: {rounds} rounds of one frame per combination, after 2 warm-up frames each",
+        "adapter: {}; weights: {}; interleaved: {rounds} rounds of one frame per combination, after {warmup} warm-up frames each",
         gpu.describe(),
         path.display()
     );
@@ -503,7 +508,7 @@ fn bench_interleaved(path: &Path, sizes: &[(u32, u32)], rounds: usize, sweep: &S
             let (precision, tiles) = (options.precision, options.tiles);
             let mut d = Denoiser::with_options(&gpu.device, &gpu.queue, &weights, w, h, options)
                 .with_context(|| format!("building the {} denoiser at {s}", precision.name()))?;
-            for _ in 0..2 {
+            for _ in 0..warmup {
                 d.denoise_into(&frame, &mut out)?;
             }
             runs.push((precision, tiles, d, Vec::with_capacity(rounds)));
@@ -533,11 +538,11 @@ fn bench_interleaved(path: &Path, sizes: &[(u32, u32)], rounds: usize, sweep: &S
     Ok(())
 }
 
-/// Time `frames` frames on GPU-resident buffers (after 2 warm-up frames), each in its own encoder
+/// Time `frames` frames on GPU-resident buffers (after `warmup` untimed ones), each in its own encoder
 /// and submit, back to back: the median GPU time between timestamps written before and after
 /// each frame, and the wall time per frame of the whole run (what a renderer feeding rae every
 /// frame would see, CPU encoding included).
-fn resident_frames(gpu: &Gpu, d: &mut Denoiser, frame: &rae_core::FrameInputs, frames: usize) -> Result<(f64, f64)> {
+fn resident_frames(gpu: &Gpu, d: &mut Denoiser, frame: &rae_core::FrameInputs, frames: usize, warmup: usize) -> Result<(f64, f64)> {
     use wgpu::util::DeviceExt;
     let dev = &gpu.device;
     let storage = |label, data: &[f32]| {
@@ -569,13 +574,13 @@ fn resident_frames(gpu: &Gpu, d: &mut Denoiser, frame: &rae_core::FrameInputs, f
         roughness: roughness.as_ref(),
         output: &output,
     })?;
-    let total = frames + 2;
+    let total = frames + warmup;
     // Per frame: the opening timestamp, its spare, the closing one.
     let count = 3 * total as u32;
     let queries = dev.create_query_set(&wgpu::QuerySetDescriptor { label: Some("frames"), ty: wgpu::QueryType::Timestamp, count });
     let mut start = Instant::now();
     for i in 0..total as u32 {
-        if i == 2 {
+        if i == warmup as u32 {
             dev.poll(wgpu::PollType::wait_indefinitely()).context("waiting for warm-up frames")?;
             start = Instant::now();
         }
@@ -589,7 +594,7 @@ fn resident_frames(gpu: &Gpu, d: &mut Denoiser, frame: &rae_core::FrameInputs, f
     let pipelined = start.elapsed().as_secs_f64() * 1e3 / frames as f64;
     let ticks = rae_core::denoiser::read_timestamps(dev, &gpu.queue, &queries, count).context("reading timestamps")?;
     let period = gpu.queue.get_timestamp_period() as f64 * 1e-6;
-    let mut ms: Vec<f64> = ticks.chunks(3).skip(2).map(|p| p[2].saturating_sub(p[0]) as f64 * period).collect();
+    let mut ms: Vec<f64> = ticks.chunks(3).skip(warmup).map(|p| p[2].saturating_sub(p[0]) as f64 * period).collect();
     Ok((median(&mut ms), pipelined))
 }
 
@@ -766,7 +771,7 @@ fn main() -> Result<()> {
         Command::Info { file, size } => info(&file, &size),
         Command::Devices => devices(),
         Command::Verify { golden, tile } => verify(&golden, parse_tile(&tile)?),
-        Command::Bench { weights, sizes, frames, layers, precision, peak_gflops, tile, weights_memory, sources, interleave } => {
+        Command::Bench { weights, sizes, frames, warmup, layers, precision, peak_gflops, tile, weights_memory, sources, interleave } => {
             let sweep = Sweep {
                 precisions: precision,
                 memories: weights_memory.iter().map(|m| parse_memory(m)).collect::<Result<_>>()?,
@@ -774,9 +779,9 @@ fn main() -> Result<()> {
                 tiles: tile.iter().map(|t| parse_tile(t)).collect::<Result<_>>()?,
             };
             if interleave {
-                bench_interleaved(&weights, &sizes, frames, &sweep)
+                bench_interleaved(&weights, &sizes, frames, warmup, &sweep)
             } else {
-                bench(&weights, &sizes, frames, layers, &sweep, peak_gflops)
+                bench(&weights, &sizes, frames, warmup, layers, &sweep, peak_gflops)
             }
         }
     }
