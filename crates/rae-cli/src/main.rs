@@ -136,8 +136,9 @@ enum Command {
         /// on GPUs; on CPU drivers wino4lanes4x4 on levels of 32x32 and more, winolanes4x4 for
         /// convs of 32+ channels below those (down to 16x16 on 16-lane subgroups, to 1x1 on
         /// 8-lane ones), lanes8x2w2 for the others, lanes4x2w2 on levels of at most 8x8; 16x4
-        /// without subgroups: what `denoise` uses). `mma16`, `mma32`, `mma48`, `mma64`: the matrix-unit kernel (f16
-        /// products summed in f32, 16 to 64 output channels per workgroup; tensor cores where
+        /// without subgroups: what `denoise` uses). `mma16`, `mma32`, `mma48`, `mma64`: the
+        /// matrix-unit kernel (f16 products summed in f32, 16 to 64 output channels per
+        /// workgroup; tensor cores where
         /// wgpu's cooperative matrices have 16x16x16 f16 -> f32, emulated and slow elsewhere;
         /// storage weights and SHADER_F16); `mma16x3` to `mma64x3`: the same with every operand
         /// split into two f16 halves and three products (f32-class results); `mma16x3p` to
