@@ -96,9 +96,17 @@ struct Tile {
     r15: vec4<f32>,
 }
 
+// Weight vec4 `i` of the conv's group (`w`-relative as laid out above). The module of the
+// two-column lanes and Winograd lanes tiles reads it from the plan's weight texture instead
+// (kernels::TEXEL_WEIGHTS), where lavapipe loads 16 lanes' vec4s in one gather rather than a
+// storage or uniform load per lane.
+fn weight(i: u32) -> vec4<f32> {
+    return weights[i];
+}
+
 // The 4x4 weights of one tap and output block j: column l maps input lane l to 4 outputs.
 fn tap(i: u32, j: u32) -> mat4x4<f32> {
-    return mat4x4<f32>(weights[i + j], weights[i + OB + j], weights[i + 2u * OB + j], weights[i + 3u * OB + j]);
+    return mat4x4<f32>(weight(i + j), weight(i + OB + j), weight(i + 2u * OB + j), weight(i + 3u * OB + j));
 }
 
 // acc + m * v as four fused multiply-adds: the sum `acc + m0 * v0 + m1 * v1 + ...` would cost
@@ -144,18 +152,18 @@ fn lanes_4_3(a: vec4<f32>, b: vec4<f32>) -> mat4x4<f32> {
 // add_column for every block of the tile (one column, TW = 1), weights read across the lanes.
 fn add_column_lanes(acc0: ptr<function, Tile>, acc1: ptr<function, Tile>, acc2: ptr<function, Tile>, acc3: ptr<function, Tile>, base: u32, v0: vec4<f32>, v1: vec4<f32>, v2: vec4<f32>, v3: vec4<f32>, v4: vec4<f32>, v5: vec4<f32>, v6: vec4<f32>, v7: vec4<f32>, v8: vec4<f32>, v9: vec4<f32>, v10: vec4<f32>, v11: vec4<f32>, v12: vec4<f32>, v13: vec4<f32>, v14: vec4<f32>, v15: vec4<f32>, v16: vec4<f32>, v17: vec4<f32>) {
     // Tap ky's 4 x OB vec4s start at base + ky * 12 * OB; lanes past them load unused vec4s.
-    let a0 = weights[base + lane];
-    let a1 = weights[base + 12u * OB + lane];
-    let a2 = weights[base + 24u * OB + lane];
+    let a0 = weight(base + lane);
+    let a1 = weight(base + 12u * OB + lane);
+    let a2 = weight(base + 24u * OB + lane);
     if OB == 1u {
         add_taps(acc0, lanes_1(a0), lanes_1(a1), lanes_1(a2), v0, v1, v2, v3, v4, v5, v6, v7, v8, v9, v10, v11, v12, v13, v14, v15, v16, v17);
     } else if OB == 2u {
         add_taps(acc0, lanes_2_0(a0), lanes_2_0(a1), lanes_2_0(a2), v0, v1, v2, v3, v4, v5, v6, v7, v8, v9, v10, v11, v12, v13, v14, v15, v16, v17);
         add_taps(acc1, lanes_2_1(a0), lanes_2_1(a1), lanes_2_1(a2), v0, v1, v2, v3, v4, v5, v6, v7, v8, v9, v10, v11, v12, v13, v14, v15, v16, v17);
     } else {
-        let b0 = weights[base + 8u + lane];
-        let b1 = weights[base + 12u * OB + 8u + lane];
-        let b2 = weights[base + 24u * OB + 8u + lane];
+        let b0 = weight(base + 8u + lane);
+        let b1 = weight(base + 12u * OB + 8u + lane);
+        let b2 = weight(base + 24u * OB + 8u + lane);
         add_taps(acc0, lanes_4_0(a0, b0), lanes_4_0(a1, b1), lanes_4_0(a2, b2), v0, v1, v2, v3, v4, v5, v6, v7, v8, v9, v10, v11, v12, v13, v14, v15, v16, v17);
         add_taps(acc1, lanes_4_1(a0, b0), lanes_4_1(a1, b1), lanes_4_1(a2, b2), v0, v1, v2, v3, v4, v5, v6, v7, v8, v9, v10, v11, v12, v13, v14, v15, v16, v17);
         add_taps(acc2, lanes_4_2(a0, b0), lanes_4_2(a1, b1), lanes_4_2(a2, b2), v0, v1, v2, v3, v4, v5, v6, v7, v8, v9, v10, v11, v12, v13, v14, v15, v16, v17);
@@ -361,20 +369,20 @@ fn conv(gid: vec3<u32>) {
     let bias_at = w + params.cin4_total * 36u * OB;
     // The bias goes into part 0's sum only.
     let with_bias = part == 0u;
-    let b0 = select(vec4<f32>(0.0), weights[bias_at], with_bias);
+    let b0 = select(vec4<f32>(0.0), weight(bias_at), with_bias);
     var acc0 = Tile(b0, b0, b0, b0, b0, b0, b0, b0, b0, b0, b0, b0, b0, b0, b0, b0);
     var acc1 = acc0;
     if OB > 1u {
-        let b1 = select(vec4<f32>(0.0), weights[bias_at + 1u], with_bias);
+        let b1 = select(vec4<f32>(0.0), weight(bias_at + 1u), with_bias);
         acc1 = Tile(b1, b1, b1, b1, b1, b1, b1, b1, b1, b1, b1, b1, b1, b1, b1, b1);
     }
     var acc2 = acc0;
     var acc3 = acc1;
     // Blocks 2 and 3 of a 4-block tile.
     if OB > 2u {
-        let b2 = select(vec4<f32>(0.0), weights[bias_at + 2u], with_bias);
+        let b2 = select(vec4<f32>(0.0), weight(bias_at + 2u), with_bias);
         acc2 = Tile(b2, b2, b2, b2, b2, b2, b2, b2, b2, b2, b2, b2, b2, b2, b2, b2);
-        let b3 = select(vec4<f32>(0.0), weights[bias_at + 3u], with_bias);
+        let b3 = select(vec4<f32>(0.0), weight(bias_at + 3u), with_bias);
         acc3 = Tile(b3, b3, b3, b3, b3, b3, b3, b3, b3, b3, b3, b3, b3, b3, b3, b3);
     }
     // Column 1 of a two-column lanes tile, blocks 0 to 3.
@@ -621,14 +629,14 @@ fn winograd(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let bias_at = w + params.cin4_total * 64u * OB;
     let second = OB > 1u && ob0 + 1u < params.cout4;
-    wino_store(m0, weights[bias_at], x, y0, ob0);
+    wino_store(m0, weight(bias_at), x, y0, ob0);
     if second {
-        wino_store(m1, weights[bias_at + 1u], x, y0, ob0 + 1u);
+        wino_store(m1, weight(bias_at + 1u), x, y0, ob0 + 1u);
     }
     if ROWS > 2u && y0 + 2u < params.height {
-        wino_store(m2, weights[bias_at], x, y0 + 2u, ob0);
+        wino_store(m2, weight(bias_at), x, y0 + 2u, ob0);
         if second {
-            wino_store(m3, weights[bias_at + 1u], x, y0 + 2u, ob0 + 1u);
+            wino_store(m3, weight(bias_at + 1u), x, y0 + 2u, ob0 + 1u);
         }
     }
 }

@@ -126,25 +126,25 @@ struct Spread {
 // base + (ky * 3 + kx) * 4 * OB (lanes past them load unused vec4s).
 fn spread(base: u32) -> Spread {
     var s: Spread;
-    s.a00 = weights[base + 0u * OB + lane];
-    s.a01 = weights[base + 12u * OB + lane];
-    s.a02 = weights[base + 24u * OB + lane];
-    s.a10 = weights[base + 4u * OB + lane];
-    s.a11 = weights[base + 16u * OB + lane];
-    s.a12 = weights[base + 28u * OB + lane];
-    s.a20 = weights[base + 8u * OB + lane];
-    s.a21 = weights[base + 20u * OB + lane];
-    s.a22 = weights[base + 32u * OB + lane];
+    s.a00 = weight(base + 0u * OB + lane);
+    s.a01 = weight(base + 12u * OB + lane);
+    s.a02 = weight(base + 24u * OB + lane);
+    s.a10 = weight(base + 4u * OB + lane);
+    s.a11 = weight(base + 16u * OB + lane);
+    s.a12 = weight(base + 28u * OB + lane);
+    s.a20 = weight(base + 8u * OB + lane);
+    s.a21 = weight(base + 20u * OB + lane);
+    s.a22 = weight(base + 32u * OB + lane);
     if OB > 2u {
-        s.b00 = weights[base + 0u * OB + 8u + lane];
-        s.b01 = weights[base + 12u * OB + 8u + lane];
-        s.b02 = weights[base + 24u * OB + 8u + lane];
-        s.b10 = weights[base + 4u * OB + 8u + lane];
-        s.b11 = weights[base + 16u * OB + 8u + lane];
-        s.b12 = weights[base + 28u * OB + 8u + lane];
-        s.b20 = weights[base + 8u * OB + 8u + lane];
-        s.b21 = weights[base + 20u * OB + 8u + lane];
-        s.b22 = weights[base + 32u * OB + 8u + lane];
+        s.b00 = weight(base + 0u * OB + 8u + lane);
+        s.b01 = weight(base + 12u * OB + 8u + lane);
+        s.b02 = weight(base + 24u * OB + 8u + lane);
+        s.b10 = weight(base + 4u * OB + 8u + lane);
+        s.b11 = weight(base + 16u * OB + 8u + lane);
+        s.b12 = weight(base + 28u * OB + 8u + lane);
+        s.b20 = weight(base + 8u * OB + 8u + lane);
+        s.b21 = weight(base + 20u * OB + 8u + lane);
+        s.b22 = weight(base + 32u * OB + 8u + lane);
     }
     return s;
 }

@@ -641,6 +641,63 @@ fn gathers_in_8_lanes_are_the_16_lane_ones_bit_for_bit() {
     }
 }
 
+#[test]
+fn lanes_tiles_read_the_weights_of_the_buffers_from_the_texture() {
+    // The two-column lanes tiles read their weights from the plan's weight texture
+    // (kernels::TEXEL_WEIGHTS); with Kernels::lanes_weights_in_buffers they read the uniform
+    // chunks or the storage buffer. The texels are the buffer's vec4s, so the outputs are the
+    // same bit for bit, for one, two and four blocks and both sources; and the texture takes no
+    // uniform chunk, so a conv too wide for one runs (460 input channels).
+    let g = gpu();
+    let dev = &g.device;
+    if !kernels::lanes_supported(dev) {
+        return;
+    }
+    let (w, h, cout) = (22usize, 13usize, 11usize);
+    let (a, b) = (tensor(7, h, w, 980), tensor(5, h, w, 981));
+    let (weight, bias) = (noise(cout * 12 * 9, 982), noise(cout, 983));
+    let (ta, tb) = (upload(&a), upload(&b));
+    let lanes = |rows, blocks| Tile::lanes(rows, blocks, 2).expect("a two-column lanes tile");
+    let tiles = [lanes(4, 2), lanes(8, 1), lanes(4, 4)];
+    let spec = ConvSpec { cb: b.c, ..one_source_spec("texels", w as u32, h as u32, a.c, &weight, &bias) };
+    // Each tile's output texels, its weights from the texture or from buffers of `memory`.
+    let run = |buffers: Option<WeightMemory>| -> Vec<Vec<u32>> {
+        let mut k = Kernels::new(dev, kernels::Precision::F32, buffers.unwrap_or(WeightMemory::Storage));
+        if buffers.is_some() {
+            k.lanes_weights_in_buffers();
+        }
+        assert_eq!(k.lanes_weights_in_texels(), buffers.is_none());
+        let plan = ConvPlan::new(dev, &g.queue, &mut k, &[spec; 3], &tiles).unwrap();
+        (0..tiles.len())
+            .map(|i| {
+                let out = output_texture(w, h, cout);
+                let group = plan.bind_group(dev, &k, i, &array_view(&ta), &array_view(&tb), &array_view(&out), None);
+                let mut enc = dev.create_command_encoder(&Default::default());
+                {
+                    let mut pass = enc.begin_compute_pass(&Default::default());
+                    plan.record(&mut pass, i, false, &group);
+                }
+                g.queue.submit(Some(enc.finish()));
+                read_texture(dev, &g.queue, &out).unwrap().iter().map(|x| x.to_bits()).collect()
+            })
+            .collect()
+    };
+    let texels = run(None);
+    for memory in [WeightMemory::Uniform, WeightMemory::Storage] {
+        for ((tile, texels), buffer) in tiles.iter().zip(&texels).zip(&run(Some(memory))) {
+            assert!(texels.iter().any(|&v| v != 0), "{tile} wrote its output");
+            assert_eq!(texels, buffer, "{tile}: weights from the texture against {}", memory.name());
+        }
+    }
+    let (weight, bias) = (vec![0.0; 4 * 460 * 9], vec![0.0; 4]);
+    let wide = one_source_spec("d1.l1.0", 8, 8, 460, &weight, &bias);
+    let mut k = Kernels::new(dev, kernels::Precision::F32, WeightMemory::Uniform);
+    assert!(ConvPlan::new(dev, &g.queue, &mut k, &[wide], &[lanes(4, 2)]).is_ok(), "460 channels from the texture");
+    k = Kernels::new(dev, kernels::Precision::F32, WeightMemory::Uniform);
+    k.lanes_weights_in_buffers();
+    assert!(ConvPlan::new(dev, &g.queue, &mut k, &[wide], &[lanes(4, 2)]).is_err(), "460 channels exceed a uniform chunk");
+}
+
 /// `tile` on a device without subgroups of 8 lanes or more: refused, with the reason.
 fn refused_without_8_lanes(tile: Tile) {
     let g = gpu();

@@ -61,7 +61,7 @@ fn every_shader_validates_with_naga() {
             lanes_module_source(
                 &storage_sources,
                 SourceAccess::Storage,
-                LanesModule { wide_stores: true, two_sources: true, gathers8: true },
+                LanesModule { wide_stores: true, two_sources: true, gathers8: true, texel_weights: true },
             ),
         ),
         (

@@ -127,6 +127,11 @@ impl WeightMemory {
     /// pay each dispatch's start; one storage dispatch took about half the time. On large
     /// levels every dispatch fills both cores, and the uniform loads win (docs/PERF.md,
     /// session 20).
+    ///
+    /// The tiles of the lanes module (two-column lanes, Winograd lanes) read the plan's weight
+    /// texture whatever this says ([`TEXEL_WEIGHTS`]): on lavapipe the deep levels' two-column
+    /// convs took 0.75-0.85x the time of their storage loads (session 33). It still decides for
+    /// the direct tiles and the one-column lanes ones (1-pixel-wide levels).
     pub fn for_conv(t: wgpu::DeviceType, width: u32, height: u32) -> Self {
         if t == wgpu::DeviceType::Cpu && width * height > CPU_STORAGE_WEIGHTS_MAX_PIXELS {
             WeightMemory::Uniform
@@ -198,6 +203,20 @@ pub const STORAGE_WEIGHT_TEXELS: [(&str, &str); 2] = [
     ),
 ];
 
+/// The rewrite of conv3x3.wgsl in the module of the two-column lanes and Winograd lanes tiles
+/// ([`lanes_module_source`]): `weight` reads the plan's weight texture (conv3x3_wino4.wgsl's
+/// `weight_texel`, from the group's first texel `params.weight_texel`), which holds the weights
+/// of every conv those tiles run ([`ConvPlan`]).
+///
+/// A two-column lanes tile loads each input block's 36 x OB weight vec4s spread over the
+/// subgroup's lanes. From a storage buffer lavapipe loads them lane by lane, from a uniform
+/// chunk it gathers them but the conv takes a dispatch per 64 KiB chunk; from the texture it is
+/// one gather, and one dispatch.
+pub const TEXEL_WEIGHTS: [(&str, &str); 1] = [(
+    "fn weight(i: u32) -> vec4<f32> {\n    return weights[i];\n}",
+    "fn weight(i: u32) -> vec4<f32> {\n    return weight_texel(params.weight_texel + i);\n}",
+)];
+
 /// Texels per row of a [`ConvPlan`]'s weight texture (conv3x3_wino4.wgsl's
 /// `WEIGHT_TEXELS_WIDTH`): within every device's 2D limit, and a row holds a few input blocks.
 pub const WEIGHT_TEXELS_WIDTH: u32 = 4096;
@@ -252,6 +271,9 @@ pub struct LanesModule {
     /// The Winograd kernels' gathers for 8-lane subgroups (conv3x3_gather8.wgsl) instead of 16
     /// (conv3x3_gather16.wgsl): [`narrow_gathers`].
     pub gathers8: bool,
+    /// The two-column lanes tiles read their weights from the weight texture
+    /// ([`TEXEL_WEIGHTS`]).
+    pub texel_weights: bool,
 }
 
 /// The conv module `conv` (conv3x3.wgsl as [`Kernels`] rewrites it for sources read as
@@ -273,6 +295,7 @@ pub fn lanes_module_source(conv: &str, access: SourceAccess, variant: LanesModul
         wino4
     };
     let gathers = shader_source(if variant.gathers8 { "conv3x3_gather8" } else { "conv3x3_gather16" });
+    let conv = if variant.texel_weights { rewrite(conv.to_string(), "conv3x3.wgsl", &TEXEL_WEIGHTS) } else { conv.to_string() };
     conv.replace(ROWS_STUB, &format!("{}\n{}\n{}\n{}", shader_source("conv3x3_rows"), shader_source("conv3x3_wino"), gathers, wino4))
 }
 
@@ -818,6 +841,9 @@ pub struct Kernels {
     /// The Winograd lanes kernels gather for 8-lane subgroups ([`narrow_gathers`], or
     /// [`Kernels::gather_in_8_lanes`]).
     gathers8: bool,
+    /// The two-column lanes tiles read their weights from the plan's weight texture
+    /// ([`TEXEL_WEIGHTS`], unless [`Kernels::lanes_weights_in_buffers`]).
+    lanes_texels: bool,
 }
 
 impl Kernels {
@@ -928,6 +954,7 @@ impl Kernels {
             oob_zero: false,
             wide_stores: wide_staged_stores(device),
             gathers8: narrow_gathers(device),
+            lanes_texels: true,
         }
     }
 
@@ -937,6 +964,21 @@ impl Kernels {
     pub fn gather_in_8_lanes(&mut self) {
         assert!(self.conv.is_empty(), "gather_in_8_lanes after conv pipelines were made");
         self.gathers8 = true;
+    }
+
+    /// Have the two-column lanes tiles read their weights from the weight buffer (uniform chunks
+    /// or storage, as the plan's weight memory says) rather than the weight texture: for
+    /// comparing the two (`cargo run --release -p rae-core --example lanes_weights_cost`). Call
+    /// it before any conv pipeline is made.
+    pub fn lanes_weights_in_buffers(&mut self) {
+        assert!(self.conv.is_empty(), "lanes_weights_in_buffers after conv pipelines were made");
+        self.lanes_texels = false;
+    }
+
+    /// Whether the two-column lanes tiles of plans made from here read their weights from the
+    /// weight texture ([`TEXEL_WEIGHTS`]).
+    pub fn lanes_weights_in_texels(&self) -> bool {
+        self.lanes_texels
     }
 
     /// Store staged outputs in 32-bit words even where [`wide_staged_stores`] holds: for
@@ -1084,7 +1126,16 @@ impl Kernels {
                 shader_module(
                     device,
                     label,
-                    lanes_module_source(&text, access, LanesModule { wide_stores: self.wide_stores, two_sources, gathers8: self.gathers8 }),
+                    lanes_module_source(
+                        &text,
+                        access,
+                        LanesModule {
+                            wide_stores: self.wide_stores,
+                            two_sources,
+                            gathers8: self.gathers8,
+                            texel_weights: self.lanes_texels,
+                        },
+                    ),
                 )
             };
             let rows = need_rows.then(|| lanes(false));
@@ -1919,8 +1970,11 @@ impl ConvPlan {
                 continue;
             }
             let taps = tile.taps();
-            // Weights in the weight texture take no chunk.
-            let texels = tile.method.is_winograd_lanes();
+            // Two columns only where the level is wider than one (Winograd tiles are 2 wide).
+            let cols = if s.width > 1 || tile.method.is_winograd() { tile.cols } else { 1 };
+            // The tiles of the lanes module read their weights from the weight texture
+            // (TEXEL_WEIGHTS), which takes no chunk.
+            let texels = tile.method.is_winograd_lanes() || (tile.method == Method::Lanes && cols > 1 && kernels.lanes_texels);
             let ob = match memory {
                 _ if texels => 4,
                 WeightMemory::Uniform => blocks_per_invocation(cin4, taps).ok_or_else(|| crate::Error::Arch {
@@ -1943,8 +1997,6 @@ impl ConvPlan {
             }
             // F(4x4, 3x3) computes whole 4x4 output tiles.
             let rows = rows_per_invocation(s.height, tile.rows).max(if tile.method == Method::Winograd4Lanes { 4 } else { 1 });
-            // Two columns only where the level is wider than one (Winograd tiles are 2 wide).
-            let cols = if s.width > 1 || tile.method.is_winograd() { tile.cols } else { 1 };
             // Split (direct tiles only) no further than one input block per part, nor beyond the
             // partial-sum budget.
             let part_bytes = cout4 as u64 * s.width as u64 * s.height as u64 * 16;
