@@ -320,7 +320,7 @@ fn bench(path: &Path, sizes: &[(u32, u32)], frames: usize, warmup: usize, layers
         gpu.device.features().contains(wgpu::Features::SHADER_F16)
     );
     println!(
-        "tile: the conv tile (rows x output blocks per invocation), `tuned` per conv on this device; weights: uniform chunks or one storage buffer; sources: the convs' inputs as sampled or storage textures (`mixed`: tuned per conv); build: seconds to build the denoiser (compiling, tuning)"
+        "tile: the conv tile (rows x output blocks per invocation), `tuned` per conv on this device; weights: uniform chunks or one storage buffer (the lanes and Winograd lanes tiles read a weight texture whatever it says); sources: the convs' inputs as sampled or storage textures (`mixed`: tuned per conv); build: seconds to build the denoiser (compiling, tuning)"
     );
     println!(
         "err: the last timed frame's largest difference from the same frames in f32 with the {} tile, over that frame's largest value",

@@ -244,7 +244,9 @@ pub struct Options {
     pub tiles: TileChoice,
     /// Where the convs read weights; `None`: each conv by adapter type and level
     /// ([`WeightMemory::for_conv`], also while tuning times it), or storage for an Mma tile
-    /// ([`Tile::mma`], [`Tile::mma_split`]).
+    /// ([`Tile::mma`], [`Tile::mma_split`]). The lanes module's tiles (two-column lanes,
+    /// Winograd lanes) read the weight texture and take storage whatever this says
+    /// ([`crate::kernels::TEXEL_WEIGHTS`]).
     pub weights: Option<WeightMemory>,
     /// How the convs read their sources. `None`: where tiles are tuned, each conv the faster
     /// of both kinds as timed with its tile (on the H100 storage-texture sources took 0.88x the
@@ -475,12 +477,12 @@ impl Denoiser {
         let memory_of = |tile: Tile, spec: &ConvSpec| -> WeightMemory {
             if chosen_memory.is_some() || fixed_mma {
                 memory
-            } else if tile.method.is_mma() || tile.method.is_winograd_lanes() {
-                // Mma tiles read only storage weights. Winograd lanes tiles read the plan's
-                // weight texture, and the memory picks only their bind-group layout: storage,
-                // which needs no 64 KiB chunk beside it.
+            } else if tile.method.is_mma() {
+                // Mma tiles read only storage weights.
                 WeightMemory::Storage
             } else {
+                // (The lanes module's tiles read the plan's weight texture, and the plan gives
+                // them storage, which needs no 64 KiB chunk beside it: kernels::TEXEL_WEIGHTS.)
                 WeightMemory::for_conv(device_type, spec.width, spec.height)
             }
         };
@@ -1070,7 +1072,9 @@ impl Denoiser {
         (0..self.graph.nodes.len()).map(|i| self.convs.staged(i)).collect()
     }
 
-    /// Where each conv reads its weights, in [`Graph::nodes`] order.
+    /// Where each conv reads its weights, in [`Graph::nodes`] order: the weight buffer binding
+    /// its pipeline takes. The lanes module's tiles (two-column lanes, Winograd lanes) read the
+    /// plan's weight texture and take [`WeightMemory::Storage`] ([`crate::kernels::TEXEL_WEIGHTS`]).
     pub fn weight_memories(&self) -> &[WeightMemory] {
         self.convs.memories()
     }

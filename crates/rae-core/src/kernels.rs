@@ -81,7 +81,9 @@ impl Precision {
     }
 }
 
-/// Where the conv kernel reads its weights from.
+/// Where the conv kernel reads its weights from. The tiles of the lanes module (two-column
+/// lanes, Winograd lanes: CPU drivers) read the plan's weight texture whatever this says
+/// ([`TEXEL_WEIGHTS`]), and their pipelines take storage.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum WeightMemory {
     /// 64 KiB uniform chunks, bound by dynamic offset: as many output-block groups per dispatch
@@ -1975,6 +1977,10 @@ impl ConvPlan {
             // The tiles of the lanes module read their weights from the weight texture
             // (TEXEL_WEIGHTS), which takes no chunk.
             let texels = tile.method.is_winograd_lanes() || (tile.method == Method::Lanes && cols > 1 && kernels.lanes_texels);
+            // Their pipelines then all take one weight memory, which they do not read: a conv
+            // on a level of uniform weights shares the pipeline of its kind on a level of
+            // storage ones (each an LLVM compile of seconds on lavapipe).
+            let memory = if texels { WeightMemory::Storage } else { memory };
             let ob = match memory {
                 _ if texels => 4,
                 WeightMemory::Uniform => blocks_per_invocation(cin4, taps).ok_or_else(|| crate::Error::Arch {
