@@ -590,6 +590,29 @@ fn conv_winograd4_lanes_tiles_match_cpu_and_pool_their_output() {
     assert_eq!(w4(8, 2).with_split(2), None);
 }
 
+/// The bits of `spec`'s output texels under each of `tiles` (one plan of `k` for them all),
+/// reading `ta` and `tb`: for holding two ways of planning the same convs to each other bit
+/// for bit.
+fn outputs_per_tile(k: &mut Kernels, spec: ConvSpec, tiles: &[Tile], ta: &wgpu::Texture, tb: &wgpu::Texture) -> Vec<Vec<u32>> {
+    let g = gpu();
+    let dev = &g.device;
+    let specs = vec![spec; tiles.len()];
+    let plan = ConvPlan::new(dev, &g.queue, k, &specs, tiles).unwrap();
+    (0..tiles.len())
+        .map(|i| {
+            let out = output_texture(spec.width as usize, spec.height as usize, spec.cout);
+            let group = plan.bind_group(dev, k, i, &array_view(ta), &array_view(tb), &array_view(&out), None);
+            let mut enc = dev.create_command_encoder(&Default::default());
+            {
+                let mut pass = enc.begin_compute_pass(&Default::default());
+                plan.record(&mut pass, i, false, &group);
+            }
+            g.queue.submit(Some(enc.finish()));
+            read_texture(dev, &g.queue, &out).unwrap().iter().map(|x| x.to_bits()).collect()
+        })
+        .collect()
+}
+
 #[test]
 fn gathers_in_8_lanes_are_the_16_lane_ones_bit_for_bit() {
     // conv3x3_gather8.wgsl, the Winograd lanes kernels' gathers on 8-lane subgroups (lavapipe
@@ -619,20 +642,7 @@ fn gathers_in_8_lanes_are_the_16_lane_ones_bit_for_bit() {
         if in_8_lanes {
             k.gather_in_8_lanes();
         }
-        let plan = ConvPlan::new(dev, &g.queue, &mut k, &[spec; 3], &tiles).unwrap();
-        (0..tiles.len())
-            .map(|i| {
-                let out = output_texture(w, h, cout);
-                let group = plan.bind_group(dev, &k, i, &array_view(&ta), &array_view(&tb), &array_view(&out), None);
-                let mut enc = dev.create_command_encoder(&Default::default());
-                {
-                    let mut pass = enc.begin_compute_pass(&Default::default());
-                    plan.record(&mut pass, i, false, &group);
-                }
-                g.queue.submit(Some(enc.finish()));
-                read_texture(dev, &g.queue, &out).unwrap().iter().map(|x| x.to_bits()).collect()
-            })
-            .collect()
+        outputs_per_tile(&mut k, spec, &tiles, &ta, &tb)
     };
     let (wide, narrow) = (run(false), run(true));
     for ((tile, wide), narrow) in tiles.iter().zip(&wide).zip(&narrow) {
@@ -667,20 +677,7 @@ fn lanes_tiles_read_the_weights_of_the_buffers_from_the_texture() {
             k.lanes_weights_in_buffers();
         }
         assert_eq!(k.lanes_weights_in_texels(), buffers.is_none());
-        let plan = ConvPlan::new(dev, &g.queue, &mut k, &[spec; 3], &tiles).unwrap();
-        (0..tiles.len())
-            .map(|i| {
-                let out = output_texture(w, h, cout);
-                let group = plan.bind_group(dev, &k, i, &array_view(&ta), &array_view(&tb), &array_view(&out), None);
-                let mut enc = dev.create_command_encoder(&Default::default());
-                {
-                    let mut pass = enc.begin_compute_pass(&Default::default());
-                    plan.record(&mut pass, i, false, &group);
-                }
-                g.queue.submit(Some(enc.finish()));
-                read_texture(dev, &g.queue, &out).unwrap().iter().map(|x| x.to_bits()).collect()
-            })
-            .collect()
+        outputs_per_tile(&mut k, spec, &tiles, &ta, &tb)
     };
     let texels = run(None);
     for memory in [WeightMemory::Uniform, WeightMemory::Storage] {

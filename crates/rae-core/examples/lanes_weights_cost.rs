@@ -1,8 +1,9 @@
 //! What reading the two-column lanes tiles' weights from the weight texture saves
-//! ([`kernels::TEXEL_WEIGHTS`]): the same conv planned twice, its weights in the storage buffer
-//! ([`Kernels::lanes_weights_in_buffers`]) and in the weight texture, timed in one process,
-//! alternating a submit of one and of the other, as `pad_cost` does. Prints, per conv, each
-//! plan's median time per dispatch and the median of the per-round ratios (texture / buffer).
+//! ([`rae_core::kernels::TEXEL_WEIGHTS`]): the same conv planned twice, its weights in the
+//! storage buffer ([`rae_core::kernels::Kernels::lanes_weights_in_buffers`]) and in the weight
+//! texture, timed in one process, alternating a submit of one and of the other, as `pad_cost`
+//! does. Prints, per conv, each plan's median time per dispatch and the median of the
+//! per-round ratios (texture / buffer).
 //!
 //! cargo run --release -p rae-core --example lanes_weights_cost -- [ROUNDS] [TILE]
 //!
@@ -10,10 +11,9 @@
 //! drivers' tile on levels of 8 x 8 and less where subgroups have 16 lanes). The convs are the
 //! default network's deepest ones: on its 8 x 8, 4 x 4 and 2 x 2 levels (the levels of a
 //! 256x256 frame's bottleneck and of a 64x64 frame's three deepest), with the weights in
-//! storage as [`WeightMemory::for_conv`] puts them there.
+//! storage as [`rae_core::kernels::WeightMemory::for_conv`] puts them there.
 
 use rae_core::Gpu;
-use rae_core::kernels::{self, ConvPlan, Kernels, WeightMemory};
 
 mod common;
 
@@ -36,24 +36,13 @@ fn main() {
             let weight: Vec<f32> = (0..cout * (ca + cb) * 9).map(|i| (i % 101) as f32 * 1e-3 - 0.05).collect();
             let bias = vec![0.01f32; cout];
             let spec = common::probe_spec(size, size, ca, cb, &weight, &bias, false);
-            let plans: Vec<_> = [true, false]
-                .into_iter()
-                .map(|buffers| {
-                    let mut k = Kernels::new(&g.device, kernels::Precision::F32, WeightMemory::Storage);
-                    k.pad_from_bounds();
-                    if buffers {
-                        k.lanes_weights_in_buffers();
-                    }
-                    let plan = ConvPlan::new(&g.device, &g.queue, &mut k, &[spec], &[tile]).expect("plan");
-                    let group = plan.bind_group(&g.device, &k, 0, &a, &b, &out, None);
-                    (k, plan, group)
-                })
-                .collect();
-            let time = |i: usize| common::time_dispatches(&g, &plans[i].1, &plans[i].2, REPEAT);
-            // The first submit of each compiles its pipeline.
-            time(0);
-            time(1);
-            let (buffer, texture, ratio) = common::alternate(rounds, time);
+            let plans = common::plan_pair(&g, spec, tile, [&a, &b, &out], None, |i, k| {
+                k.pad_from_bounds();
+                if i == 0 {
+                    k.lanes_weights_in_buffers();
+                }
+            });
+            let (buffer, texture, ratio) = common::time_pair(&g, &plans, rounds, REPEAT);
             println!("{:>12} {:>6} {label:>12} {buffer:>12.3} {texture:>12.3} {ratio:>10.3}", tile.to_string(), format!("{size}x{size}"));
         }
     }

@@ -11,7 +11,7 @@
 //! sources, and 8 -> 32 from one.
 
 use rae_core::Gpu;
-use rae_core::kernels::{self, ConvPlan, Kernels, WeightMemory};
+use rae_core::kernels;
 
 mod common;
 
@@ -38,23 +38,12 @@ fn main() {
             let bias = vec![0.0f32; 32];
             let spec = common::probe_spec(w, h, ca, cb, &weight, &bias, false);
             // The two plans: the fetch tests each pixel, and it reads outside instead.
-            let plans: Vec<_> = [false, true]
-                .into_iter()
-                .map(|pad| {
-                    let mut k = Kernels::new(&g.device, kernels::Precision::F32, WeightMemory::Storage);
-                    if pad {
-                        k.pad_from_bounds();
-                    }
-                    let plan = ConvPlan::new(&g.device, &g.queue, &mut k, &[spec], &[tile]).expect("plan");
-                    let group = plan.bind_group(&g.device, &k, 0, &a, &b, &out, None);
-                    (k, plan, group)
-                })
-                .collect();
-            let time = |i: usize| common::time_dispatches(&g, &plans[i].1, &plans[i].2, REPEAT);
-            // The first submit of each compiles its pipeline.
-            time(0);
-            time(1);
-            let (tested, bounds, ratio) = common::alternate(rounds, time);
+            let plans = common::plan_pair(&g, spec, tile, [&a, &b, &out], None, |i, k| {
+                if i == 1 {
+                    k.pad_from_bounds();
+                }
+            });
+            let (tested, bounds, ratio) = common::time_pair(&g, &plans, rounds, REPEAT);
             println!("{name:>16} {label:>9} {:>12.3} {:>12.3} {:>10.3}", tested, bounds, ratio);
         }
     }

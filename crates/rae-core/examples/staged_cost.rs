@@ -13,7 +13,7 @@
 //! 32-channel sources, 32 -> 32 from one with its pooled output, and 8 -> 32 from one.
 
 use rae_core::Gpu;
-use rae_core::kernels::{self, ConvPlan, Kernels, WeightMemory};
+use rae_core::kernels;
 
 mod common;
 
@@ -39,26 +39,15 @@ fn main() {
         let bias = vec![0.01f32; 32];
         let spec = common::probe_spec(w, h, ca, cb, &weight, &bias, pool);
         // The two plans, staged as the Denoiser stages them: 32-bit words, and 64-bit ones.
-        let plans: Vec<_> = [true, false]
-            .into_iter()
-            .map(|narrow| {
-                let mut k = Kernels::new(&g.device, kernels::Precision::F32, WeightMemory::Storage);
-                k.pad_from_bounds();
-                k.stage_outputs();
-                if narrow {
-                    k.stage_in_32_bit_words();
-                }
-                let plan = ConvPlan::new(&g.device, &g.queue, &mut k, &[spec], &[tile]).expect("plan");
-                assert!(plan.staged(0), "a staged conv");
-                let group = plan.bind_group(&g.device, &k, 0, &a, &b, &out, pool.then_some(&pooled));
-                (k, plan, group)
-            })
-            .collect();
-        let time = |i: usize| common::time_dispatches(&g, &plans[i].1, &plans[i].2, REPEAT);
-        // The first submit of each compiles its pipeline.
-        time(0);
-        time(1);
-        let (narrow, wide, ratio) = common::alternate(rounds, time);
+        let plans = common::plan_pair(&g, spec, tile, [&a, &b, &out], pool.then_some(&pooled), |i, k| {
+            k.pad_from_bounds();
+            k.stage_outputs();
+            if i == 0 {
+                k.stage_in_32_bit_words();
+            }
+        });
+        assert!(plans.iter().all(|p| p.1.staged(0)), "staged convs");
+        let (narrow, wide, ratio) = common::time_pair(&g, &plans, rounds, REPEAT);
         println!("{:>16} {label:>11} {:>12.3} {:>12.3} {:>10.3}", tile.to_string(), narrow, wide, ratio);
     }
 }

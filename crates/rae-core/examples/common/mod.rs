@@ -60,7 +60,44 @@ pub fn time_dispatches(g: &rae_core::Gpu, plan: &kernels::ConvPlan, group: &wgpu
     t.elapsed().as_secs_f64() * 1e3 / repeat as f64
 }
 
-/// Two things timed by `time(0)` and `time(1)` in `rounds` rounds, which goes first alternating,
+/// `spec` under `tile` planned twice, `setup(i, kernels)` making plan i's difference (i = 0,
+/// 1) on an f32 [`kernels::Kernels`] of storage weights, each bound to `a`, `b`, `out` and
+/// `pooled`: the kernels, plan and bind group of each, for [`time_pair`].
+pub fn plan_pair(
+    g: &rae_core::Gpu,
+    spec: kernels::ConvSpec,
+    tile: Tile,
+    [a, b, out]: [&wgpu::TextureView; 3],
+    pooled: Option<&wgpu::TextureView>,
+    setup: impl Fn(usize, &mut kernels::Kernels),
+) -> Vec<(kernels::Kernels, kernels::ConvPlan, wgpu::BindGroup)> {
+    (0..2)
+        .map(|i| {
+            let mut k = kernels::Kernels::new(&g.device, kernels::Precision::F32, kernels::WeightMemory::Storage);
+            setup(i, &mut k);
+            let plan = kernels::ConvPlan::new(&g.device, &g.queue, &mut k, &[spec], &[tile]).expect("plan");
+            let group = plan.bind_group(&g.device, &k, 0, a, b, out, pooled);
+            (k, plan, group)
+        })
+        .collect()
+}
+
+/// The two plans of [`plan_pair`] timed in `rounds` alternating rounds of a submit of `repeat`
+/// dispatches each ([`time_dispatches`], [`alternate`]), after one submit each that compiles
+/// their pipelines: each one's median time per dispatch and the median ratio plan 1 / plan 0.
+pub fn time_pair(
+    g: &rae_core::Gpu,
+    plans: &[(kernels::Kernels, kernels::ConvPlan, wgpu::BindGroup)],
+    rounds: usize,
+    repeat: usize,
+) -> (f64, f64, f64) {
+    let time = |i: usize| time_dispatches(g, &plans[i].1, &plans[i].2, repeat);
+    time(0);
+    time(1);
+    alternate(rounds, time)
+}
+
+/// Two things timed by `time(0)` and `time(1)`/// Two things timed by `time(0)` and `time(1)` in `rounds` rounds, which goes first alternating,
 /// so that the machine's drift falls on both alike: the median of each one's times and of the
 /// per-round ratios time(1) / time(0).
 pub fn alternate(rounds: usize, mut time: impl FnMut(usize) -> f64) -> (f64, f64, f64) {
