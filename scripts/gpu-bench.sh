@@ -13,10 +13,6 @@
 # frames, times tuned-mma and fixed mma tiles beside the others, prints the stages of tuned-mma
 # and denoises the sample with it (f32 and f16) for its PSNR against the direct one; MMA=only
 # stops after that (one call within the device's 10-minute limit; the sweep in a second call).
-# PREFETCH=1 checks and times the split tiles that read their windows ahead (session 18,
-# mma16x3p to mma64x3p: goldens, bit-identity with the split tiles, fixed tiles at 1080p, and
-# tuned-mma against tuned-mma with them among its candidates, interleaved); PREFETCH=only stops
-# after it.
 # With several builds the sweep runs ROUNDS (default 2) interleaved rounds of each, for
 # side-by-side ratios; everything else uses the first.
 set -uo pipefail
@@ -45,20 +41,6 @@ w=models/rae-default.safetensors
     "$cli" devices
     echo "== goldens"
     "$cli" verify tests/fixtures/golden_*.safetensors
-    if [ -n "${PREFETCH:-}" ]; then
-        p=mma16x3p+mma32x3p+mma48x3p+mma64x3p
-        echo "== prefetch: the split tiles with windows read ahead against PyTorch's goldens (must pass)"
-        "$cli" verify tests/fixtures/golden_*.safetensors --tile mma32x3p
-        "$cli" verify tests/fixtures/golden_full_96x64.safetensors --tile mma64x3p
-        echo "== prefetch: fixed tiles, 64x64 err against the direct f32 frames (x3p must equal x3), then 1080p"
-        "$cli" bench "$w" --sizes 64x64 --frames 3 --precision f32 --tile mma16x3,mma16x3p,mma32x3,mma32x3p,mma64x3,mma64x3p --weights-memory storage
-        "$cli" bench "$w" --sizes 1920x1080 --frames 20 --precision f32,f16 --tile mma16x3,mma16x3p,mma32x3,mma32x3p,mma48x3,mma48x3p,mma64x3,mma64x3p --weights-memory storage --peak-gflops 66900 | grep -E "^ +(size|[0-9]+x[0-9]+) "
-        echo "== prefetch: tuned-mma against tuned-mma+x3p, interleaved (ratio < 1: the prefetching tiles help)"
-        "$cli" bench "$w" --sizes 1920x1080,1280x720 --frames 30 --precision f32 --tile "tuned-mma,tuned-mma+$p" --weights-memory storage --peak-gflops 66900 --interleave
-        echo "== prefetch: stages of tuned-mma+x3p (which convs pick them)"
-        "$cli" bench "$w" --sizes 1920x1080 --frames 10 --precision f32 --tile "tuned-mma+$p" --weights-memory storage --layers
-        [ "$PREFETCH" = only ] && exit 0
-    fi
     if [ -n "${MMA:-}" ]; then
         echo "== mma: the split tiles against PyTorch's goldens (must pass, as the direct kernel does), then the plain one (fails by design: f16 operands)"
         "$cli" verify tests/fixtures/golden_*.safetensors --tile mma32x3

@@ -49,11 +49,6 @@ override MT: u32 = 4u;
 // bias), and with SPLIT_A the activations too (f32 storage; f16 activations have none).
 override SPLIT: bool = false;
 override SPLIT_A: bool = true;
-// Split entry points: load chunk c + 1's window into registers (`Prefetch`) before chunk c's
-// products, so that its texture reads are in flight while the matrix products run, and write
-// it to `win` after them (kernels::Method::MmaSplitPrefetch). Without it, a workgroup waits on
-// its reads between the two barriers, with nothing of its own to compute.
-override PREFETCH: bool = false;
 
 // Rows per workgroup (one per subgroup) and the staged window's height (ROWS + 2).
 const ROWS: u32 = 4u;
@@ -62,20 +57,6 @@ const WIN_H: u32 = 6u;
 const TILE: u32 = 256u;
 // Scale of a split operand's remainder (2^11: one f16 mantissa).
 const LO_SCALE: f32 = 2048.0;
-// One invocation's share of a chunk's window with PREFETCH, as read from the sources (not yet
-// clamped): texel li + 128 k in member tk, the split tiles' 6 x 34 x 4 = 816 texels over 128
-// invocations, rounded up (kernels::MMA_PREFETCH_TEXELS checks the count). Named members, not
-// an array, so that no driver has to prove an index constant to keep them in registers.
-struct Prefetch {
-    t0: vec4<f32>,
-    t1: vec4<f32>,
-    t2: vec4<f32>,
-    t3: vec4<f32>,
-    t4: vec4<f32>,
-    t5: vec4<f32>,
-    t6: vec4<f32>,
-}
-
 // Weights of group z (16 * NT output channels from 4 * params.ob0 + z * 16 * NT), f16 from
 // w = z * group_stride: for chunk c (input blocks 4c .. 4c + 3) and tap t = ky * 3 + kx, NT
 // tiles of 16 x 16 at w + ((c * 9 + t) * NT + nt) * 256, row k (input channel 16c + k, in the
@@ -195,96 +176,6 @@ fn put_texel_split(i: u32, source: vec4<f32>) {
         win[lo_at() + o + 1u] = l.y;
         win[lo_at() + o + 2u] = l.z;
         win[lo_at() + o + 3u] = l.w;
-    }
-}
-
-// PREFETCH: window texel i of chunk c as `window_source` reads it, but at the pixel clamped into
-// the level: the load does not wait on the test of the level's edge. `put_prefetched` zeroes it
-// where `window_inside` says the pixel is outside. Which source (or none) still depends on the
-// block, but a lane's block is the same for all its texels of a chunk (i = li + 128 k), so that
-// is one branch around all seven loads, divergent only in a chunk that spans both sources.
-fn window_load(i: u32, c: u32, x0: u32, y0: u32) -> vec4<f32> {
-    let j = i % 4u;
-    let pixel = i / 4u;
-    let x = clamp(i32(x0 + pixel % win_w()) - 1, 0, i32(params.width) - 1);
-    let y = clamp(i32(y0 + pixel / win_w()) - 1, 0, i32(params.height) - 1);
-    let ib = 4u * c + j;
-    var v = vec4<f32>(0.0);
-    if ib < params.cin4_a {
-        v = read_at(src_a, MODE_A, x, y, ib);
-    } else if SOURCE_B && ib < params.cin4_a + params.cin4_b {
-        v = read_at(src_b, MODE_B, x, y, ib - params.cin4_a);
-    }
-    return v;
-}
-
-// Whether window texel i's pixel (of any chunk) is inside the level (else the conv reads zero).
-fn window_inside(i: u32, x0: u32, y0: u32) -> bool {
-    let pixel = i / 4u;
-    let x = i32(x0 + pixel % win_w()) - 1;
-    let y = i32(y0 + pixel / win_w()) - 1;
-    return x >= 0 && y >= 0 && x < i32(params.width) && y < i32(params.height);
-}
-
-// PREFETCH: texel li + 128 k of chunk c's window, loaded by `window_load`. Past the window (the
-// last member of some invocations) it loads the window's last texel again, which
-// `put_prefetched` drops: no test before the load.
-fn fetch_texel(li: u32, k: u32, c: u32, x0: u32, y0: u32) -> vec4<f32> {
-    return window_load(min(li + 128u * k, win_texels() - 1u), c, x0, y0);
-}
-
-// PREFETCH: invocation li's texels of chunk c's window, read but not yet used.
-fn fetch_chunk(li: u32, c: u32, x0: u32, y0: u32) -> Prefetch {
-    return Prefetch(
-        fetch_texel(li, 0u, c, x0, y0),
-        fetch_texel(li, 1u, c, x0, y0),
-        fetch_texel(li, 2u, c, x0, y0),
-        fetch_texel(li, 3u, c, x0, y0),
-        fetch_texel(li, 4u, c, x0, y0),
-        fetch_texel(li, 5u, c, x0, y0),
-        fetch_texel(li, 6u, c, x0, y0),
-    );
-}
-
-// PREFETCH: texel li + 128 k, read by `fetch_texel`, into `win` as `stage_chunk_split` puts it:
-// zero where its pixel is outside the level, nothing past the window.
-fn put_prefetched(li: u32, k: u32, v: vec4<f32>, x0: u32, y0: u32) {
-    let i = li + 128u * k;
-    if i < win_texels() {
-        put_texel_split(i, select(vec4<f32>(0.0), v, window_inside(i, x0, y0)));
-    }
-}
-
-// PREFETCH: what `fetch_chunk` read for the window whose top-left output pixel is (x0, y0), into
-// `win`.
-fn put_chunk_split(p: Prefetch, li: u32, x0: u32, y0: u32) {
-    put_prefetched(li, 0u, p.t0, x0, y0);
-    put_prefetched(li, 1u, p.t1, x0, y0);
-    put_prefetched(li, 2u, p.t2, x0, y0);
-    put_prefetched(li, 3u, p.t3, x0, y0);
-    put_prefetched(li, 4u, p.t4, x0, y0);
-    put_prefetched(li, 5u, p.t5, x0, y0);
-    put_prefetched(li, 6u, p.t6, x0, y0);
-}
-
-// Chunk c's window into `win` for a split entry point: from `regs`, where `fetch_chunk` read it
-// during the previous chunk's products (PREFETCH; the first chunk is read here), or read now.
-fn stage_split(regs: ptr<function, Prefetch>, li: u32, c: u32, x0: u32, y0: u32) {
-    if PREFETCH {
-        if c == 0u {
-            *regs = fetch_chunk(li, 0u, x0, y0);
-        }
-        put_chunk_split(*regs, li, x0, y0);
-    } else {
-        stage_chunk_split(li, c, x0, y0);
-    }
-}
-
-// PREFETCH: start reading chunk c + 1's window (if there is one) into `regs`, after chunk c's
-// is in `win` and before its products.
-fn prefetch_next(regs: ptr<function, Prefetch>, li: u32, c: u32, x0: u32, y0: u32) {
-    if PREFETCH && c + 1u < chunks() {
-        *regs = fetch_chunk(li, c + 1u, x0, y0);
     }
 }
 
@@ -413,13 +304,11 @@ fn mma_split_emulated(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invoc
     let n = 4u * (lane / 16u);
     // Zero, as WGSL initialises a var without an initialiser.
     var acc: array<vec4<f32>, 32>;
-    var regs: Prefetch;
     for (var c = 0u; c < chunks(); c++) {
         // The previous chunk's products are done before its window is overwritten.
         workgroupBarrier();
-        stage_split(&regs, li, c, x0, y0);
+        stage_chunk_split(li, c, x0, y0);
         workgroupBarrier();
-        prefetch_next(&regs, li, c, x0, y0);
         for (var t = 0u; t < 9u; t++) {
             for (var mt = 0u; mt < MT; mt++) {
                 let row = a_at(sg, mt, t / 3u, t % 3u) + p * 16u;

@@ -161,14 +161,11 @@ fn mma_split(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_ind
     var c10 = Acc(); var c11 = Acc(); var c12 = Acc(); var c13 = Acc();
     var d00 = Acc(); var d01 = Acc(); var d02 = Acc(); var d03 = Acc();
     var d10 = Acc(); var d11 = Acc(); var d12 = Acc(); var d13 = Acc();
-    // With PREFETCH, the next chunk's window is read into `regs` while this chunk's products run.
-    var regs: Prefetch;
     for (var c = 0u; c < chunks(); c++) {
         // The previous chunk's products are done before its window is overwritten.
         workgroupBarrier();
-        stage_split(&regs, li, c, x0, y0);
+        stage_chunk_split(li, c, x0, y0);
         workgroupBarrier();
-        prefetch_next(&regs, li, c, x0, y0);
         for (var t = 0u; t < 9u; t++) {
             let ky = t / 3u;
             let kx = t % 3u;

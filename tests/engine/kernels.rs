@@ -490,75 +490,66 @@ fn conv_winograd_tiles_match_cpu() {
 
 #[test]
 fn conv_winograd_lanes_tiles_match_cpu_and_the_winograd_tiles() {
-    // Winograd with its weights across the subgroup: two and four stacked 2x2 tiles, one, two
-    // and four blocks, both weight memories and every read mode, on levels 13 and 22 wide and 19
+    // Winograd with its weights across the subgroup: two stacked 2x2 tiles, one, two and four
+    // blocks, both weight memories and every read mode, on levels 13 and 22 wide and 19
     // and 12 high (partial tiles on both edges, lanes past them loading for the others).
     let g = gpu();
     let wl = |rows, blocks| Tile::winograd_lanes(rows, blocks).expect("a Winograd lanes tile");
     if !kernels::winograd_lanes_supported(&g.device) {
-        refused_without_8_lanes(wl(8, 2));
+        refused_without_8_lanes(wl(4, 2));
         return;
     }
     let cases = [
-        (wl(8, 2), WeightMemory::Uniform),
-        (wl(4, 1).with_group(32).unwrap(), WeightMemory::Storage),
-        (wl(8, 4), WeightMemory::Storage),
         (wl(4, 2), WeightMemory::Uniform),
+        (wl(4, 1).with_group(32).unwrap(), WeightMemory::Storage),
+        (wl(4, 4), WeightMemory::Storage),
+        (wl(4, 2), WeightMemory::Storage),
         (wl(4, 4), WeightMemory::Uniform),
-        (wl(8, 1), WeightMemory::Storage),
+        (wl(4, 1), WeightMemory::Uniform),
     ];
     for (i, (tile, memory)) in cases.into_iter().enumerate() {
         assert_eq!((tile.cols, tile.taps()), (2, 16));
         check_conv_case(i, 800 + 3 * i as u64, tile, memory);
     }
     // One row: a deep level of a small frame.
-    check_conv_tile((tensor(9, 1, 11, 830), Read::Direct), None, 8, true, 11, 1, 831, wl(8, 4), WeightMemory::Storage);
-    // The same transforms and sums in the same order as `winograd`'s: bit-identical, whatever
-    // the number of stacked tiles.
+    check_conv_tile((tensor(9, 1, 11, 830), Read::Direct), None, 8, true, 11, 1, 831, wl(4, 4), WeightMemory::Storage);
+    // The same transforms and sums in the same order as `winograd`'s: bit-identical.
     let (a, b) = (tensor(6, 38, 26, 840), tensor(5, 19, 13, 841));
     let (weight, bias) = (noise(11 * 11 * 9, 842), noise(11, 843));
     let run = |tile| gpu_conv((&a, Read::Pool), Some((&b, Read::Direct)), &weight, &bias, true, 13, 19, tile, WeightMemory::Uniform).data;
     let wino = run(Tile::winograd(4, 2).unwrap());
-    assert_eq!(run(wl(8, 2)), wino, "winolanes8x2 against wino4x2");
-    assert_eq!(run(wl(8, 4)), wino, "winolanes8x4 against wino4x2");
     assert_eq!(run(wl(4, 2)), wino, "winolanes4x2 against wino4x2");
-    assert_eq!(run(wl(8, 1)), run(Tile::winograd(2, 1).unwrap()), "winolanes8x1 against wino2x1");
+    assert_eq!(run(wl(4, 4)), wino, "winolanes4x4 against wino4x2");
     // Its pooled output is the 2x2 max of its output, bit for bit (the pool pass's).
-    pools_as_the_pool_pass(wl(8, 4), 850);
-    assert_eq!(wl(8, 2).to_string(), "winolanes8x2");
+    pools_as_the_pool_pass(wl(4, 4), 850);
+    assert_eq!(wl(4, 2).to_string(), "winolanes4x2");
     assert_eq!(Tile::CPU_WINOGRAD, wl(4, 4), "the CPU drivers' Winograd tile is one the kernel has");
-    assert_eq!(Tile::CPU_WINOGRAD_TALL, wl(8, 4), "and its tall one");
     assert_eq!(Tile::winograd_lanes(2, 1), None);
-    assert_eq!(Tile::winograd_lanes(16, 1), None);
-    assert_eq!(Tile::winograd_lanes(8, 3), None);
-    assert_eq!(wl(8, 2).with_split(2), None);
+    assert_eq!(Tile::winograd_lanes(8, 1), None);
+    assert_eq!(Tile::winograd_lanes(4, 3), None);
+    assert_eq!(wl(4, 2).with_split(2), None);
 }
 
 #[test]
 fn conv_winograd4_lanes_tiles_match_cpu_and_pool_their_output() {
     // Winograd F(4x4, 3x3) with its weights in the plan's weight texture, across the subgroup:
-    // one and two stacked 4x4 tiles, one, two and four blocks, either weight memory (the texture
-    // serves both layouts) and every read mode, on levels 13 and 22 wide (4-column tiles with 1
+    // one 4x4 tile, one, two and four blocks, either weight memory (the texture serves both
+    // layouts) and every read mode, on levels 13 and 22 wide (4-column tiles with 1
     // and 2 columns inside) and 19 and 12 high, against the float64 sum.
     let g = gpu();
     let w4 = |rows, blocks| Tile::winograd4_lanes(rows, blocks).expect("a Winograd F(4x4) lanes tile");
     if !kernels::winograd_lanes_supported(&g.device) {
-        refused_without_8_lanes(w4(8, 4));
+        refused_without_8_lanes(w4(4, 4));
         return;
     }
+    // Every output-block count (every broadcast of the gathers), each weight memory.
     let cases = [
-        (w4(8, 4), WeightMemory::Storage),
-        (w4(4, 1).with_group(32).unwrap(), WeightMemory::Uniform),
-        (w4(8, 2), WeightMemory::Uniform),
         (w4(4, 4), WeightMemory::Storage),
-        (w4(8, 1), WeightMemory::Storage),
+        (w4(4, 1).with_group(32).unwrap(), WeightMemory::Uniform),
         (w4(4, 2), WeightMemory::Uniform),
+        (w4(4, 4), WeightMemory::Uniform),
     ];
-    // On 8 lanes (conv3x3_gather8.wgsl) the first four cases: every output-block count (every
-    // broadcast of the 8-lane gathers) and the 4-block tile of each height, without the last
-    // two cases' compiles (an F(4x4) pipeline takes LLVM 6-30 s there, `compile_cost`).
-    let narrow = kernels::narrow_gathers(&g.device);
-    for (i, (tile, memory)) in cases.into_iter().enumerate().take(if narrow { 4 } else { cases.len() }) {
+    for (i, (tile, memory)) in cases.into_iter().enumerate() {
         assert_eq!((tile.cols, tile.taps()), (4, 36));
         check_conv_case(i, 900 + 3 * i as u64, tile, memory);
     }
@@ -581,13 +572,12 @@ fn conv_winograd4_lanes_tiles_match_cpu_and_pool_their_output() {
     // Its pooled output is the 2x2 max of its output, bit for bit, with the last column of tiles
     // half outside the level.
     pools_as_the_pool_pass(cpu, 950);
-    assert_eq!(w4(8, 4).to_string(), "wino4lanes8x4");
+    assert_eq!(w4(4, 2).to_string(), "wino4lanes4x2");
     assert_eq!(Tile::CPU_WINOGRAD4, w4(4, 4), "the CPU drivers' F(4x4) tile is one the kernel has");
-    assert_eq!(Tile::CPU_WINOGRAD4_TALL, w4(8, 4), "and its tall one");
     assert_eq!(Tile::winograd4_lanes(2, 1), None);
-    assert_eq!(Tile::winograd4_lanes(16, 1), None);
-    assert_eq!(Tile::winograd4_lanes(8, 3), None);
-    assert_eq!(w4(8, 2).with_split(2), None);
+    assert_eq!(Tile::winograd4_lanes(8, 4), None);
+    assert_eq!(Tile::winograd4_lanes(4, 3), None);
+    assert_eq!(w4(4, 2).with_split(2), None);
 }
 
 /// The bits of `spec`'s output texels under each of `tiles` (one plan of `k` for them all),
@@ -649,50 +639,6 @@ fn gathers_in_8_lanes_are_the_16_lane_ones_bit_for_bit() {
         assert!(wide.iter().any(|&v| v != 0), "{tile} wrote its output");
         assert_eq!(narrow, wide, "{tile}: 8-lane gathers against 16-lane ones");
     }
-}
-
-#[test]
-fn lanes_tiles_read_the_weights_of_the_buffers_from_the_texture() {
-    // The two-column lanes tiles read their weights from the plan's weight texture
-    // (kernels::TEXEL_WEIGHTS); with Kernels::lanes_weights_in_buffers they read the uniform
-    // chunks or the storage buffer. The texels are the buffer's vec4s, so the outputs are the
-    // same bit for bit, for one, two and four blocks and both sources; and the texture takes no
-    // uniform chunk, so a conv too wide for one runs (460 input channels).
-    let g = gpu();
-    let dev = &g.device;
-    if !kernels::lanes_supported(dev) {
-        return;
-    }
-    let (w, h, cout) = (22usize, 13usize, 11usize);
-    let (a, b) = (tensor(7, h, w, 980), tensor(5, h, w, 981));
-    let (weight, bias) = (noise(cout * 12 * 9, 982), noise(cout, 983));
-    let (ta, tb) = (upload(&a), upload(&b));
-    let lanes = |rows, blocks| Tile::lanes(rows, blocks, 2).expect("a two-column lanes tile");
-    let tiles = [lanes(4, 2), lanes(8, 1), lanes(4, 4)];
-    let spec = ConvSpec { cb: b.c, ..one_source_spec("texels", w as u32, h as u32, a.c, &weight, &bias) };
-    // Each tile's output texels, its weights from the texture or from buffers of `memory`.
-    let run = |buffers: Option<WeightMemory>| -> Vec<Vec<u32>> {
-        let mut k = Kernels::new(dev, kernels::Precision::F32, buffers.unwrap_or(WeightMemory::Storage));
-        if buffers.is_some() {
-            k.lanes_weights_in_buffers();
-        }
-        assert_eq!(k.lanes_weights_in_texels(), buffers.is_none());
-        outputs_per_tile(&mut k, spec, &tiles, &ta, &tb)
-    };
-    let texels = run(None);
-    for memory in [WeightMemory::Uniform, WeightMemory::Storage] {
-        for ((tile, texels), buffer) in tiles.iter().zip(&texels).zip(&run(Some(memory))) {
-            assert!(texels.iter().any(|&v| v != 0), "{tile} wrote its output");
-            assert_eq!(texels, buffer, "{tile}: weights from the texture against {}", memory.name());
-        }
-    }
-    let (weight, bias) = (vec![0.0; 4 * 460 * 9], vec![0.0; 4]);
-    let wide = one_source_spec("d1.l1.0", 8, 8, 460, &weight, &bias);
-    let mut k = Kernels::new(dev, kernels::Precision::F32, WeightMemory::Uniform);
-    assert!(ConvPlan::new(dev, &g.queue, &mut k, &[wide], &[lanes(4, 2)]).is_ok(), "460 channels from the texture");
-    k = Kernels::new(dev, kernels::Precision::F32, WeightMemory::Uniform);
-    k.lanes_weights_in_buffers();
-    assert!(ConvPlan::new(dev, &g.queue, &mut k, &[wide], &[lanes(4, 2)]).is_err(), "460 channels exceed a uniform chunk");
 }
 
 /// `tile` on a device without subgroups of 8 lanes or more: refused, with the reason.
@@ -1180,42 +1126,6 @@ fn conv_mma_split_tiles_match_cpu_in_f32() {
     );
     assert_eq!(Tile::mma_split(32).unwrap().to_string(), "mma32x3");
     assert_eq!(Tile::mma_split(80), None, "at most four 16-channel tiles");
-}
-
-#[test]
-fn prefetching_split_tiles_give_the_split_tiles_output() {
-    // Reading the next chunk's window into registers during the products (conv3x3_mma.wgsl's
-    // PREFETCH) changes when the window is read, not what is summed: every output bit is the
-    // split tile's. Five chunks (the last partial) over a pooled and a direct source on a level
-    // of partial workgroups; one chunk (nothing to prefetch);
-    // two chunks, one source upsampled, on a level one pixel high.
-    // (a's channels, height, width), b's, how each is read, outputs, the level's width, height.
-    type Shape = (usize, usize, usize);
-    type Case = (Shape, Option<Shape>, Read, Read, usize, usize, usize);
-    let cases: [Case; 3] = [
-        ((41, 18, 140), Some((22, 9, 70)), Read::Pool, Read::Direct, 43, 70, 9),
-        ((12, 5, 19), None, Read::Direct, Read::Direct, 29, 19, 5),
-        ((20, 1, 5), Some((9, 1, 9)), Read::Upsample, Read::Direct, 20, 9, 1),
-    ];
-    for (n, ((ca, ha, wa), b, read_a, read_b, cout, w, h)) in cases.into_iter().enumerate() {
-        let seed = 340 + 10 * n as u64;
-        let a = tensor(ca, ha, wa, seed);
-        let b = b.map(|(cb, hb, wb)| tensor(cb, hb, wb, seed + 1));
-        let weight: Vec<f32> = noise(cout * (ca + b.as_ref().map_or(0, |b| b.c)) * 9, seed + 2).iter().map(|v| v * 0.3).collect();
-        let bias = noise(cout, seed + 3);
-        // One and four tiles a group (each one more pipeline for lavapipe to compile).
-        for channels in [16, 64] {
-            let conv = |tile: Tile| {
-                gpu_conv((&a, read_a), b.as_ref().map(|b| (b, read_b)), &weight, &bias, true, w, h, tile, WeightMemory::Storage)
-            };
-            let (split, prefetch) = (Tile::mma_split(channels).unwrap(), Tile::mma_split_prefetch(channels).unwrap());
-            let (want, got) = (conv(split), conv(prefetch));
-            let differ = want.data.iter().zip(&got.data).filter(|(x, y)| x.to_bits() != y.to_bits()).count();
-            assert_eq!(differ, 0, "case {n}: {prefetch} differs from {split} in {differ} of {} values", want.data.len());
-        }
-    }
-    assert_eq!(Tile::mma_split_prefetch(32).unwrap().to_string(), "mma32x3p");
-    assert_eq!(Tile::mma_split_prefetch(80), None, "at most four 16-channel tiles");
 }
 
 #[test]

@@ -1,9 +1,8 @@
 //! Every WGSL file parses and validates with naga: no GPU needed, a broken shader fails here.
 
 use rae_core::kernels::{
-    LanesModule, MMA_ENABLE, MMA_PREFETCH_TEXELS, MMA_SPLIT_PIXELS, MMA_WORKGROUP_BYTES, PREP_WITHOUT_SUBGROUPS, ROWS_STUB, SHADERS,
-    STORAGE_SOURCES, STORAGE_WEIGHTS, SourceAccess, UNIFORM_WEIGHTS, WITHOUT_SUBGROUPS, conv_module_source, lanes_module_source,
-    mma_source, shader_source,
+    LanesModule, MMA_ENABLE, MMA_WORKGROUP_BYTES, PREP_WITHOUT_SUBGROUPS, ROWS_STUB, SHADERS, STORAGE_SOURCES, STORAGE_WEIGHTS,
+    SourceAccess, UNIFORM_WEIGHTS, WITHOUT_SUBGROUPS, conv_module_source, lanes_module_source, mma_source, shader_source,
 };
 
 /// `src` (from `file`) with each of `rewrites` made, each of which must find its text.
@@ -61,7 +60,7 @@ fn every_shader_validates_with_naga() {
             lanes_module_source(
                 &storage_sources,
                 SourceAccess::Storage,
-                LanesModule { wide_stores: true, two_sources: true, gathers8: true, texel_weights: true },
+                LanesModule { wide_stores: true, two_sources: true, gathers8: true },
             ),
         ),
         (
@@ -138,13 +137,11 @@ fn the_matrix_unit_kernel_translates_to_spirv() {
         .validate(&module)
         .unwrap_or_else(|e| panic!("{}", e.emit_to_string(&source)));
     let plain = (1..=4).map(|nt| ("mma", nt, false, false));
-    let split = (1..=2).flat_map(|nt| {
-        [(nt, true, false), (nt, false, false), (nt, true, true)].map(|(nt, split_a, prefetch)| ("mma_split", nt, true, split_a, prefetch))
-    });
-    for (entry, nt, split, split_a, prefetch) in plain.map(|(e, nt, s, a)| (e, nt, s, a, false)).chain(split) {
-        let case = format!("{entry} NT = {nt} SPLIT_A = {split_a} PREFETCH = {prefetch}");
+    let split = (1..=2).flat_map(|nt| [true, false].map(|split_a| ("mma_split", nt, true, split_a)));
+    for (entry, nt, split, split_a) in plain.chain(split) {
+        let case = format!("{entry} NT = {nt} SPLIT_A = {split_a}");
         let constants: naga::back::PipelineConstants =
-            [("NT", nt as f64), ("SPLIT", split as u32 as f64), ("SPLIT_A", split_a as u32 as f64), ("PREFETCH", prefetch as u32 as f64)]
+            [("NT", nt as f64), ("SPLIT", split as u32 as f64), ("SPLIT_A", split_a as u32 as f64)]
                 .into_iter()
                 .map(|(k, v)| (k.to_string(), v))
                 .collect();
@@ -159,25 +156,6 @@ fn the_matrix_unit_kernel_translates_to_spirv() {
         assert!(has(17, &[6022]), "{case}: OpCapability CooperativeMatrixKHR");
         assert!(has(14, &[0, 3]), "{case}: OpMemoryModel Logical Vulkan");
     }
-}
-
-#[test]
-fn the_prefetch_registers_hold_a_split_window() {
-    // conv3x3_mma.wgsl's `Prefetch` has kernels::MMA_PREFETCH_TEXELS members, each one texel
-    // (vec4<f32>): the split tiles' window shared out over a workgroup's 128 invocations, none
-    // left over and none spare.
-    let source = mma_source(false);
-    let module = naga::front::wgsl::parse_str(&source).unwrap_or_else(|e| panic!("{}", e.emit_to_string(&source)));
-    let (_, ty) = module.types.iter().find(|(_, t)| t.name.as_deref() == Some("Prefetch")).expect("conv3x3_mma.wgsl has `Prefetch`");
-    let naga::TypeInner::Struct { members, .. } = &ty.inner else { panic!("`Prefetch` is a struct") };
-    for m in members {
-        let texel = matches!(module.types[m.ty].inner, naga::TypeInner::Vector { size: naga::VectorSize::Quad, scalar: naga::Scalar::F32 });
-        assert!(texel, "member {:?} is a vec4<f32>", m.name);
-    }
-    let texels = members.len() as u32;
-    assert_eq!(texels, MMA_PREFETCH_TEXELS);
-    let window = 6 * (MMA_SPLIT_PIXELS + 2) * 4;
-    assert!(128 * texels >= window && 128 * (texels - 1) < window, "{texels} texels a lane for a window of {window}");
 }
 
 #[test]

@@ -1,7 +1,9 @@
 //! Recurrence, reset, determinism, odd sizes, the caller-buffer path and input errors.
 
 use rae_core::denoiser::TUNE_TILES;
-use rae_core::kernels::{self, CPU_SHORT_TILE_MAX_PIXELS, CPU_WINOGRAD_MIN_BLOCKS, CPU_WINOGRAD4_MIN_PIXELS, blocks, rows_per_invocation};
+use rae_core::kernels::{
+    self, CPU_SHORT_TILE_MAX_PIXELS, CPU_WINOGRAD_MIN_BLOCKS, CPU_WINOGRAD4_MIN_PIXELS, TileList, blocks, rows_per_invocation,
+};
 use rae_core::{Denoiser, Error, FrameInputs, GpuFrameIo, Method, Options, SourceAccess, Tile, TileChoice, WeightMemory, Weights};
 use wgpu::util::DeviceExt;
 
@@ -285,8 +287,12 @@ fn tuned_tiles_and_storage_weights_give_the_frames_of_the_default_plan() {
     // Three candidates of TUNE_TILES (a tall, a 2-column and a short one): each is compiled on
     // lavapipe, which takes seconds per pipeline.
     const CANDIDATES: [Tile; 3] = [TUNE_TILES[0], TUNE_TILES[10], TUNE_TILES[6]];
-    let tuned =
-        Options { tiles: TileChoice::TunedAmong(&CANDIDATES), weights: Some(WeightMemory::Storage), sources: None, ..Default::default() };
+    let tuned = Options {
+        tiles: TileChoice::TunedAmong(TileList::new(&CANDIDATES)),
+        weights: Some(WeightMemory::Storage),
+        sources: None,
+        ..Default::default()
+    };
     let mut a = Denoiser::with_options(&g.device, &g.queue, &weights, golden.width, golden.height, fixed).unwrap();
     let mut b = Denoiser::with_options(&g.device, &g.queue, &weights, golden.width, golden.height, tuned).unwrap();
     assert_eq!(b.weight_memory(), Some(WeightMemory::Storage));

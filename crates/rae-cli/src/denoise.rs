@@ -8,6 +8,7 @@ use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
 use rae_core::gpu::CompileHelper;
 use rae_core::io::{self, Sequence, Slot};
+use rae_core::metrics::median;
 use rae_core::{Denoiser, Gpu, InputBuffer, Precision, TileChoice, Weights, metrics};
 
 /// What `denoise` was asked to do.
@@ -18,8 +19,8 @@ pub struct Options {
     pub output: Option<PathBuf>,
     /// Weights file (None: the best shipped model for the buffers present).
     pub weights: Option<PathBuf>,
-    /// Folder of shipped models.
-    pub models: PathBuf,
+    /// Folder of shipped models (`None`: [`models_dir`] finds it).
+    pub models: Option<PathBuf>,
     /// Frame numbers to denoise, inclusive.
     pub frames: Option<(Option<u32>, Option<u32>)>,
     /// Frame numbers before which the hidden state is reset (scene cuts).
@@ -52,6 +53,28 @@ pub fn parse_range(s: &str) -> Result<(Option<u32>, Option<u32>)> {
             Ok((n, n))
         }
     }
+}
+
+/// The folder of shipped models: `explicit` (`--models`), else `$RAE_MODELS`, else the first
+/// of `models/` beside the executable, `../share/rae/models/` from it (an installed tree) and
+/// the source tree's `models/` that holds a `.safetensors` file.
+pub fn models_dir(explicit: Option<&Path>) -> Result<PathBuf> {
+    if let Some(dir) = explicit {
+        return Ok(dir.to_path_buf());
+    }
+    if let Some(dir) = std::env::var_os("RAE_MODELS") {
+        return Ok(PathBuf::from(dir));
+    }
+    let exe_dir = std::env::current_exe().ok().and_then(|e| e.parent().map(Path::to_path_buf));
+    let mut places: Vec<PathBuf> = exe_dir.iter().flat_map(|d| [d.join("models"), d.join("../share/rae/models")]).collect();
+    places.push(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models"));
+    let has_models = |d: &Path| {
+        std::fs::read_dir(d).is_ok_and(|mut it| it.any(|e| e.is_ok_and(|e| e.path().extension().is_some_and(|x| x == "safetensors"))))
+    };
+    places.iter().find(|d| has_models(d)).cloned().with_context(|| {
+        let looked: Vec<String> = places.iter().map(|p| p.display().to_string()).collect();
+        format!("no shipped models found (looked in {}); set RAE_MODELS=DIR, pass --models DIR or --weights FILE", looked.join(", "))
+    })
 }
 
 /// The shipped model with the most inputs among those whose buffers the sequence has.
@@ -100,14 +123,6 @@ fn prepare_output(input: &Path, out: &Path) -> Result<()> {
     Ok(())
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
-    if v.is_empty() {
-        return f64::NAN;
-    }
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
-
 fn ms(d: Duration) -> f64 {
     d.as_secs_f64() * 1e3
 }
@@ -142,7 +157,7 @@ pub fn run(o: &Options) -> Result<()> {
     let present: BTreeSet<InputBuffer> = seq.inputs().into_iter().collect();
     let weights_path = match &o.weights {
         Some(p) => p.clone(),
-        None => pick_model(&o.models, &present)?,
+        None => pick_model(&models_dir(o.models.as_deref())?, &present)?,
     };
     let weights = Weights::load(&weights_path)?;
     for b in weights.arch.required_buffers() {
@@ -199,7 +214,7 @@ pub fn run(o: &Options) -> Result<()> {
         match o.tiles {
             TileChoice::Auto => "auto",
             TileChoice::Tuned | TileChoice::TunedAmong(_) => "tuned",
-            TileChoice::TunedMma | TileChoice::TunedMmaWith(_) => "tuned-mma",
+            TileChoice::TunedMma => "tuned-mma",
             TileChoice::Fixed(_) => "--tile",
         }
     );
@@ -287,9 +302,9 @@ pub fn run(o: &Options) -> Result<()> {
     println!(
         "time per frame (median of {}, frame 0 includes shader compilation): upload {:.2} ms, GPU {:.1} ms, download {:.2} ms",
         reports.len(),
-        median(up),
-        median(gpu_t),
-        median(down)
+        median(&mut up),
+        median(&mut gpu_t),
+        median(&mut down)
     );
     if reports.iter().any(|r| r.rae.is_some()) {
         println!();

@@ -10,6 +10,7 @@ use clap::{Parser, Subcommand};
 use rae_core::frame::parse_size;
 use rae_core::golden::{Golden, Tolerance};
 use rae_core::graph::Graph;
+use rae_core::metrics::median;
 use rae_core::{Denoiser, Gpu, GpuFrameIo, Options, Precision, SourceAccess, Tile, TileChoice, WeightMemory, Weights};
 
 #[derive(Parser)]
@@ -33,9 +34,10 @@ enum Command {
         /// Weights file (default: the shipped model that fits the buffers present).
         #[arg(long)]
         weights: Option<PathBuf>,
-        /// Folder of shipped models.
-        #[arg(long, default_value = concat!(env!("CARGO_MANIFEST_DIR"), "/../../models"))]
-        models: PathBuf,
+        /// Folder of shipped models (default: $RAE_MODELS, else `models/` beside the executable
+        /// or in `../share/rae/` from it, else the source tree's `models/`).
+        #[arg(long)]
+        models: Option<PathBuf>,
         /// Frame numbers to denoise: A..B, A.., ..B or A (inclusive).
         #[arg(long)]
         frames: Option<String>,
@@ -189,79 +191,7 @@ impl From<PrecisionArg> for Precision {
 }
 
 fn parse_tile(s: &str) -> Result<TileChoice> {
-    match s {
-        "auto" => return Ok(TileChoice::Auto),
-        "tuned" => return Ok(TileChoice::Tuned),
-        "tuned-mma" => return Ok(TileChoice::TunedMma),
-        _ => {}
-    }
-    // Tuned among the listed tiles, or tuned-mma's candidates and these: the list lives as
-    // long as the program (a few per run).
-    let (among, list) = match (s.strip_prefix("tuned:"), s.strip_prefix("tuned-mma+")) {
-        (Some(list), _) => (true, list),
-        (_, Some(list)) => (false, list),
-        _ => (false, ""),
-    };
-    if !list.is_empty() || among {
-        let tiles = list
-            .split('+')
-            .map(|t| match parse_tile(t)? {
-                TileChoice::Fixed(tile) => Ok(tile),
-                _ => bail!("`{t}` in tile `{s}`: tuned:T+T+... and tuned-mma+T+... list fixed tiles"),
-            })
-            .collect::<Result<Vec<Tile>>>()?;
-        let tiles = Vec::leak(tiles);
-        return Ok(if among { TileChoice::TunedAmong(tiles) } else { TileChoice::TunedMmaWith(tiles) });
-    }
-    if let Some(channels) = s.strip_prefix("mma") {
-        let tile = if let Some(split) = channels.strip_suffix("x3p") {
-            split.parse().ok().and_then(Tile::mma_split_prefetch)
-        } else if let Some(split) = channels.strip_suffix("x3") {
-            split.parse().ok().and_then(Tile::mma_split)
-        } else {
-            channels.parse().ok().and_then(Tile::mma)
-        };
-        return tile.map(TileChoice::Fixed).with_context(|| format!("tile `{s}`: matrix-unit tiles are mma16, mma32, mma48 or mma64 (output channels per workgroup), split mma16x3 to mma64x3, or split with prefetched windows mma16x3p to mma64x3p"));
-    }
-    let bad = || format!("tile `{s}` is not [wino|lanes|winolanes|wino4lanes]ROWSxBLOCKS[wCOLS][gGROUPX][kSPLIT], tuned or auto");
-    let (winograd, s2) = s.strip_prefix("wino").map_or((false, s), |r| (true, r));
-    let (four, s2) = s2.strip_prefix("4lanes").map_or((false, s2), |r| (winograd, r));
-    if four {
-        let (shape, group) = s2.split_once('g').map_or((s2, "8"), |(a, g)| (a, g));
-        let tile = shape.split_once('x').and_then(|(r, b)| Tile::winograd4_lanes(r.parse().ok()?, b.parse().ok()?));
-        return tile.and_then(|t| t.with_group(group.parse().ok()?)).map(TileChoice::Fixed).with_context(|| {
-            format!("tile `{s}`: Winograd F(4x4, 3x3) lanes tiles have 4 or 8 rows, 1, 2 or 4 blocks and workgroups 8, 16, 32 or 64 wide")
-        });
-    }
-    let (lanes, s2) = s2.strip_prefix("lanes").map_or((false, s2), |r| (true, r));
-    let (s2, split) = s2.split_once('k').map_or((s2, "1"), |(a, k)| (a, k));
-    let split: u32 = split.parse().with_context(bad)?;
-    let (rest, group) = s2.split_once('g').map_or((s2, "8"), |(a, g)| (a, g));
-    let group: u32 = group.parse().with_context(bad)?;
-    let (shape, cols) = rest.split_once('w').map_or((rest, "1"), |(a, c)| (a, c));
-    let (r, b) = shape.split_once('x').with_context(bad)?;
-    let (r, b, c) = (r.parse().with_context(bad)?, b.parse().with_context(bad)?, cols.parse().with_context(bad)?);
-    if winograd && lanes {
-        return Tile::winograd_lanes(r, b)
-            .filter(|_| c == 1 && split == 1)
-            .and_then(|t| t.with_group(group))
-            .map(TileChoice::Fixed)
-            .with_context(|| {
-                format!("tile `{s}`: Winograd lanes tiles have 4 or 8 rows, 1, 2 or 4 blocks and workgroups 8, 16, 32 or 64 wide")
-            });
-    }
-    if winograd {
-        return Tile::winograd(r, b)
-            .filter(|_| c == 1 && split == 1)
-            .and_then(|t| t.with_group(group))
-            .map(TileChoice::Fixed)
-            .with_context(|| format!("tile `{s}`: Winograd tiles have 2 or 4 rows, 1 or 2 blocks and workgroups 8, 16, 32 or 64 wide"));
-    }
-    if lanes { Tile::lanes(r, b, c) } else { Tile::with_cols(r, b, c) }
-        .and_then(|t| t.with_group(group))
-        .and_then(|t| t.with_split(split))
-        .map(TileChoice::Fixed)
-        .with_context(|| format!("tile `{s}`: the kernel has 1, 2, 4, 8 or 16 rows, 1, 2 or 4 blocks (4 with one column, except lanes tiles), 1 or 2 columns (lanes tiles with 2 at most 8 rows), workgroups 8, 16, 32 or 64 wide and splits of 1 to 16"))
+    Ok(s.parse()?)
 }
 
 fn parse_sources(s: &str) -> Result<Option<SourceAccess>> {
@@ -280,23 +210,6 @@ fn parse_memory(s: &str) -> Result<Option<WeightMemory>> {
         "storage" => Ok(Some(WeightMemory::Storage)),
         _ => bail!("weights memory `{s}`: uniform, storage or auto"),
     }
-}
-
-/// A tile choice for tables.
-fn tile_name(t: TileChoice) -> String {
-    match t {
-        TileChoice::Auto => "auto".into(),
-        TileChoice::Tuned => "tuned".into(),
-        TileChoice::TunedAmong(tiles) => format!("tuned:{}", tiles.iter().map(|t| t.to_string()).collect::<Vec<_>>().join("+")),
-        TileChoice::TunedMma => "tuned-mma".into(),
-        TileChoice::TunedMmaWith(tiles) => format!("tuned-mma+{}", tiles.iter().map(|t| t.to_string()).collect::<Vec<_>>().join("+")),
-        TileChoice::Fixed(t) => t.to_string(),
-    }
-}
-
-fn median(v: &mut [f64]) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
 }
 
 fn bench(path: &Path, sizes: &[(u32, u32)], frames: usize, warmup: usize, layers: bool, sweep: &Sweep, peak: Option<f64>) -> Result<()> {
@@ -377,7 +290,7 @@ fn bench(path: &Path, sizes: &[(u32, u32)], frames: usize, warmup: usize, layers
                     println!(
                         "{s:>10} {:>9} {:>9} {:>7} {:>7} unsupported: {e}",
                         precision.name(),
-                        tile_name(tiles),
+                        tiles.to_string(),
                         options.weights.map_or("auto", |m| m.name()),
                         options.sources.map_or("auto", |m| m.name())
                     );
@@ -418,7 +331,7 @@ fn bench(path: &Path, sizes: &[(u32, u32)], frames: usize, warmup: usize, layers
             println!(
                 "{s:>10} {:>9} {:>9} {:>7} {:>7} {build_s:>6.1} {:>10.2} {:>9.2} {g:>9.2} {:>9.2} {res:>9} {pipe:>9} {gflops:>9.1} {share:>7} {mib:>9.1} {alloc:>9} {err:>8.1e}",
                 precision.name(),
-                tile_name(tiles),
+                tiles.to_string(),
                 d.weights_name(),
                 d.sources_name(),
                 median(&mut total),
@@ -528,7 +441,7 @@ fn bench_interleaved(path: &Path, sizes: &[(u32, u32)], rounds: usize, warmup: u
             println!(
                 "{s:>10} {:>9} {:>12} {:>7} {:>7} {:>10.2} {fastest:>10.2} {:>9.3}",
                 precision.name(),
-                tile_name(*tiles),
+                tiles.to_string(),
                 d.weights_name(),
                 d.sources_name(),
                 median(ms),
@@ -704,7 +617,7 @@ fn devices() -> Result<()> {
 fn verify(files: &[PathBuf], tiles: TileChoice) -> Result<()> {
     let gpu = Gpu::new()?;
     println!("adapter: {}", gpu.describe());
-    println!("tile: {}", tile_name(tiles));
+    println!("tile: {tiles}");
     println!("{:<40} {:>5} {:>9} {:>12} {:>10} {:>10}", "sequence", "frame", "size", "max |err|", "of tol", "ms");
     let mut failed = 0;
     for path in files {
@@ -784,51 +697,6 @@ fn main() -> Result<()> {
             } else {
                 bench(&weights, &sizes, frames, warmup, layers, &sweep, peak_gflops)
             }
-        }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn tuned_among_a_list_parses_and_names_itself() {
-        let choice = parse_tile("tuned:16x2+lanes8x2w2+mma32x3+mma64x3p").unwrap();
-        let TileChoice::TunedAmong(tiles) = choice else { panic!("{choice:?}") };
-        assert_eq!(
-            tiles,
-            [Tile::new(16, 2).unwrap(), Tile::lanes(8, 2, 2).unwrap(), Tile::mma_split(32).unwrap(), Tile::mma_split_prefetch(64).unwrap()]
-        );
-        assert_eq!(tile_name(choice), "tuned:16x2+lanes8x2w2+mma32x3+mma64x3p");
-        assert_eq!(parse_tile(&tile_name(choice)).unwrap(), choice);
-        let with = parse_tile("tuned-mma+mma32x3p+mma64x3p").unwrap();
-        let TileChoice::TunedMmaWith(extra) = with else { panic!("{with:?}") };
-        assert_eq!(extra, [Tile::mma_split_prefetch(32).unwrap(), Tile::mma_split_prefetch(64).unwrap()]);
-        assert_eq!(tile_name(with), "tuned-mma+mma32x3p+mma64x3p");
-        assert!(parse_tile("tuned-mma+tuned").is_err());
-        let err = parse_tile("tuned:16x2+auto").unwrap_err().to_string();
-        assert!(err.contains("`auto` in tile `tuned:16x2+auto`"), "{err}");
-        assert!(parse_tile("tuned:16x2+9x9").is_err());
-    }
-
-    #[test]
-    fn winograd_tiles_parse_and_name_themselves() {
-        // The three Winograd spellings, each back from its name; shapes the kernels lack are
-        // refused with the shapes they have.
-        let four = Tile::winograd4_lanes(8, 4).unwrap().with_group(16).unwrap();
-        for (name, tile) in [
-            ("wino4x2", Tile::winograd(4, 2).unwrap()),
-            ("winolanes8x4", Tile::winograd_lanes(8, 4).unwrap()),
-            ("wino4lanes8x4g16", four),
-            ("wino4lanes4x1", Tile::winograd4_lanes(4, 1).unwrap()),
-        ] {
-            assert_eq!(parse_tile(name).unwrap(), TileChoice::Fixed(tile), "{name}");
-            assert_eq!(tile.to_string(), name);
-        }
-        for bad in ["wino4lanes16x4", "wino4lanes8x3", "wino4lanes8x4w2", "wino4lanes8"] {
-            let err = parse_tile(bad).unwrap_err().to_string();
-            assert!(err.contains(&format!("tile `{bad}`")) && err.contains("4 or 8 rows, 1, 2 or 4 blocks"), "{err}");
         }
     }
 }

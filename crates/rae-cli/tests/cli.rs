@@ -407,6 +407,39 @@ fn weights_that_do_not_fit_are_an_error() {
 }
 
 #[test]
+fn an_installed_binary_finds_the_models_beside_it_or_in_rae_models() {
+    // A copy of the binary with a `models/` folder beside it (as `cargo install` plus a copy of
+    // the models leaves it) takes its models from there, before the source tree's; RAE_MODELS
+    // takes precedence over both, and a folder without a fitting model is named in the error.
+    let tmp = tempfile::tempdir().unwrap();
+    let bin = tmp.path().join("bin");
+    std::fs::create_dir_all(bin.join("models")).unwrap();
+    let exe = bin.join("rae-cli");
+    std::fs::copy(env!("CARGO_BIN_EXE_rae-cli"), &exe).unwrap();
+    let shipped = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/rae-color.safetensors");
+    std::fs::copy(shipped, bin.join("models/rae-color.safetensors")).unwrap();
+    let seq = seq_dir(&tmp);
+    per_buffer_sequence(&seq, 2);
+    let run = |models_env: Option<&Path>| {
+        let mut c = Command::new(&exe);
+        c.arg("denoise").arg(&seq).args(["--no-compile-helper", "--tile", REFERENCE_TILE]).env_remove("RAE_MODELS");
+        if let Some(m) = models_env {
+            c.env("RAE_MODELS", m);
+        }
+        c.output().unwrap()
+    };
+    let out = run(None);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{text}{}", String::from_utf8_lossy(&out.stderr));
+    assert!(text.contains("rae-color.safetensors"), "the model beside the binary: {text}");
+    let empty = tmp.path().join("no-models");
+    std::fs::create_dir(&empty).unwrap();
+    let out = run(Some(&empty));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("no-models"), "RAE_MODELS is where it looked: {err}");
+}
+
+#[test]
 fn the_shipped_model_that_fits_is_chosen() {
     // The model with the most inputs among those whose buffers the sequence has.
     let tmp = tempfile::tempdir().unwrap();

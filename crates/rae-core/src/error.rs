@@ -162,6 +162,14 @@ pub enum Error {
         /// What is wrong with it.
         reason: &'static str,
     },
+    /// A tile or tile choice given as text that names none the kernels have.
+    #[error("tile `{text}`: {reason}")]
+    TileText {
+        /// The text.
+        text: String,
+        /// What is wrong with it.
+        reason: String,
+    },
     /// A conv tile this device cannot run.
     #[error("tile {tile}: {reason}")]
     UnsupportedTile {

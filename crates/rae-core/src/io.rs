@@ -526,23 +526,33 @@ pub fn write_text(path: &Path, text: &str) -> Result<()> {
 
 /// Write RGB radiance as an EXR (f32, or f16 with `half`), atomically.
 pub fn write_exr(path: &Path, width: u32, height: u32, rgb: &[f32], half: bool) -> Result<()> {
+    write_exr_channels(path, width, height, &["R", "G", "B"], rgb, half)
+}
+
+/// Write an EXR of the named channels, `data` interleaved (`width * height * names.len()`,
+/// top row first), ZIP-compressed, f32 or f16 with `half` (beyond 65504 becomes infinite),
+/// atomically: under a temporary name, renamed into place once whole.
+pub fn write_exr_channels(path: &Path, width: u32, height: u32, names: &[&str], data: &[f32], half: bool) -> Result<()> {
     use exr::prelude::*;
-    let w = width as usize;
+    let n = names.len();
+    debug_assert_eq!(data.len(), width as usize * height as usize * n);
+    let channels: SmallVec<[AnyChannel<FlatSamples>; 4]> = names
+        .iter()
+        .enumerate()
+        .map(|(c, name)| {
+            let values = data.iter().skip(c).step_by(n);
+            let samples = if half {
+                FlatSamples::F16(values.map(|&v| f16::from_f32(v)).collect())
+            } else {
+                FlatSamples::F32(values.copied().collect())
+            };
+            AnyChannel::new(*name, samples)
+        })
+        .collect();
+    let size = (width as usize, height as usize);
+    let layer = Layer::new(size, LayerAttributes::default(), Encoding::SMALL_LOSSLESS, AnyChannels::sort(channels));
     atomic_write(path, |tmp| {
-        let res = if half {
-            let px = |p: Vec2<usize>| {
-                let i = 3 * (p.y() * w + p.x());
-                (f16::from_f32(rgb[i]), f16::from_f32(rgb[i + 1]), f16::from_f32(rgb[i + 2]))
-            };
-            Image::from_channels((w, height as usize), SpecificChannels::rgb(px)).write().to_file(tmp)
-        } else {
-            let px = |p: Vec2<usize>| {
-                let i = 3 * (p.y() * w + p.x());
-                (rgb[i], rgb[i + 1], rgb[i + 2])
-            };
-            Image::from_channels((w, height as usize), SpecificChannels::rgb(px)).write().to_file(tmp)
-        };
-        res.map_err(|e| crate::error::Error::Output { path: path.into(), reason: e.to_string() })
+        Image::from_layer(layer).write().to_file(tmp).map_err(|e| crate::error::Error::Output { path: path.into(), reason: e.to_string() })
     })
 }
 

@@ -63,6 +63,12 @@ pub fn temporal_error(x_prev: &[f32], x: &[f32], r_prev: &[f32], r: &[f32]) -> f
     (0..n).map(|i| ((tonemap(x[i]) - tonemap(x_prev[i])) - (tonemap(r[i]) - tonemap(r_prev[i]))).abs() as f64).sum::<f64>() / n as f64
 }
 
+/// The median of `values` (the upper one of an even count; NaN when empty), sorting them.
+pub fn median(values: &mut [f64]) -> f64 {
+    values.sort_by(f64::total_cmp);
+    values.get(values.len() / 2).copied().unwrap_or(f64::NAN)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -167,8 +167,8 @@ fn live(choice: &SceneChoice, weights: &Path, frames: u32, size: (u32, u32), out
         }
         let t2 = Instant::now();
         println!("{f:>5} {:>10.1} {:>12.1}", (t1 - t0).as_secs_f64() * 1e3, (t2 - t1).as_secs_f64() * 1e3);
-        output::write_rgb(&output::frame_path(out, "color", f), w as usize, h as usize, &fb.color, output::Precision::F32)?;
-        output::write_rgb(&output::frame_path(out, "denoised", f), w as usize, h as usize, &denoised, output::Precision::F32)?;
+        rae_core::io::write_exr(&output::frame_path(out, "color", f), w, h, &fb.color, false)?;
+        rae_core::io::write_exr(&output::frame_path(out, "denoised", f), w, h, &denoised, false)?;
     }
     if let Some(h) = helper {
         h.finish();

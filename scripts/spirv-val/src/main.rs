@@ -60,15 +60,14 @@ fn main() {
                 src = src.replace("rgba32float", "rgba16float");
             }
             for nt in 1..=4 {
-                // Plain (MT 4), split (MT 2, the activations split in f32) and split with
-                // prefetched windows, as ConvPlan sets them.
-                for (split, prefetch) in [(false, false), (true, false), (true, true)] {
+                // Plain (MT 4) and split (MT 2, the activations split in f32), as ConvPlan sets
+                // them.
+                for split in [false, true] {
                     let label = format!(
-                        "conv3x3_mma ({}, {} sources, NT = {nt}{}{})",
+                        "conv3x3_mma ({}, {} sources, NT = {nt}{})",
                         if f16 { "f16" } else { "f32" },
                         if storage { "storage" } else { "sampled" },
-                        if split { ", SPLIT" } else { "" },
-                        if prefetch { ", PREFETCH" } else { "" }
+                        if split { ", SPLIT" } else { "" }
                     );
                     let mt = if split { 2.0 } else { 4.0 };
                     modules.push((
@@ -81,7 +80,6 @@ fn main() {
                             ("MODE_B", 3.0),
                             ("SPLIT", split as u32 as f64),
                             ("SPLIT_A", (split && !f16) as u32 as f64),
-                            ("PREFETCH", prefetch as u32 as f64),
                         ],
                     ));
                 }

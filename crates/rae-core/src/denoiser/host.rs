@@ -1,0 +1,350 @@
+//! Frames from and to host memory: upload, one submit, readback ([`Denoiser::denoise`]), the
+//! profiled frame, and reading textures and buffers back for tests and tools.
+
+use super::*;
+
+/// Buffers of the host-slice path, made on its first use and kept: a frame creates no buffer.
+///
+/// `upload` is a persistent staging buffer (MAP_WRITE) holding every input back to back. It is
+/// mapped between frames: a frame writes the host slices into it, unmaps it, and the frame's
+/// encoder copies it into the input buffers; after the submit it is mapped again in the same
+/// poll that maps `readback`. (`queue.write_buffer` would stage through a fresh allocation in
+/// wgpu on every frame.)
+pub(super) struct HostIo {
+    inputs: Vec<(InputBuffer, wgpu::Buffer)>,
+    /// Offset of each input in `upload`, in the order of `inputs`.
+    offsets: Vec<u64>,
+    upload: wgpu::Buffer,
+    /// Whether `upload` is mapped now (wgpu has no query for it).
+    upload_mapped: std::sync::atomic::AtomicBool,
+    output: wgpu::Buffer,
+    readback: wgpu::Buffer,
+    pub(super) binding: IoBinding,
+}
+
+impl HostIo {
+    pub(super) fn bytes(&self) -> u64 {
+        self.inputs.iter().map(|(_, b)| b.size()).sum::<u64>() + self.upload.size() + self.output.size() + self.readback.size()
+    }
+}
+
+/// Timestamp queries and their buffers for [`Denoiser::denoise_profiled`], made on first use.
+pub(super) struct Profiler {
+    queries: wgpu::QuerySet,
+    resolved: wgpu::Buffer,
+    readback: wgpu::Buffer,
+    count: u32,
+}
+
+impl Denoiser {
+    /// Denoise one frame from host slices; returns RGB radiance (`width * height * 3`).
+    pub fn denoise(&mut self, frame: &FrameInputs) -> Result<Vec<f32>> {
+        let mut out = vec![0.0; self.width as usize * self.height as usize * 3];
+        self.denoise_into(frame, &mut out)?;
+        Ok(out)
+    }
+
+    /// Denoise one frame from host slices into `out` (`width * height * 3`), with timings.
+    pub fn denoise_into(&mut self, frame: &FrameInputs, out: &mut [f32]) -> Result<FrameTimings> {
+        let needed = self.arch.required_buffers();
+        frame.validate(&needed, self.width, self.height)?;
+        let n = self.width as usize * self.height as usize * 3;
+        if out.len() != n {
+            return Err(Error::InputSize {
+                buffer: "output",
+                found: out.len(),
+                expected: n,
+                width: self.width,
+                height: self.height,
+                channels: 3,
+            });
+        }
+        if self.host.is_none() {
+            self.host = Some(self.make_host_io()?);
+        }
+        let t0 = Instant::now();
+        let host = self.host.take().expect("made above");
+        let mut encoder = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("rae frame") });
+        let uploaded = self.upload(&host, frame, &mut encoder);
+        let recorded = uploaded.and_then(|_| self.record(&mut encoder, &host.binding));
+        encoder.copy_buffer_to_buffer(&host.output, 0, &host.readback, 0, host.output.size());
+        let t1 = Instant::now();
+        self.queue.submit(Some(encoder.finish()));
+        let waited = self.device.poll(wgpu::PollType::wait_indefinitely());
+        let t2 = Instant::now();
+        let result = recorded
+            .and(waited.map(|_| ()).map_err(|e| Error::Gpu(e.to_string())))
+            .and_then(|_| finish_host_frame(&self.device, &host, out));
+        let t3 = Instant::now();
+        self.host = Some(host);
+        result.map(|_| FrameTimings { upload: t1 - t0, gpu: t2 - t1, download: t3 - t2 })
+    }
+
+    /// Copy the frame's host slices into the mapped staging buffer, unmap it and record its
+    /// copies into the input buffers.
+    fn upload(&self, host: &HostIo, frame: &FrameInputs, encoder: &mut wgpu::CommandEncoder) -> Result<()> {
+        if !host.upload_mapped.load(Ordering::Relaxed) {
+            // Only after a failed frame: map it again (a frame normally ends with it mapped).
+            let (tx, rx) = std::sync::mpsc::channel();
+            host.upload.map_async(wgpu::MapMode::Write, .., move |r| {
+                let _ = tx.send(r);
+            });
+            self.device.poll(wgpu::PollType::wait_indefinitely()).map_err(|e| Error::Gpu(e.to_string()))?;
+            rx.recv().map_err(|e| Error::Gpu(e.to_string()))?.map_err(|e| Error::Gpu(e.to_string()))?;
+            host.upload_mapped.store(true, Ordering::Relaxed);
+        }
+        {
+            let mut view = host.upload.get_mapped_range_mut(..).map_err(|e| Error::Gpu(format!("staging buffer: {e:?}")))?;
+            for ((b, buf), &off) in host.inputs.iter().zip(&host.offsets) {
+                let src: &[u8] = bytemuck::cast_slice(frame.get(*b).expect("validated"));
+                view.slice(off as usize..off as usize + src.len()).copy_from_slice(src);
+                debug_assert_eq!(src.len() as u64, buf.size());
+            }
+        }
+        host.upload.unmap();
+        host.upload_mapped.store(false, Ordering::Relaxed);
+        for ((_, buf), &off) in host.inputs.iter().zip(&host.offsets) {
+            encoder.copy_buffer_to_buffer(&host.upload, off, buf, 0, buf.size());
+        }
+        Ok(())
+    }
+
+    /// Denoise one frame from host slices with a timestamp after every stage; returns each
+    /// stage's GPU time in milliseconds: `prep`, every conv by module name, `output`. Needs
+    /// `TIMESTAMP_QUERY_INSIDE_PASSES` (lavapipe and most Vulkan drivers have it).
+    pub fn denoise_profiled(&mut self, frame: &FrameInputs, out: &mut [f32]) -> Result<Vec<(String, f64)>> {
+        if !self.device.features().contains(wgpu::Features::TIMESTAMP_QUERY_INSIDE_PASSES) {
+            return Err(Error::Gpu("the device has no TIMESTAMP_QUERY_INSIDE_PASSES: no per-stage times".into()));
+        }
+        let needed = self.arch.required_buffers();
+        frame.validate(&needed, self.width, self.height)?;
+        if self.host.is_none() {
+            self.host = Some(self.make_host_io()?);
+        }
+        if self.profiler.is_none() {
+            // A timestamp before the frame and after each stage, and the opening one's spare.
+            let count = self.graph.nodes.len() as u32 + 4;
+            let queries =
+                self.device.create_query_set(&wgpu::QuerySetDescriptor { label: Some("stages"), ty: wgpu::QueryType::Timestamp, count });
+            let buffer = |usage| {
+                self.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("timestamps"),
+                    size: count as u64 * 8,
+                    usage,
+                    mapped_at_creation: false,
+                })
+            };
+            let resolved = buffer(wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC);
+            let readback = buffer(wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST);
+            self.profiler = Some(Profiler { queries, resolved, readback, count });
+        }
+        let prof = self.profiler.take().expect("made above");
+        let count = prof.count;
+        let host = self.host.take().expect("made above");
+        let mut encoder = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("rae frame (profiled)") });
+        let uploaded = self.upload(&host, frame, &mut encoder);
+        let recorded = uploaded.and_then(|_| self.record_with(&mut encoder, &host.binding, Some(&prof.queries)));
+        encoder.resolve_query_set(&prof.queries, 0..count, &prof.resolved, 0);
+        encoder.copy_buffer_to_buffer(&prof.resolved, 0, &prof.readback, 0, count as u64 * 8);
+        encoder.copy_buffer_to_buffer(&host.output, 0, &host.readback, 0, host.output.size());
+        self.queue.submit(Some(encoder.finish()));
+        let result = recorded.and_then(|_| finish_host_frame(&self.device, &host, out));
+        self.host = Some(host);
+        let mut ticks = vec![0f32; 2 * count as usize];
+        let read = result.and_then(|_| read_buffer(&self.device, &prof.readback, &mut ticks));
+        self.profiler = Some(prof);
+        read?;
+        let ticks: Vec<u64> = bytemuck::pod_collect_to_vec(&ticks);
+        let period = self.queue.get_timestamp_period() as f64;
+        let pooled = |i: usize| self.graph.pools.iter().any(|p| p.after == i);
+        let conv_names =
+            self.graph.nodes.iter().enumerate().map(|(i, n)| if pooled(i) { format!("{}+pool", n.name) } else { n.name.clone() });
+        let names = std::iter::once("prep".to_string()).chain(conv_names).chain(std::iter::once("output".to_string()));
+        // The last query is the spare of the opening timestamp (`names` ends before it).
+        Ok(names.zip(ticks.windows(2)).map(|(n, w)| (n, w[1].saturating_sub(w[0]) as f64 * period * 1e-6)).collect())
+    }
+
+    pub(super) fn make_host_io(&self) -> Result<HostIo> {
+        let pixels = self.width as u64 * self.height as u64;
+        let buffer = |label, size, usage| {
+            self.device.create_buffer(&wgpu::BufferDescriptor { label: Some(label), size, usage, mapped_at_creation: false })
+        };
+        let inputs: Vec<_> = self
+            .arch
+            .required_buffers()
+            .into_iter()
+            .map(|b| (b, buffer(b.name(), pixels * b.channels() as u64 * 4, wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST)))
+            .collect();
+        let mut offsets = Vec::with_capacity(inputs.len());
+        let mut staged = 0u64;
+        for (_, b) in &inputs {
+            offsets.push(staged);
+            staged += b.size().next_multiple_of(wgpu::COPY_BUFFER_ALIGNMENT);
+        }
+        let upload = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("upload staging"),
+            size: staged,
+            usage: wgpu::BufferUsages::MAP_WRITE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: true,
+        });
+        let output = buffer("output", pixels * 12, wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC);
+        let readback = buffer("readback", pixels * 12, wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST);
+        let get = |b: InputBuffer| inputs.iter().find(|(x, _)| *x == b).map(|(_, buf)| buf);
+        let binding = self.bind_io(&GpuFrameIo {
+            color: get(InputBuffer::Color).expect("color is always an input"),
+            albedo: get(InputBuffer::Albedo),
+            normal: get(InputBuffer::Normal),
+            depth: get(InputBuffer::Depth),
+            roughness: get(InputBuffer::Roughness),
+            output: &output,
+        })?;
+        Ok(HostIo { inputs, offsets, upload, upload_mapped: std::sync::atomic::AtomicBool::new(true), output, readback, binding })
+    }
+
+    /// The packed network input of the last frame, channel-major (`channels x ph x pw`), for
+    /// checking the prep kernel.
+    pub fn read_input(&self) -> Result<Vec<f32>> {
+        let all = read_texture(&self.device, &self.queue, &self.input_texture)?;
+        let (w, h) = (self.pwidth as usize, self.pheight as usize);
+        let c = self.graph.in_channels;
+        Ok((0..c * h * w)
+            .map(|i| {
+                let (ch, p) = (i / (h * w), i % (h * w));
+                all[((ch / 4) * h * w + p) * 4 + ch % 4]
+            })
+            .collect())
+    }
+
+    /// The largest prepared (demodulated, transfer-space) color value of the last frame, as
+    /// prep recorded it for the output's bound: for checking the prep kernel's reduction.
+    pub fn read_color_max(&self) -> Result<f32> {
+        let readback = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("stats readback"),
+            size: 16,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut encoder = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("read stats") });
+        encoder.copy_buffer_to_buffer(&self.stats, 0, &readback, 0, 16);
+        self.queue.submit(Some(encoder.finish()));
+        let mut v = [0f32; 4];
+        read_buffer(&self.device, &readback, &mut v)?;
+        Ok(v[0])
+    }
+
+    /// Largest |value| of each recurrent block's current hidden state (d1 .. bottleneck), read
+    /// back from the GPU: for watching the state over long sequences. A reset denoiser reports
+    /// the state it will ignore on its next frame.
+    pub fn hidden_max_abs(&self) -> Result<Vec<f32>> {
+        self.hidden_textures
+            .iter()
+            .map(|pair| {
+                let v = read_texture(&self.device, &self.queue, &pair[self.parity])?;
+                Ok(v.iter().fold(0.0f32, |m, x| if x.is_nan() { f32::NAN } else { m.max(x.abs()) }))
+            })
+            .collect()
+    }
+}
+
+/// After a host-path frame's submit: map the staging buffer for the next frame's writes and the
+/// readback for this frame's output in one poll, then copy the output into `out`.
+pub(super) fn finish_host_frame(device: &wgpu::Device, host: &HostIo, out: &mut [f32]) -> Result<()> {
+    // Each callback says which buffer it is, so the staging buffer's flag is right even when
+    // the readback fails (a lost device): the next frame then maps it only if it is unmapped.
+    let (tx, rx) = std::sync::mpsc::channel();
+    let tx2 = tx.clone();
+    host.upload.map_async(wgpu::MapMode::Write, .., move |r| {
+        let _ = tx2.send((true, r));
+    });
+    host.readback.map_async(wgpu::MapMode::Read, .., move |r| {
+        let _ = tx.send((false, r));
+    });
+    device.poll(wgpu::PollType::wait_indefinitely()).map_err(|e| Error::Gpu(e.to_string()))?;
+    let (mut failed, mut readback_mapped) = (None, false);
+    for _ in 0..2 {
+        let (upload, r) = rx.recv().map_err(|e| Error::Gpu(e.to_string()))?;
+        match r {
+            Ok(()) if upload => host.upload_mapped.store(true, Ordering::Relaxed),
+            Ok(()) => readback_mapped = true,
+            Err(e) => failed = Some(Error::Gpu(e.to_string())),
+        }
+    }
+    if let Some(e) = failed {
+        // Leave the readback unmapped for the next frame's copy.
+        if readback_mapped {
+            host.readback.unmap();
+        }
+        return Err(e);
+    }
+    {
+        let view = host.readback.get_mapped_range(..).map_err(|e| Error::Gpu(format!("{e:?}")))?;
+        out.copy_from_slice(&bytemuck::cast_slice::<u8, f32>(&view)[..out.len()]);
+    }
+    host.readback.unmap();
+    Ok(())
+}
+
+/// Map a MAP_READ buffer and copy its f32s into `out`.
+pub(super) fn read_buffer(device: &wgpu::Device, buffer: &wgpu::Buffer, out: &mut [f32]) -> Result<()> {
+    let (tx, rx) = std::sync::mpsc::channel();
+    buffer.map_async(wgpu::MapMode::Read, .., move |r| {
+        let _ = tx.send(r);
+    });
+    device.poll(wgpu::PollType::wait_indefinitely()).map_err(|e| Error::Gpu(e.to_string()))?;
+    rx.recv().map_err(|e| Error::Gpu(e.to_string()))?.map_err(|e| Error::Gpu(e.to_string()))?;
+    {
+        let view = buffer.get_mapped_range(..).map_err(|e| Error::Gpu(format!("{e:?}")))?;
+        out.copy_from_slice(&bytemuck::cast_slice::<u8, f32>(&view)[..out.len()]);
+    }
+    buffer.unmap();
+    Ok(())
+}
+
+/// Read a whole rgba32float or rgba16float texture array back: `layers x h x w x 4` f32.
+pub fn read_texture(device: &wgpu::Device, queue: &wgpu::Queue, texture: &wgpu::Texture) -> Result<Vec<f32>> {
+    let size = texture.size();
+    let (w, h, l) = (size.width, size.height, size.depth_or_array_layers);
+    let texel = match texture.format() {
+        wgpu::TextureFormat::Rgba32Float => 16,
+        wgpu::TextureFormat::Rgba16Float => 8,
+        f => return Err(Error::Gpu(format!("read_texture: unsupported format {f:?}"))),
+    };
+    let row = (w * texel).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
+    let buf = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("texture readback"),
+        size: row as u64 * h as u64 * l as u64,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let mut enc = device.create_command_encoder(&Default::default());
+    enc.copy_texture_to_buffer(
+        texture.as_image_copy(),
+        wgpu::TexelCopyBufferInfo {
+            buffer: &buf,
+            layout: wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(row), rows_per_image: Some(h) },
+        },
+        size,
+    );
+    queue.submit(Some(enc.finish()));
+    let mut raw = vec![0f32; (row / 4 * h * l) as usize];
+    read_buffer(device, &buf, &mut raw)?;
+    if texel == 8 {
+        // Widen f16 texels: the same rows, each u16 to an f32.
+        let halves: &[u16] = bytemuck::cast_slice(&raw);
+        let rowh = (row / 2) as usize;
+        let mut out = Vec::with_capacity((w * h * l * 4) as usize);
+        for r in 0..(h * l) as usize {
+            out.extend(halves[r * rowh..r * rowh + w as usize * 4].iter().map(|&b| half::f16::from_bits(b).to_f32()));
+        }
+        return Ok(out);
+    }
+    let rowf = (row / 4) as usize;
+    let mut out = Vec::with_capacity((w * h * l * 4) as usize);
+    for layer in 0..l as usize {
+        for y in 0..h as usize {
+            let start = (layer * h as usize + y) * rowf;
+            out.extend_from_slice(&raw[start..start + w as usize * 4]);
+        }
+    }
+    Ok(out)
+}

@@ -1,0 +1,280 @@
+//! Recording a frame into a command encoder: the caller's GPU buffers ([`GpuFrameIo`]), the
+//! frame's passes, and the timestamps that time them.
+
+use super::*;
+
+/// The caller's GPU buffers for one frame (tightly packed f32, same layout as [`FrameInputs`]);
+/// each needs `STORAGE` usage. `output` receives RGB radiance at the frame size.
+#[derive(Debug, Clone, Copy)]
+pub struct GpuFrameIo<'a> {
+    /// Noisy radiance, RGB.
+    pub color: &'a wgpu::Buffer,
+    /// Albedo, RGB.
+    pub albedo: Option<&'a wgpu::Buffer>,
+    /// Normal, xyz.
+    pub normal: Option<&'a wgpu::Buffer>,
+    /// Depth.
+    pub depth: Option<&'a wgpu::Buffer>,
+    /// Roughness.
+    pub roughness: Option<&'a wgpu::Buffer>,
+    /// Denoised radiance, RGB (written).
+    pub output: &'a wgpu::Buffer,
+}
+
+impl GpuFrameIo<'_> {
+    fn get(&self, b: InputBuffer) -> Option<&wgpu::Buffer> {
+        match b {
+            InputBuffer::Color => Some(self.color),
+            InputBuffer::Albedo => self.albedo,
+            InputBuffer::Normal => self.normal,
+            InputBuffer::Depth => self.depth,
+            InputBuffer::Roughness => self.roughness,
+        }
+    }
+}
+
+/// Bind groups that connect a set of caller buffers to one [`Denoiser`]; make it once per set
+/// of buffers with [`Denoiser::bind_io`] and reuse it every frame.
+pub struct IoBinding {
+    owner: u64,
+    prep: wgpu::BindGroup,
+    output: wgpu::BindGroup,
+}
+
+impl Denoiser {
+    /// Connect caller buffers (see [`GpuFrameIo`]); checks presence, sizes and usages.
+    pub fn bind_io(&self, io: &GpuFrameIo) -> Result<IoBinding> {
+        let pixels = self.width as u64 * self.height as u64;
+        let needed = self.arch.required_buffers();
+        let check = |name: &'static str, buf: &wgpu::Buffer, channels: u64| -> Result<()> {
+            let want = pixels * channels * 4;
+            if buf.size() < want {
+                return Err(Error::GpuBuffer { buffer: name, reason: format!("{} bytes, need {want}", buf.size()) });
+            }
+            if !buf.usage().contains(wgpu::BufferUsages::STORAGE) {
+                return Err(Error::GpuBuffer { buffer: name, reason: "lacks STORAGE usage".into() });
+            }
+            Ok(())
+        };
+        for &b in &needed {
+            let buf =
+                io.get(b).ok_or_else(|| Error::MissingInput { buffer: b.name(), needed: needed.iter().map(|b| b.name()).collect() })?;
+            check(b.name(), buf, b.channels() as u64)?;
+        }
+        check("output", io.output, 3)?;
+        let pick = |b: InputBuffer| if needed.contains(&b) { io.get(b).expect("checked") } else { &self.dummy };
+        let prep = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("prep"),
+            layout: &self.kernels.prep_layout,
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: self.prep_params.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 1, resource: pick(InputBuffer::Color).as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 2, resource: pick(InputBuffer::Albedo).as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 3, resource: pick(InputBuffer::Normal).as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 4, resource: pick(InputBuffer::Depth).as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 5, resource: pick(InputBuffer::Roughness).as_entire_binding() },
+                wgpu::BindGroupEntry {
+                    binding: 6,
+                    resource: wgpu::BindingResource::TextureView(&self.input_texture.create_view(&wgpu::TextureViewDescriptor {
+                        dimension: Some(wgpu::TextureViewDimension::D2Array),
+                        ..Default::default()
+                    })),
+                },
+                wgpu::BindGroupEntry { binding: 7, resource: self.stats.as_entire_binding() },
+            ],
+        });
+        let output = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("output"),
+            layout: &self.kernels.output_layout,
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: self.output_params.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&self.output_view) },
+                wgpu::BindGroupEntry { binding: 2, resource: pick(InputBuffer::Albedo).as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 3, resource: io.output.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 4, resource: self.stats.as_entire_binding() },
+            ],
+        });
+        Ok(IoBinding { owner: self.id, prep, output })
+    }
+
+    /// Record one frame into the caller's encoder: read the buffers bound in `io`, write its
+    /// output buffer. Frames must be submitted in the order they are recorded (the hidden state
+    /// advances at record time).
+    pub fn record(&mut self, encoder: &mut wgpu::CommandEncoder, io: &IoBinding) -> Result<()> {
+        self.record_with(encoder, io, None)
+    }
+
+    /// [`Self::record`], writing a timestamp before the frame and after each stage into `queries`
+    /// (prep, every conv, output: [`Graph::nodes`]` + 3` queries).
+    pub(super) fn record_with(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        io: &IoBinding,
+        queries: Option<&wgpu::QuerySet>,
+    ) -> Result<()> {
+        if io.owner != self.id {
+            return Err(Error::GpuBuffer { buffer: "io", reason: "binding was made by another Denoiser".into() });
+        }
+        let (reset, parity) = (self.reset_pending, self.parity);
+        encoder.clear_buffer(&self.stats, 0, None);
+        let stamp = |pass: &mut wgpu::ComputePass, i: u32| {
+            if let Some(q) = queries {
+                pass.write_timestamp(q, i);
+            }
+        };
+        let n = self.conv_groups[parity].len();
+        let mut pools = self.graph.pools.iter().zip(&self.pool_groups[parity]).peekable();
+        // The frame is one compute pass, split after each staged conv for the copy of its output
+        // into its texture (ConvPlan::staged). That conv's stage is stamped at the start of the
+        // next pass, so its time holds the copy.
+        let mut next = 0;
+        let mut pending_stamp = None;
+        loop {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("rae frame"), timestamp_writes: None });
+            if let Some(i) = pending_stamp.take() {
+                stamp(&mut pass, i);
+            }
+            if next == 0 {
+                if let Some(q) = queries {
+                    write_opening_timestamp(&mut pass, q, 0, self.graph.nodes.len() as u32 + 3);
+                }
+                pass.set_pipeline(&self.prep);
+                pass.set_bind_group(0, &io.prep, &[]);
+                pass.dispatch_workgroups(self.pwidth.div_ceil(WORKGROUP), self.pheight.div_ceil(WORKGROUP), 1);
+                stamp(&mut pass, 1);
+            }
+            let mut staged = None;
+            while next < n {
+                let i = next;
+                next += 1;
+                self.convs.record(&mut pass, i, reset, &self.conv_groups[parity][i]);
+                if self.convs.staged(i) {
+                    staged = Some(i);
+                    break;
+                }
+                // The pool of a block's new state runs right after the conv that writes it (its
+                // time is counted with that conv's stage), unless that conv pooled it itself.
+                if let Some((p, g)) = pools.next_if(|(p, _)| p.after == i)
+                    && !self.convs.pools(i)
+                {
+                    let (w, h) = (self.pwidth >> p.level, self.pheight >> p.level);
+                    pass.set_pipeline(&self.kernels.pool);
+                    pass.set_bind_group(0, g, &[]);
+                    pass.dispatch_workgroups(w.div_ceil(WORKGROUP), h.div_ceil(WORKGROUP), blocks(p.channels));
+                }
+                stamp(&mut pass, 2 + i as u32);
+            }
+            if let Some(i) = staged {
+                drop(pass);
+                self.convs.copy_staged(encoder, i, &self.conv_outputs[parity][i]);
+                // A staged conv pools its own output (F(4x4) tiles always can).
+                debug_assert!(self.graph.pools.iter().all(|p| p.after != i) || self.convs.pools(i));
+                let _ = pools.next_if(|(p, _)| p.after == i);
+                pending_stamp = Some(2 + i as u32);
+                continue;
+            }
+            pass.set_pipeline(&self.kernels.output);
+            pass.set_bind_group(0, &io.output, &[]);
+            pass.dispatch_workgroups(self.width.div_ceil(WORKGROUP), self.height.div_ceil(WORKGROUP), 1);
+            stamp(&mut pass, 2 + self.graph.nodes.len() as u32);
+            break;
+        }
+        self.parity ^= 1;
+        self.reset_pending = false;
+        Ok(())
+    }
+
+    /// Dispatch every pipeline of a frame once, last stage first, with one workgroup each, and
+    /// wait: a helper that compiles pipelines for another denoiser's first frame
+    /// ([`crate::gpu::CompileHelper`]; CPU drivers compile at a pipeline's first dispatch, and
+    /// one workgroup costs no arithmetic to speak of at any frame size). What it writes is
+    /// meaningless, so the hidden state is reset after it.
+    pub fn compile_backwards(&mut self) -> Result<()> {
+        if self.host.is_none() {
+            self.host = Some(self.make_host_io()?);
+        }
+        let host = self.host.as_ref().expect("made above");
+        let parity = self.parity;
+        let mut encoder = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("rae compile") });
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("rae compile"), timestamp_writes: None });
+            pass.set_pipeline(&self.kernels.output);
+            pass.set_bind_group(0, &host.binding.output, &[]);
+            pass.dispatch_workgroups(1, 1, 1);
+            let pools: Vec<_> = self.graph.pools.iter().zip(&self.pool_groups[parity]).collect();
+            for (i, group) in self.conv_groups[parity].iter().enumerate().rev() {
+                if let Some((_, g)) = pools.iter().find(|(p, _)| p.after == i)
+                    && !self.convs.pools(i)
+                {
+                    pass.set_pipeline(&self.kernels.pool);
+                    pass.set_bind_group(0, *g, &[]);
+                    pass.dispatch_workgroups(1, 1, 1);
+                }
+                self.convs.record_compile(&mut pass, i, group);
+            }
+            pass.set_pipeline(&self.prep);
+            pass.set_bind_group(0, &host.binding.prep, &[]);
+            pass.dispatch_workgroups(1, 1, 1);
+        }
+        self.queue.submit(Some(encoder.finish()));
+        self.device.poll(wgpu::PollType::wait_indefinitely()).map_err(|e| Error::Gpu(e.to_string()))?;
+        self.reset_pending = true;
+        Ok(())
+    }
+}
+
+/// Where a timestamp can be written: a command encoder or a compute pass.
+pub trait TimestampWriter {
+    /// Write timestamp `index` of `queries` here.
+    fn write_timestamp_to(&mut self, queries: &wgpu::QuerySet, index: u32);
+}
+
+impl TimestampWriter for wgpu::CommandEncoder {
+    fn write_timestamp_to(&mut self, queries: &wgpu::QuerySet, index: u32) {
+        self.write_timestamp(queries, index);
+    }
+}
+
+impl TimestampWriter for wgpu::ComputePass<'_> {
+    fn write_timestamp_to(&mut self, queries: &wgpu::QuerySet, index: u32) {
+        self.write_timestamp(queries, index);
+    }
+}
+
+/// Write timestamp `index`, which opens a timed span, so that it is taken before the work
+/// recorded after it runs: a second timestamp into the unused query `spare` follows it.
+///
+/// Lavapipe (Mesa 22.3's llvmpipe) does not read the clock when the command runs. It bins the
+/// query into its rasterizer's current scene and reads the clock when that scene is next
+/// flushed. A timestamp write flushes before binning its own query (wgpu writes at
+/// BOTTOM_OF_PIPE), and so does a pipeline barrier; a compute dispatch does not. So an opening
+/// timestamp followed by dispatches that need no barrier between them (a frame's prep: its
+/// barriers are wgpu's, in the command buffer before the frame's) was read only at the first
+/// barrier, after them. A 256x256 frame lost prep's 3-4 ms from its span, and a stage table lost
+/// prep (docs/PERF.md, session 19). The spare's write flushes the scene holding `index` at
+/// once. The timestamps that close a span need no spare: the next dispatch's barrier or the end
+/// of the command buffer flushes them. Drivers that write timestamps as the GPU passes them lose
+/// one query.
+pub fn write_opening_timestamp(writer: &mut impl TimestampWriter, queries: &wgpu::QuerySet, index: u32, spare: u32) {
+    writer.write_timestamp_to(queries, index);
+    writer.write_timestamp_to(queries, spare);
+}
+
+/// Resolve the first `count` timestamps of `queries` (written by work already submitted) and
+/// read them back, in ticks: multiply differences by `queue.get_timestamp_period()` for
+/// nanoseconds. Makes its own buffers (set-up and benchmark use; `denoise_profiled` keeps
+/// persistent ones) and waits for the GPU.
+pub fn read_timestamps(device: &wgpu::Device, queue: &wgpu::Queue, queries: &wgpu::QuerySet, count: u32) -> Result<Vec<u64>> {
+    let size = count as u64 * 8;
+    let buffer =
+        |usage| device.create_buffer(&wgpu::BufferDescriptor { label: Some("timestamps"), size, usage, mapped_at_creation: false });
+    let resolved = buffer(wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC);
+    let readback = buffer(wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST);
+    let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("timestamps") });
+    encoder.resolve_query_set(queries, 0..count, &resolved, 0);
+    encoder.copy_buffer_to_buffer(&resolved, 0, &readback, 0, size);
+    queue.submit(Some(encoder.finish()));
+    let mut raw = vec![0f32; 2 * count as usize];
+    read_buffer(device, &readback, &mut raw)?;
+    Ok(bytemuck::pod_collect_to_vec(&raw))
+}
