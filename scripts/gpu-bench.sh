@@ -1,14 +1,13 @@
 #!/usr/bin/env bash
-# Issue 8's GPU measurements in one run, for a lent NVIDIA machine (see docs/PERF.md):
+# The GPU measurements of docs/PERF.md in one run, for a lent NVIDIA machine:
 #   build here:   bash scripts/device-prep.sh [REV ...]   (.devbin/rae-cli[-REV], loaders in .gl)
 #   run there:    bash scripts/gpu-bench.sh "$OUT" .devbin/rae-cli [OTHER-BUILD ...]   (carrying .devbin and .gl)
 # Checks the goldens on the GPU, times 1080p and 720p in f32 and f16 over conv tiles x weight
 # memories (GPU-resident frames by timestamps, and host round trips), per-stage times, the sample
 # sequence end to end, and PyTorch/cuDNN on the same weights (TF32 off, then on). Everything goes to $2/log.txt.
-# TILES, MEMORIES, SOURCES (e.g. auto,sampled,storage, auto being per conv where tuned since
-# session 16; builds before session 12 have no --sources),
+# TILES, MEMORIES, SOURCES (e.g. auto,sampled,storage; auto is per conv where tuned) and
 # STAGE_TILES override the sweep; SKIP_TORCH=1 leaves PyTorch out; MMA=1 adds the matrix-unit
-# kernel (sessions 13-14; older builds have no mma tiles): it holds the split tiles (mma32x3) to
+# kernel: it holds the split tiles (mma32x3) to
 # PyTorch's goldens (`verify --tile`), prints every mma tile's error against the direct f32
 # frames, times tuned-mma and fixed mma tiles beside the others, prints the stages of tuned-mma
 # and denoises the sample with it (f32 and f16) for its PSNR against the direct one; MMA=only

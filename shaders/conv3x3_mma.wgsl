@@ -154,8 +154,8 @@ fn stage_chunk_split(li: u32, c: u32, x0: u32, y0: u32) {
 // to f16's range, hi, and with SPLIT_A its scaled remainder from lo_at().
 //
 // hi is v cut to what f16 holds exactly, in f32 arithmetic, not f16(v) widened back: the
-// NVIDIA driver (580, H100, session 15) treated v - f32(f16(v)) as if the round trip were
-// exact, so the remainder came out zero and the split tiles gave f16-operand (TF32-like)
+// NVIDIA driver (580, H100) treats v - f32(f16(v)) as if the round trip were exact, so the
+// remainder comes out zero and the split tiles gave f16-operand (TF32-like)
 // error. In f16's normal range (from 2^-14) the cut is a mask to 10 mantissa bits; below it,
 // where f16's spacing is 2^-24, a truncation to that multiple (exact: powers of two). Either
 // converts to f16 exactly, and v - hi is exact in f32 with no conversion to fold.

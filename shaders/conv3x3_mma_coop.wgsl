@@ -13,6 +13,7 @@ alias Acc = coop_mat16x16<f32, C>;
 alias TileA = coop_mat16x16<f16, A>;
 alias TileB = coop_mat16x16<f16, B>;
 
+// ---- generated: mma ----
 @compute @workgroup_size(128, 1, 1)
 fn mma(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
     let x0 = wg.x * pixels();
@@ -137,6 +138,7 @@ fn mma(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li
         emit(sg, lane, 3u, 3u, x0, y0, wg.z);
     }
 }
+// ---- end generated ----
 
 // ---- Split operands in matrix units: entry point `mma_split` ----
 //
@@ -146,9 +148,10 @@ fn mma(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li
 // LO_SCALE (elementwise, as in the emulation), and goes out through `stage` as `mma`'s
 // accumulators do. Two pixel tiles per row rather than
 // `mma`'s four keep the window and its remainders in `win` (kernels::MMA_WORKGROUP_BYTES):
-// with its own 12.7 KB array for the remainders (29.4 KB a workgroup, session 14) the H100
-// ran this kernel 2.5 times slower than `mma` (session 15, docs/PERF.md).
+// with its own 12.7 KB array for the remainders (29.4 KB a workgroup) the H100 runs this
+// kernel 2.5 times slower than `mma` (`docs/perf/h100-2026-11-24-s15.log`).
 
+// ---- generated: mma_split ----
 @compute @workgroup_size(128, 1, 1)
 fn mma_split(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
     let x0 = wg.x * pixels();
@@ -265,3 +268,4 @@ fn mma_split(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_ind
         emit(sg, lane, 1u, 3u, x0, y0, wg.z);
     }
 }
+// ---- end generated ----

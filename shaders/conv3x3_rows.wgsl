@@ -196,12 +196,11 @@ fn taps_4_3(s: Spread) -> Taps {
 // 2 x 8 x 4 x 144 multiply-adds per input block, and LLVM's compile time grows faster than its
 // size; the driver's front end also inlines every row pair before the override drops the ones
 // past ROWS, so the rows this file does not have cost no build time (16-row two-column tiles
-// ran 1.36-1.41x the time of 8-row ones, session 9). Both columns in one pass (16
-// accumulators) gave lanes8x4w2 fastest frames 0.94x those of one column per pass (8
-// accumulators; session 10, the medians within the machine's noise). On lavapipe
-// (docs/PERF.md, session 9) the one-column 16 x 4 tile unrolled this way ran 0.89x
-// `accumulate`'s column loop but took 3x as long to compile cold; the column loop with two
-// rows at a time gained nothing. Two columns share each fetched column and weight twice, so a
+// run 1.36-1.41x the time of 8-row ones, `docs/perf/lavapipe-2026-11-23-s9.log`). Both columns
+// in one pass (16 accumulators) give lanes8x4w2 fastest frames 0.94x those of one column per
+// pass (`lavapipe-2026-11-23-s10.log`). On lavapipe the one-column 16 x 4 tile unrolled this way
+// runs 0.89x `accumulate`'s column loop but takes 3x as long to compile cold, and the column
+// loop with two rows at a time gains nothing (`lavapipe-2026-11-23-s9.log`). Two columns share each fetched column and weight twice, so a
 // 4- or 8-row tile is the fast shape, and a short tile keeps the compile near the loop's.
 fn accumulate_rows(acc0: ptr<function, Tile>, acc1: ptr<function, Tile>, acc2: ptr<function, Tile>, acc3: ptr<function, Tile>, acc4: ptr<function, Tile>, acc5: ptr<function, Tile>, acc6: ptr<function, Tile>, acc7: ptr<function, Tile>, cb: u32, w: u32, x: i32, y0: i32) {
     let k = window4(cb, x, y0);

@@ -6,7 +6,7 @@
 // lane's offset and each of the store's words out of spilled vectors, and a store takes at
 // most four words. A row of four rgba32float pixels is four vec4<f32> stores of 16 bytes;
 // packed two floats to a u64 it is two vec4<u64> stores of 32 bytes: half the loops for the
-// same bytes, bit for bit the same memory (docs/PERF.md, session 29).
+// same bytes, bit for bit the same memory (`docs/perf/lavapipe-2026-12-02-s29.log`).
 
 // The staged output buffer (binding 5, `partial` elsewhere in the module) in 32-byte words:
 // two pixels each.

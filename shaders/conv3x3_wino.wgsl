@@ -5,13 +5,13 @@
 // overrides), conv3x3_rows.wgsl's Column and the gathers (Gather, gather, ob<OB>_<k>) of
 // conv3x3_gather16.wgsl or, on subgroups of 8 lanes, conv3x3_gather8.wgsl.
 //
-// An invocation computes ROWS / 2 stacked 2x2 output tiles (ROWS = 4 or 8) of 2 columns for OB
-// output blocks (1, 2 or 4). Each input block costs 4 columns of ROWS + 2 fetched texels, their
+// An invocation computes two stacked 2x2 output tiles (ROWS = 4) of 2 columns for OB output
+// blocks (1, 2 or 4). Each input block costs 4 columns of 6 fetched texels, their
 // transforms V = B^T d B (additions only), and per tile and output block 16 products of a 4x4
 // weight matrix with a vec4: 256 multiply-adds per 4 outputs and input block where the direct
 // sum takes 576. On lavapipe a texel fetch is about half of the time (each is ~100 instructions
 // of per-lane addressing, loads and transposes), so the CPU tile takes OB = 4: each fetched
-// texel feeds 16 output channels of 4 stacked tiles (kernels::Tile::CPU_WINOGRAD). Weights are
+// texel feeds 16 output channels of 2 stacked tiles (kernels::Tile::CPU_WINOGRAD). Weights are
 // texels of the plan's weight texture (conv3x3_wino4.wgsl's `weight_texel`: on lavapipe a
 // buffer load at a per-lane address is a loop over the lanes, a texel load one gather), laid
 // out as conv3x3.wgsl's `winograd` reads them from its buffer (input block cb, position p,
@@ -63,12 +63,14 @@ fn wino_row_of(d0: vec4<f32>, d1: vec4<f32>, d2: vec4<f32>, d3: vec4<f32>) -> Qu
 // Add input block `cb` of cat(a, b) (conv3x3_rows.wgsl's `window4`) to the transformed tiles
 // m<t><j> (tile t from the top, output block j) whose top-left output is (x, y0): the window's
 // columns are fetched once, each of its rows transformed once, and each position's weights,
-// taken from the lanes once, go to every tile before the next position's. The body is unrolled
-// per (OB, ROWS), the overrides dropping the others: 4 x 4 x 16 products of a 4x4 and a vec4 at
-// most (the 16 transformed tiles, 1,024 vec4s, stay in the stack between blocks), in two basic
-// blocks of two tile rows each (conv_common.wgsl's `once`: one block took 2.3x the compile
-// time). One loop runs it over both sources' blocks, so LLVM compiles it once.
-fn wino_step(m00: ptr<function, Wino>, m01: ptr<function, Wino>, m02: ptr<function, Wino>, m03: ptr<function, Wino>, m10: ptr<function, Wino>, m11: ptr<function, Wino>, m12: ptr<function, Wino>, m13: ptr<function, Wino>, m20: ptr<function, Wino>, m21: ptr<function, Wino>, m22: ptr<function, Wino>, m23: ptr<function, Wino>, m30: ptr<function, Wino>, m31: ptr<function, Wino>, m32: ptr<function, Wino>, m33: ptr<function, Wino>, cb: u32, w: u32, x: i32, y0: i32) {
+// taken from the lanes once, go to both tiles before the next position's. The body is unrolled
+// per OB, the overrides dropping the others: 4 x 2 x 16 products of a 4x4 and a vec4 at most
+// (the 8 transformed tiles, 128 vec4s, stay in the stack between blocks), in two basic blocks of
+// two tile rows each (conv_common.wgsl's `once`: one block takes 2.3x the compile time). It is
+// generated (tests/engine/generated.rs). One loop runs it over both sources' blocks, so LLVM
+// compiles it once.
+// ---- generated: wino_step ----
+fn wino_step(m00: ptr<function, Wino>, m01: ptr<function, Wino>, m02: ptr<function, Wino>, m03: ptr<function, Wino>, m10: ptr<function, Wino>, m11: ptr<function, Wino>, m12: ptr<function, Wino>, m13: ptr<function, Wino>, cb: u32, w: u32, x: i32, y0: i32) {
     let k = window4(cb, x, y0);
     let k0 = k.k0;
     let k1 = k.k1;
@@ -82,383 +84,258 @@ fn wino_step(m00: ptr<function, Wino>, m01: ptr<function, Wino>, m02: ptr<functi
     let e5 = wino_row_of(k0.v5, k1.v5, k2.v5, k3.v5);
     let v0 = wino_v(e0, e1, e2, e3);
     let v1 = wino_v(e2, e3, e4, e5);
-    var v2 = v0;
-    var v3 = v0;
-    if ROWS > 4u {
-        let e6 = wino_row_of(k0.v6, k1.v6, k2.v6, k3.v6);
-        let e7 = wino_row_of(k0.v7, k1.v7, k2.v7, k3.v7);
-        let e8 = wino_row_of(k0.v8, k1.v8, k2.v8, k3.v8);
-        let e9 = wino_row_of(k0.v9, k1.v9, k2.v9, k3.v9);
-        v2 = wino_v(e4, e5, e6, e7);
-        v3 = wino_v(e6, e7, e8, e9);
-    }
     let g = wino_gather(w + cb * 64u * OB);
-    // Position p = 4 i + c of each tile (Wino's r<i>.c<c>), block by block.
+    // Position p = 4 i + c of each tile (Wino's r<i>.c<c>), block by block; tile rows 0
+    // and 1, then 2 and 3, each pair in a loop that runs once: a basic block of its own
+    // for LLVM (conv_common.wgsl's `once`).
     if OB == 1u {
-        // Tile rows 0 and 1, 2 and 3, each pair in a loop that runs once: a basic
-        // block of its own for LLVM (conv_common.wgsl's `once`).
         loop {
             { let u = ob1_0(g.g0);
-              (*m00).r0.c0 = mac((*m00).r0.c0, u, v0.r0.c0); (*m10).r0.c0 = mac((*m10).r0.c0, u, v1.r0.c0);
-              if ROWS > 4u { (*m20).r0.c0 = mac((*m20).r0.c0, u, v2.r0.c0); (*m30).r0.c0 = mac((*m30).r0.c0, u, v3.r0.c0); } }
+              (*m00).r0.c0 = mac((*m00).r0.c0, u, v0.r0.c0); (*m10).r0.c0 = mac((*m10).r0.c0, u, v1.r0.c0); }
             { let u = ob1_1(g.g0);
-              (*m00).r0.c1 = mac((*m00).r0.c1, u, v0.r0.c1); (*m10).r0.c1 = mac((*m10).r0.c1, u, v1.r0.c1);
-              if ROWS > 4u { (*m20).r0.c1 = mac((*m20).r0.c1, u, v2.r0.c1); (*m30).r0.c1 = mac((*m30).r0.c1, u, v3.r0.c1); } }
+              (*m00).r0.c1 = mac((*m00).r0.c1, u, v0.r0.c1); (*m10).r0.c1 = mac((*m10).r0.c1, u, v1.r0.c1); }
             { let u = ob1_2(g.g0);
-              (*m00).r0.c2 = mac((*m00).r0.c2, u, v0.r0.c2); (*m10).r0.c2 = mac((*m10).r0.c2, u, v1.r0.c2);
-              if ROWS > 4u { (*m20).r0.c2 = mac((*m20).r0.c2, u, v2.r0.c2); (*m30).r0.c2 = mac((*m30).r0.c2, u, v3.r0.c2); } }
+              (*m00).r0.c2 = mac((*m00).r0.c2, u, v0.r0.c2); (*m10).r0.c2 = mac((*m10).r0.c2, u, v1.r0.c2); }
             { let u = ob1_3(g.g0);
-              (*m00).r0.c3 = mac((*m00).r0.c3, u, v0.r0.c3); (*m10).r0.c3 = mac((*m10).r0.c3, u, v1.r0.c3);
-              if ROWS > 4u { (*m20).r0.c3 = mac((*m20).r0.c3, u, v2.r0.c3); (*m30).r0.c3 = mac((*m30).r0.c3, u, v3.r0.c3); } }
+              (*m00).r0.c3 = mac((*m00).r0.c3, u, v0.r0.c3); (*m10).r0.c3 = mac((*m10).r0.c3, u, v1.r0.c3); }
             { let u = ob1_0(g.g1);
-              (*m00).r1.c0 = mac((*m00).r1.c0, u, v0.r1.c0); (*m10).r1.c0 = mac((*m10).r1.c0, u, v1.r1.c0);
-              if ROWS > 4u { (*m20).r1.c0 = mac((*m20).r1.c0, u, v2.r1.c0); (*m30).r1.c0 = mac((*m30).r1.c0, u, v3.r1.c0); } }
+              (*m00).r1.c0 = mac((*m00).r1.c0, u, v0.r1.c0); (*m10).r1.c0 = mac((*m10).r1.c0, u, v1.r1.c0); }
             { let u = ob1_1(g.g1);
-              (*m00).r1.c1 = mac((*m00).r1.c1, u, v0.r1.c1); (*m10).r1.c1 = mac((*m10).r1.c1, u, v1.r1.c1);
-              if ROWS > 4u { (*m20).r1.c1 = mac((*m20).r1.c1, u, v2.r1.c1); (*m30).r1.c1 = mac((*m30).r1.c1, u, v3.r1.c1); } }
+              (*m00).r1.c1 = mac((*m00).r1.c1, u, v0.r1.c1); (*m10).r1.c1 = mac((*m10).r1.c1, u, v1.r1.c1); }
             { let u = ob1_2(g.g1);
-              (*m00).r1.c2 = mac((*m00).r1.c2, u, v0.r1.c2); (*m10).r1.c2 = mac((*m10).r1.c2, u, v1.r1.c2);
-              if ROWS > 4u { (*m20).r1.c2 = mac((*m20).r1.c2, u, v2.r1.c2); (*m30).r1.c2 = mac((*m30).r1.c2, u, v3.r1.c2); } }
+              (*m00).r1.c2 = mac((*m00).r1.c2, u, v0.r1.c2); (*m10).r1.c2 = mac((*m10).r1.c2, u, v1.r1.c2); }
             { let u = ob1_3(g.g1);
-              (*m00).r1.c3 = mac((*m00).r1.c3, u, v0.r1.c3); (*m10).r1.c3 = mac((*m10).r1.c3, u, v1.r1.c3);
-              if ROWS > 4u { (*m20).r1.c3 = mac((*m20).r1.c3, u, v2.r1.c3); (*m30).r1.c3 = mac((*m30).r1.c3, u, v3.r1.c3); } }
+              (*m00).r1.c3 = mac((*m00).r1.c3, u, v0.r1.c3); (*m10).r1.c3 = mac((*m10).r1.c3, u, v1.r1.c3); }
             continuing { break if once(); }
         }
         loop {
             { let u = ob1_0(g.g2);
-              (*m00).r2.c0 = mac((*m00).r2.c0, u, v0.r2.c0); (*m10).r2.c0 = mac((*m10).r2.c0, u, v1.r2.c0);
-              if ROWS > 4u { (*m20).r2.c0 = mac((*m20).r2.c0, u, v2.r2.c0); (*m30).r2.c0 = mac((*m30).r2.c0, u, v3.r2.c0); } }
+              (*m00).r2.c0 = mac((*m00).r2.c0, u, v0.r2.c0); (*m10).r2.c0 = mac((*m10).r2.c0, u, v1.r2.c0); }
             { let u = ob1_1(g.g2);
-              (*m00).r2.c1 = mac((*m00).r2.c1, u, v0.r2.c1); (*m10).r2.c1 = mac((*m10).r2.c1, u, v1.r2.c1);
-              if ROWS > 4u { (*m20).r2.c1 = mac((*m20).r2.c1, u, v2.r2.c1); (*m30).r2.c1 = mac((*m30).r2.c1, u, v3.r2.c1); } }
+              (*m00).r2.c1 = mac((*m00).r2.c1, u, v0.r2.c1); (*m10).r2.c1 = mac((*m10).r2.c1, u, v1.r2.c1); }
             { let u = ob1_2(g.g2);
-              (*m00).r2.c2 = mac((*m00).r2.c2, u, v0.r2.c2); (*m10).r2.c2 = mac((*m10).r2.c2, u, v1.r2.c2);
-              if ROWS > 4u { (*m20).r2.c2 = mac((*m20).r2.c2, u, v2.r2.c2); (*m30).r2.c2 = mac((*m30).r2.c2, u, v3.r2.c2); } }
+              (*m00).r2.c2 = mac((*m00).r2.c2, u, v0.r2.c2); (*m10).r2.c2 = mac((*m10).r2.c2, u, v1.r2.c2); }
             { let u = ob1_3(g.g2);
-              (*m00).r2.c3 = mac((*m00).r2.c3, u, v0.r2.c3); (*m10).r2.c3 = mac((*m10).r2.c3, u, v1.r2.c3);
-              if ROWS > 4u { (*m20).r2.c3 = mac((*m20).r2.c3, u, v2.r2.c3); (*m30).r2.c3 = mac((*m30).r2.c3, u, v3.r2.c3); } }
+              (*m00).r2.c3 = mac((*m00).r2.c3, u, v0.r2.c3); (*m10).r2.c3 = mac((*m10).r2.c3, u, v1.r2.c3); }
             { let u = ob1_0(g.g3);
-              (*m00).r3.c0 = mac((*m00).r3.c0, u, v0.r3.c0); (*m10).r3.c0 = mac((*m10).r3.c0, u, v1.r3.c0);
-              if ROWS > 4u { (*m20).r3.c0 = mac((*m20).r3.c0, u, v2.r3.c0); (*m30).r3.c0 = mac((*m30).r3.c0, u, v3.r3.c0); } }
+              (*m00).r3.c0 = mac((*m00).r3.c0, u, v0.r3.c0); (*m10).r3.c0 = mac((*m10).r3.c0, u, v1.r3.c0); }
             { let u = ob1_1(g.g3);
-              (*m00).r3.c1 = mac((*m00).r3.c1, u, v0.r3.c1); (*m10).r3.c1 = mac((*m10).r3.c1, u, v1.r3.c1);
-              if ROWS > 4u { (*m20).r3.c1 = mac((*m20).r3.c1, u, v2.r3.c1); (*m30).r3.c1 = mac((*m30).r3.c1, u, v3.r3.c1); } }
+              (*m00).r3.c1 = mac((*m00).r3.c1, u, v0.r3.c1); (*m10).r3.c1 = mac((*m10).r3.c1, u, v1.r3.c1); }
             { let u = ob1_2(g.g3);
-              (*m00).r3.c2 = mac((*m00).r3.c2, u, v0.r3.c2); (*m10).r3.c2 = mac((*m10).r3.c2, u, v1.r3.c2);
-              if ROWS > 4u { (*m20).r3.c2 = mac((*m20).r3.c2, u, v2.r3.c2); (*m30).r3.c2 = mac((*m30).r3.c2, u, v3.r3.c2); } }
+              (*m00).r3.c2 = mac((*m00).r3.c2, u, v0.r3.c2); (*m10).r3.c2 = mac((*m10).r3.c2, u, v1.r3.c2); }
             { let u = ob1_3(g.g3);
-              (*m00).r3.c3 = mac((*m00).r3.c3, u, v0.r3.c3); (*m10).r3.c3 = mac((*m10).r3.c3, u, v1.r3.c3);
-              if ROWS > 4u { (*m20).r3.c3 = mac((*m20).r3.c3, u, v2.r3.c3); (*m30).r3.c3 = mac((*m30).r3.c3, u, v3.r3.c3); } }
+              (*m00).r3.c3 = mac((*m00).r3.c3, u, v0.r3.c3); (*m10).r3.c3 = mac((*m10).r3.c3, u, v1.r3.c3); }
             continuing { break if once(); }
         }
     } else if OB == 2u {
-        // Tile rows 0 and 1, 2 and 3, each pair in a loop that runs once: a basic
-        // block of its own for LLVM (conv_common.wgsl's `once`).
         loop {
             { let u = ob2_00(g.g0);
-              (*m00).r0.c0 = mac((*m00).r0.c0, u, v0.r0.c0); (*m10).r0.c0 = mac((*m10).r0.c0, u, v1.r0.c0);
-              if ROWS > 4u { (*m20).r0.c0 = mac((*m20).r0.c0, u, v2.r0.c0); (*m30).r0.c0 = mac((*m30).r0.c0, u, v3.r0.c0); } }
+              (*m00).r0.c0 = mac((*m00).r0.c0, u, v0.r0.c0); (*m10).r0.c0 = mac((*m10).r0.c0, u, v1.r0.c0); }
             { let u = ob2_01(g.g0);
-              (*m01).r0.c0 = mac((*m01).r0.c0, u, v0.r0.c0); (*m11).r0.c0 = mac((*m11).r0.c0, u, v1.r0.c0);
-              if ROWS > 4u { (*m21).r0.c0 = mac((*m21).r0.c0, u, v2.r0.c0); (*m31).r0.c0 = mac((*m31).r0.c0, u, v3.r0.c0); } }
+              (*m01).r0.c0 = mac((*m01).r0.c0, u, v0.r0.c0); (*m11).r0.c0 = mac((*m11).r0.c0, u, v1.r0.c0); }
             { let u = ob2_10(g.g0);
-              (*m00).r0.c1 = mac((*m00).r0.c1, u, v0.r0.c1); (*m10).r0.c1 = mac((*m10).r0.c1, u, v1.r0.c1);
-              if ROWS > 4u { (*m20).r0.c1 = mac((*m20).r0.c1, u, v2.r0.c1); (*m30).r0.c1 = mac((*m30).r0.c1, u, v3.r0.c1); } }
+              (*m00).r0.c1 = mac((*m00).r0.c1, u, v0.r0.c1); (*m10).r0.c1 = mac((*m10).r0.c1, u, v1.r0.c1); }
             { let u = ob2_11(g.g0);
-              (*m01).r0.c1 = mac((*m01).r0.c1, u, v0.r0.c1); (*m11).r0.c1 = mac((*m11).r0.c1, u, v1.r0.c1);
-              if ROWS > 4u { (*m21).r0.c1 = mac((*m21).r0.c1, u, v2.r0.c1); (*m31).r0.c1 = mac((*m31).r0.c1, u, v3.r0.c1); } }
+              (*m01).r0.c1 = mac((*m01).r0.c1, u, v0.r0.c1); (*m11).r0.c1 = mac((*m11).r0.c1, u, v1.r0.c1); }
             { let u = ob2_00(g.g1);
-              (*m00).r0.c2 = mac((*m00).r0.c2, u, v0.r0.c2); (*m10).r0.c2 = mac((*m10).r0.c2, u, v1.r0.c2);
-              if ROWS > 4u { (*m20).r0.c2 = mac((*m20).r0.c2, u, v2.r0.c2); (*m30).r0.c2 = mac((*m30).r0.c2, u, v3.r0.c2); } }
+              (*m00).r0.c2 = mac((*m00).r0.c2, u, v0.r0.c2); (*m10).r0.c2 = mac((*m10).r0.c2, u, v1.r0.c2); }
             { let u = ob2_01(g.g1);
-              (*m01).r0.c2 = mac((*m01).r0.c2, u, v0.r0.c2); (*m11).r0.c2 = mac((*m11).r0.c2, u, v1.r0.c2);
-              if ROWS > 4u { (*m21).r0.c2 = mac((*m21).r0.c2, u, v2.r0.c2); (*m31).r0.c2 = mac((*m31).r0.c2, u, v3.r0.c2); } }
+              (*m01).r0.c2 = mac((*m01).r0.c2, u, v0.r0.c2); (*m11).r0.c2 = mac((*m11).r0.c2, u, v1.r0.c2); }
             { let u = ob2_10(g.g1);
-              (*m00).r0.c3 = mac((*m00).r0.c3, u, v0.r0.c3); (*m10).r0.c3 = mac((*m10).r0.c3, u, v1.r0.c3);
-              if ROWS > 4u { (*m20).r0.c3 = mac((*m20).r0.c3, u, v2.r0.c3); (*m30).r0.c3 = mac((*m30).r0.c3, u, v3.r0.c3); } }
+              (*m00).r0.c3 = mac((*m00).r0.c3, u, v0.r0.c3); (*m10).r0.c3 = mac((*m10).r0.c3, u, v1.r0.c3); }
             { let u = ob2_11(g.g1);
-              (*m01).r0.c3 = mac((*m01).r0.c3, u, v0.r0.c3); (*m11).r0.c3 = mac((*m11).r0.c3, u, v1.r0.c3);
-              if ROWS > 4u { (*m21).r0.c3 = mac((*m21).r0.c3, u, v2.r0.c3); (*m31).r0.c3 = mac((*m31).r0.c3, u, v3.r0.c3); } }
+              (*m01).r0.c3 = mac((*m01).r0.c3, u, v0.r0.c3); (*m11).r0.c3 = mac((*m11).r0.c3, u, v1.r0.c3); }
             { let u = ob2_00(g.g2);
-              (*m00).r1.c0 = mac((*m00).r1.c0, u, v0.r1.c0); (*m10).r1.c0 = mac((*m10).r1.c0, u, v1.r1.c0);
-              if ROWS > 4u { (*m20).r1.c0 = mac((*m20).r1.c0, u, v2.r1.c0); (*m30).r1.c0 = mac((*m30).r1.c0, u, v3.r1.c0); } }
+              (*m00).r1.c0 = mac((*m00).r1.c0, u, v0.r1.c0); (*m10).r1.c0 = mac((*m10).r1.c0, u, v1.r1.c0); }
             { let u = ob2_01(g.g2);
-              (*m01).r1.c0 = mac((*m01).r1.c0, u, v0.r1.c0); (*m11).r1.c0 = mac((*m11).r1.c0, u, v1.r1.c0);
-              if ROWS > 4u { (*m21).r1.c0 = mac((*m21).r1.c0, u, v2.r1.c0); (*m31).r1.c0 = mac((*m31).r1.c0, u, v3.r1.c0); } }
+              (*m01).r1.c0 = mac((*m01).r1.c0, u, v0.r1.c0); (*m11).r1.c0 = mac((*m11).r1.c0, u, v1.r1.c0); }
             { let u = ob2_10(g.g2);
-              (*m00).r1.c1 = mac((*m00).r1.c1, u, v0.r1.c1); (*m10).r1.c1 = mac((*m10).r1.c1, u, v1.r1.c1);
-              if ROWS > 4u { (*m20).r1.c1 = mac((*m20).r1.c1, u, v2.r1.c1); (*m30).r1.c1 = mac((*m30).r1.c1, u, v3.r1.c1); } }
+              (*m00).r1.c1 = mac((*m00).r1.c1, u, v0.r1.c1); (*m10).r1.c1 = mac((*m10).r1.c1, u, v1.r1.c1); }
             { let u = ob2_11(g.g2);
-              (*m01).r1.c1 = mac((*m01).r1.c1, u, v0.r1.c1); (*m11).r1.c1 = mac((*m11).r1.c1, u, v1.r1.c1);
-              if ROWS > 4u { (*m21).r1.c1 = mac((*m21).r1.c1, u, v2.r1.c1); (*m31).r1.c1 = mac((*m31).r1.c1, u, v3.r1.c1); } }
+              (*m01).r1.c1 = mac((*m01).r1.c1, u, v0.r1.c1); (*m11).r1.c1 = mac((*m11).r1.c1, u, v1.r1.c1); }
             { let u = ob2_00(g.g3);
-              (*m00).r1.c2 = mac((*m00).r1.c2, u, v0.r1.c2); (*m10).r1.c2 = mac((*m10).r1.c2, u, v1.r1.c2);
-              if ROWS > 4u { (*m20).r1.c2 = mac((*m20).r1.c2, u, v2.r1.c2); (*m30).r1.c2 = mac((*m30).r1.c2, u, v3.r1.c2); } }
+              (*m00).r1.c2 = mac((*m00).r1.c2, u, v0.r1.c2); (*m10).r1.c2 = mac((*m10).r1.c2, u, v1.r1.c2); }
             { let u = ob2_01(g.g3);
-              (*m01).r1.c2 = mac((*m01).r1.c2, u, v0.r1.c2); (*m11).r1.c2 = mac((*m11).r1.c2, u, v1.r1.c2);
-              if ROWS > 4u { (*m21).r1.c2 = mac((*m21).r1.c2, u, v2.r1.c2); (*m31).r1.c2 = mac((*m31).r1.c2, u, v3.r1.c2); } }
+              (*m01).r1.c2 = mac((*m01).r1.c2, u, v0.r1.c2); (*m11).r1.c2 = mac((*m11).r1.c2, u, v1.r1.c2); }
             { let u = ob2_10(g.g3);
-              (*m00).r1.c3 = mac((*m00).r1.c3, u, v0.r1.c3); (*m10).r1.c3 = mac((*m10).r1.c3, u, v1.r1.c3);
-              if ROWS > 4u { (*m20).r1.c3 = mac((*m20).r1.c3, u, v2.r1.c3); (*m30).r1.c3 = mac((*m30).r1.c3, u, v3.r1.c3); } }
+              (*m00).r1.c3 = mac((*m00).r1.c3, u, v0.r1.c3); (*m10).r1.c3 = mac((*m10).r1.c3, u, v1.r1.c3); }
             { let u = ob2_11(g.g3);
-              (*m01).r1.c3 = mac((*m01).r1.c3, u, v0.r1.c3); (*m11).r1.c3 = mac((*m11).r1.c3, u, v1.r1.c3);
-              if ROWS > 4u { (*m21).r1.c3 = mac((*m21).r1.c3, u, v2.r1.c3); (*m31).r1.c3 = mac((*m31).r1.c3, u, v3.r1.c3); } }
+              (*m01).r1.c3 = mac((*m01).r1.c3, u, v0.r1.c3); (*m11).r1.c3 = mac((*m11).r1.c3, u, v1.r1.c3); }
             continuing { break if once(); }
         }
         loop {
             { let u = ob2_00(g.g4);
-              (*m00).r2.c0 = mac((*m00).r2.c0, u, v0.r2.c0); (*m10).r2.c0 = mac((*m10).r2.c0, u, v1.r2.c0);
-              if ROWS > 4u { (*m20).r2.c0 = mac((*m20).r2.c0, u, v2.r2.c0); (*m30).r2.c0 = mac((*m30).r2.c0, u, v3.r2.c0); } }
+              (*m00).r2.c0 = mac((*m00).r2.c0, u, v0.r2.c0); (*m10).r2.c0 = mac((*m10).r2.c0, u, v1.r2.c0); }
             { let u = ob2_01(g.g4);
-              (*m01).r2.c0 = mac((*m01).r2.c0, u, v0.r2.c0); (*m11).r2.c0 = mac((*m11).r2.c0, u, v1.r2.c0);
-              if ROWS > 4u { (*m21).r2.c0 = mac((*m21).r2.c0, u, v2.r2.c0); (*m31).r2.c0 = mac((*m31).r2.c0, u, v3.r2.c0); } }
+              (*m01).r2.c0 = mac((*m01).r2.c0, u, v0.r2.c0); (*m11).r2.c0 = mac((*m11).r2.c0, u, v1.r2.c0); }
             { let u = ob2_10(g.g4);
-              (*m00).r2.c1 = mac((*m00).r2.c1, u, v0.r2.c1); (*m10).r2.c1 = mac((*m10).r2.c1, u, v1.r2.c1);
-              if ROWS > 4u { (*m20).r2.c1 = mac((*m20).r2.c1, u, v2.r2.c1); (*m30).r2.c1 = mac((*m30).r2.c1, u, v3.r2.c1); } }
+              (*m00).r2.c1 = mac((*m00).r2.c1, u, v0.r2.c1); (*m10).r2.c1 = mac((*m10).r2.c1, u, v1.r2.c1); }
             { let u = ob2_11(g.g4);
-              (*m01).r2.c1 = mac((*m01).r2.c1, u, v0.r2.c1); (*m11).r2.c1 = mac((*m11).r2.c1, u, v1.r2.c1);
-              if ROWS > 4u { (*m21).r2.c1 = mac((*m21).r2.c1, u, v2.r2.c1); (*m31).r2.c1 = mac((*m31).r2.c1, u, v3.r2.c1); } }
+              (*m01).r2.c1 = mac((*m01).r2.c1, u, v0.r2.c1); (*m11).r2.c1 = mac((*m11).r2.c1, u, v1.r2.c1); }
             { let u = ob2_00(g.g5);
-              (*m00).r2.c2 = mac((*m00).r2.c2, u, v0.r2.c2); (*m10).r2.c2 = mac((*m10).r2.c2, u, v1.r2.c2);
-              if ROWS > 4u { (*m20).r2.c2 = mac((*m20).r2.c2, u, v2.r2.c2); (*m30).r2.c2 = mac((*m30).r2.c2, u, v3.r2.c2); } }
+              (*m00).r2.c2 = mac((*m00).r2.c2, u, v0.r2.c2); (*m10).r2.c2 = mac((*m10).r2.c2, u, v1.r2.c2); }
             { let u = ob2_01(g.g5);
-              (*m01).r2.c2 = mac((*m01).r2.c2, u, v0.r2.c2); (*m11).r2.c2 = mac((*m11).r2.c2, u, v1.r2.c2);
-              if ROWS > 4u { (*m21).r2.c2 = mac((*m21).r2.c2, u, v2.r2.c2); (*m31).r2.c2 = mac((*m31).r2.c2, u, v3.r2.c2); } }
+              (*m01).r2.c2 = mac((*m01).r2.c2, u, v0.r2.c2); (*m11).r2.c2 = mac((*m11).r2.c2, u, v1.r2.c2); }
             { let u = ob2_10(g.g5);
-              (*m00).r2.c3 = mac((*m00).r2.c3, u, v0.r2.c3); (*m10).r2.c3 = mac((*m10).r2.c3, u, v1.r2.c3);
-              if ROWS > 4u { (*m20).r2.c3 = mac((*m20).r2.c3, u, v2.r2.c3); (*m30).r2.c3 = mac((*m30).r2.c3, u, v3.r2.c3); } }
+              (*m00).r2.c3 = mac((*m00).r2.c3, u, v0.r2.c3); (*m10).r2.c3 = mac((*m10).r2.c3, u, v1.r2.c3); }
             { let u = ob2_11(g.g5);
-              (*m01).r2.c3 = mac((*m01).r2.c3, u, v0.r2.c3); (*m11).r2.c3 = mac((*m11).r2.c3, u, v1.r2.c3);
-              if ROWS > 4u { (*m21).r2.c3 = mac((*m21).r2.c3, u, v2.r2.c3); (*m31).r2.c3 = mac((*m31).r2.c3, u, v3.r2.c3); } }
+              (*m01).r2.c3 = mac((*m01).r2.c3, u, v0.r2.c3); (*m11).r2.c3 = mac((*m11).r2.c3, u, v1.r2.c3); }
             { let u = ob2_00(g.g6);
-              (*m00).r3.c0 = mac((*m00).r3.c0, u, v0.r3.c0); (*m10).r3.c0 = mac((*m10).r3.c0, u, v1.r3.c0);
-              if ROWS > 4u { (*m20).r3.c0 = mac((*m20).r3.c0, u, v2.r3.c0); (*m30).r3.c0 = mac((*m30).r3.c0, u, v3.r3.c0); } }
+              (*m00).r3.c0 = mac((*m00).r3.c0, u, v0.r3.c0); (*m10).r3.c0 = mac((*m10).r3.c0, u, v1.r3.c0); }
             { let u = ob2_01(g.g6);
-              (*m01).r3.c0 = mac((*m01).r3.c0, u, v0.r3.c0); (*m11).r3.c0 = mac((*m11).r3.c0, u, v1.r3.c0);
-              if ROWS > 4u { (*m21).r3.c0 = mac((*m21).r3.c0, u, v2.r3.c0); (*m31).r3.c0 = mac((*m31).r3.c0, u, v3.r3.c0); } }
+              (*m01).r3.c0 = mac((*m01).r3.c0, u, v0.r3.c0); (*m11).r3.c0 = mac((*m11).r3.c0, u, v1.r3.c0); }
             { let u = ob2_10(g.g6);
-              (*m00).r3.c1 = mac((*m00).r3.c1, u, v0.r3.c1); (*m10).r3.c1 = mac((*m10).r3.c1, u, v1.r3.c1);
-              if ROWS > 4u { (*m20).r3.c1 = mac((*m20).r3.c1, u, v2.r3.c1); (*m30).r3.c1 = mac((*m30).r3.c1, u, v3.r3.c1); } }
+              (*m00).r3.c1 = mac((*m00).r3.c1, u, v0.r3.c1); (*m10).r3.c1 = mac((*m10).r3.c1, u, v1.r3.c1); }
             { let u = ob2_11(g.g6);
-              (*m01).r3.c1 = mac((*m01).r3.c1, u, v0.r3.c1); (*m11).r3.c1 = mac((*m11).r3.c1, u, v1.r3.c1);
-              if ROWS > 4u { (*m21).r3.c1 = mac((*m21).r3.c1, u, v2.r3.c1); (*m31).r3.c1 = mac((*m31).r3.c1, u, v3.r3.c1); } }
+              (*m01).r3.c1 = mac((*m01).r3.c1, u, v0.r3.c1); (*m11).r3.c1 = mac((*m11).r3.c1, u, v1.r3.c1); }
             { let u = ob2_00(g.g7);
-              (*m00).r3.c2 = mac((*m00).r3.c2, u, v0.r3.c2); (*m10).r3.c2 = mac((*m10).r3.c2, u, v1.r3.c2);
-              if ROWS > 4u { (*m20).r3.c2 = mac((*m20).r3.c2, u, v2.r3.c2); (*m30).r3.c2 = mac((*m30).r3.c2, u, v3.r3.c2); } }
+              (*m00).r3.c2 = mac((*m00).r3.c2, u, v0.r3.c2); (*m10).r3.c2 = mac((*m10).r3.c2, u, v1.r3.c2); }
             { let u = ob2_01(g.g7);
-              (*m01).r3.c2 = mac((*m01).r3.c2, u, v0.r3.c2); (*m11).r3.c2 = mac((*m11).r3.c2, u, v1.r3.c2);
-              if ROWS > 4u { (*m21).r3.c2 = mac((*m21).r3.c2, u, v2.r3.c2); (*m31).r3.c2 = mac((*m31).r3.c2, u, v3.r3.c2); } }
+              (*m01).r3.c2 = mac((*m01).r3.c2, u, v0.r3.c2); (*m11).r3.c2 = mac((*m11).r3.c2, u, v1.r3.c2); }
             { let u = ob2_10(g.g7);
-              (*m00).r3.c3 = mac((*m00).r3.c3, u, v0.r3.c3); (*m10).r3.c3 = mac((*m10).r3.c3, u, v1.r3.c3);
-              if ROWS > 4u { (*m20).r3.c3 = mac((*m20).r3.c3, u, v2.r3.c3); (*m30).r3.c3 = mac((*m30).r3.c3, u, v3.r3.c3); } }
+              (*m00).r3.c3 = mac((*m00).r3.c3, u, v0.r3.c3); (*m10).r3.c3 = mac((*m10).r3.c3, u, v1.r3.c3); }
             { let u = ob2_11(g.g7);
-              (*m01).r3.c3 = mac((*m01).r3.c3, u, v0.r3.c3); (*m11).r3.c3 = mac((*m11).r3.c3, u, v1.r3.c3);
-              if ROWS > 4u { (*m21).r3.c3 = mac((*m21).r3.c3, u, v2.r3.c3); (*m31).r3.c3 = mac((*m31).r3.c3, u, v3.r3.c3); } }
+              (*m01).r3.c3 = mac((*m01).r3.c3, u, v0.r3.c3); (*m11).r3.c3 = mac((*m11).r3.c3, u, v1.r3.c3); }
             continuing { break if once(); }
         }
     } else {
-        // Tile rows 0 and 1, 2 and 3, each pair in a loop that runs once: a basic
-        // block of its own for LLVM (conv_common.wgsl's `once`).
         loop {
             { let u = ob4_0(g.g0);
-              (*m00).r0.c0 = mac((*m00).r0.c0, u, v0.r0.c0); (*m10).r0.c0 = mac((*m10).r0.c0, u, v1.r0.c0);
-              if ROWS > 4u { (*m20).r0.c0 = mac((*m20).r0.c0, u, v2.r0.c0); (*m30).r0.c0 = mac((*m30).r0.c0, u, v3.r0.c0); } }
+              (*m00).r0.c0 = mac((*m00).r0.c0, u, v0.r0.c0); (*m10).r0.c0 = mac((*m10).r0.c0, u, v1.r0.c0); }
             { let u = ob4_1(g.g0);
-              (*m01).r0.c0 = mac((*m01).r0.c0, u, v0.r0.c0); (*m11).r0.c0 = mac((*m11).r0.c0, u, v1.r0.c0);
-              if ROWS > 4u { (*m21).r0.c0 = mac((*m21).r0.c0, u, v2.r0.c0); (*m31).r0.c0 = mac((*m31).r0.c0, u, v3.r0.c0); } }
+              (*m01).r0.c0 = mac((*m01).r0.c0, u, v0.r0.c0); (*m11).r0.c0 = mac((*m11).r0.c0, u, v1.r0.c0); }
             { let u = ob4_2(g.g0);
-              (*m02).r0.c0 = mac((*m02).r0.c0, u, v0.r0.c0); (*m12).r0.c0 = mac((*m12).r0.c0, u, v1.r0.c0);
-              if ROWS > 4u { (*m22).r0.c0 = mac((*m22).r0.c0, u, v2.r0.c0); (*m32).r0.c0 = mac((*m32).r0.c0, u, v3.r0.c0); } }
+              (*m02).r0.c0 = mac((*m02).r0.c0, u, v0.r0.c0); (*m12).r0.c0 = mac((*m12).r0.c0, u, v1.r0.c0); }
             { let u = ob4_3(g.g0);
-              (*m03).r0.c0 = mac((*m03).r0.c0, u, v0.r0.c0); (*m13).r0.c0 = mac((*m13).r0.c0, u, v1.r0.c0);
-              if ROWS > 4u { (*m23).r0.c0 = mac((*m23).r0.c0, u, v2.r0.c0); (*m33).r0.c0 = mac((*m33).r0.c0, u, v3.r0.c0); } }
+              (*m03).r0.c0 = mac((*m03).r0.c0, u, v0.r0.c0); (*m13).r0.c0 = mac((*m13).r0.c0, u, v1.r0.c0); }
             { let u = ob4_0(g.g1);
-              (*m00).r0.c1 = mac((*m00).r0.c1, u, v0.r0.c1); (*m10).r0.c1 = mac((*m10).r0.c1, u, v1.r0.c1);
-              if ROWS > 4u { (*m20).r0.c1 = mac((*m20).r0.c1, u, v2.r0.c1); (*m30).r0.c1 = mac((*m30).r0.c1, u, v3.r0.c1); } }
+              (*m00).r0.c1 = mac((*m00).r0.c1, u, v0.r0.c1); (*m10).r0.c1 = mac((*m10).r0.c1, u, v1.r0.c1); }
             { let u = ob4_1(g.g1);
-              (*m01).r0.c1 = mac((*m01).r0.c1, u, v0.r0.c1); (*m11).r0.c1 = mac((*m11).r0.c1, u, v1.r0.c1);
-              if ROWS > 4u { (*m21).r0.c1 = mac((*m21).r0.c1, u, v2.r0.c1); (*m31).r0.c1 = mac((*m31).r0.c1, u, v3.r0.c1); } }
+              (*m01).r0.c1 = mac((*m01).r0.c1, u, v0.r0.c1); (*m11).r0.c1 = mac((*m11).r0.c1, u, v1.r0.c1); }
             { let u = ob4_2(g.g1);
-              (*m02).r0.c1 = mac((*m02).r0.c1, u, v0.r0.c1); (*m12).r0.c1 = mac((*m12).r0.c1, u, v1.r0.c1);
-              if ROWS > 4u { (*m22).r0.c1 = mac((*m22).r0.c1, u, v2.r0.c1); (*m32).r0.c1 = mac((*m32).r0.c1, u, v3.r0.c1); } }
+              (*m02).r0.c1 = mac((*m02).r0.c1, u, v0.r0.c1); (*m12).r0.c1 = mac((*m12).r0.c1, u, v1.r0.c1); }
             { let u = ob4_3(g.g1);
-              (*m03).r0.c1 = mac((*m03).r0.c1, u, v0.r0.c1); (*m13).r0.c1 = mac((*m13).r0.c1, u, v1.r0.c1);
-              if ROWS > 4u { (*m23).r0.c1 = mac((*m23).r0.c1, u, v2.r0.c1); (*m33).r0.c1 = mac((*m33).r0.c1, u, v3.r0.c1); } }
+              (*m03).r0.c1 = mac((*m03).r0.c1, u, v0.r0.c1); (*m13).r0.c1 = mac((*m13).r0.c1, u, v1.r0.c1); }
             { let u = ob4_0(g.g2);
-              (*m00).r0.c2 = mac((*m00).r0.c2, u, v0.r0.c2); (*m10).r0.c2 = mac((*m10).r0.c2, u, v1.r0.c2);
-              if ROWS > 4u { (*m20).r0.c2 = mac((*m20).r0.c2, u, v2.r0.c2); (*m30).r0.c2 = mac((*m30).r0.c2, u, v3.r0.c2); } }
+              (*m00).r0.c2 = mac((*m00).r0.c2, u, v0.r0.c2); (*m10).r0.c2 = mac((*m10).r0.c2, u, v1.r0.c2); }
             { let u = ob4_1(g.g2);
-              (*m01).r0.c2 = mac((*m01).r0.c2, u, v0.r0.c2); (*m11).r0.c2 = mac((*m11).r0.c2, u, v1.r0.c2);
-              if ROWS > 4u { (*m21).r0.c2 = mac((*m21).r0.c2, u, v2.r0.c2); (*m31).r0.c2 = mac((*m31).r0.c2, u, v3.r0.c2); } }
+              (*m01).r0.c2 = mac((*m01).r0.c2, u, v0.r0.c2); (*m11).r0.c2 = mac((*m11).r0.c2, u, v1.r0.c2); }
             { let u = ob4_2(g.g2);
-              (*m02).r0.c2 = mac((*m02).r0.c2, u, v0.r0.c2); (*m12).r0.c2 = mac((*m12).r0.c2, u, v1.r0.c2);
-              if ROWS > 4u { (*m22).r0.c2 = mac((*m22).r0.c2, u, v2.r0.c2); (*m32).r0.c2 = mac((*m32).r0.c2, u, v3.r0.c2); } }
+              (*m02).r0.c2 = mac((*m02).r0.c2, u, v0.r0.c2); (*m12).r0.c2 = mac((*m12).r0.c2, u, v1.r0.c2); }
             { let u = ob4_3(g.g2);
-              (*m03).r0.c2 = mac((*m03).r0.c2, u, v0.r0.c2); (*m13).r0.c2 = mac((*m13).r0.c2, u, v1.r0.c2);
-              if ROWS > 4u { (*m23).r0.c2 = mac((*m23).r0.c2, u, v2.r0.c2); (*m33).r0.c2 = mac((*m33).r0.c2, u, v3.r0.c2); } }
+              (*m03).r0.c2 = mac((*m03).r0.c2, u, v0.r0.c2); (*m13).r0.c2 = mac((*m13).r0.c2, u, v1.r0.c2); }
             { let u = ob4_0(g.g3);
-              (*m00).r0.c3 = mac((*m00).r0.c3, u, v0.r0.c3); (*m10).r0.c3 = mac((*m10).r0.c3, u, v1.r0.c3);
-              if ROWS > 4u { (*m20).r0.c3 = mac((*m20).r0.c3, u, v2.r0.c3); (*m30).r0.c3 = mac((*m30).r0.c3, u, v3.r0.c3); } }
+              (*m00).r0.c3 = mac((*m00).r0.c3, u, v0.r0.c3); (*m10).r0.c3 = mac((*m10).r0.c3, u, v1.r0.c3); }
             { let u = ob4_1(g.g3);
-              (*m01).r0.c3 = mac((*m01).r0.c3, u, v0.r0.c3); (*m11).r0.c3 = mac((*m11).r0.c3, u, v1.r0.c3);
-              if ROWS > 4u { (*m21).r0.c3 = mac((*m21).r0.c3, u, v2.r0.c3); (*m31).r0.c3 = mac((*m31).r0.c3, u, v3.r0.c3); } }
+              (*m01).r0.c3 = mac((*m01).r0.c3, u, v0.r0.c3); (*m11).r0.c3 = mac((*m11).r0.c3, u, v1.r0.c3); }
             { let u = ob4_2(g.g3);
-              (*m02).r0.c3 = mac((*m02).r0.c3, u, v0.r0.c3); (*m12).r0.c3 = mac((*m12).r0.c3, u, v1.r0.c3);
-              if ROWS > 4u { (*m22).r0.c3 = mac((*m22).r0.c3, u, v2.r0.c3); (*m32).r0.c3 = mac((*m32).r0.c3, u, v3.r0.c3); } }
+              (*m02).r0.c3 = mac((*m02).r0.c3, u, v0.r0.c3); (*m12).r0.c3 = mac((*m12).r0.c3, u, v1.r0.c3); }
             { let u = ob4_3(g.g3);
-              (*m03).r0.c3 = mac((*m03).r0.c3, u, v0.r0.c3); (*m13).r0.c3 = mac((*m13).r0.c3, u, v1.r0.c3);
-              if ROWS > 4u { (*m23).r0.c3 = mac((*m23).r0.c3, u, v2.r0.c3); (*m33).r0.c3 = mac((*m33).r0.c3, u, v3.r0.c3); } }
+              (*m03).r0.c3 = mac((*m03).r0.c3, u, v0.r0.c3); (*m13).r0.c3 = mac((*m13).r0.c3, u, v1.r0.c3); }
             { let u = ob4_0(g.g4);
-              (*m00).r1.c0 = mac((*m00).r1.c0, u, v0.r1.c0); (*m10).r1.c0 = mac((*m10).r1.c0, u, v1.r1.c0);
-              if ROWS > 4u { (*m20).r1.c0 = mac((*m20).r1.c0, u, v2.r1.c0); (*m30).r1.c0 = mac((*m30).r1.c0, u, v3.r1.c0); } }
+              (*m00).r1.c0 = mac((*m00).r1.c0, u, v0.r1.c0); (*m10).r1.c0 = mac((*m10).r1.c0, u, v1.r1.c0); }
             { let u = ob4_1(g.g4);
-              (*m01).r1.c0 = mac((*m01).r1.c0, u, v0.r1.c0); (*m11).r1.c0 = mac((*m11).r1.c0, u, v1.r1.c0);
-              if ROWS > 4u { (*m21).r1.c0 = mac((*m21).r1.c0, u, v2.r1.c0); (*m31).r1.c0 = mac((*m31).r1.c0, u, v3.r1.c0); } }
+              (*m01).r1.c0 = mac((*m01).r1.c0, u, v0.r1.c0); (*m11).r1.c0 = mac((*m11).r1.c0, u, v1.r1.c0); }
             { let u = ob4_2(g.g4);
-              (*m02).r1.c0 = mac((*m02).r1.c0, u, v0.r1.c0); (*m12).r1.c0 = mac((*m12).r1.c0, u, v1.r1.c0);
-              if ROWS > 4u { (*m22).r1.c0 = mac((*m22).r1.c0, u, v2.r1.c0); (*m32).r1.c0 = mac((*m32).r1.c0, u, v3.r1.c0); } }
+              (*m02).r1.c0 = mac((*m02).r1.c0, u, v0.r1.c0); (*m12).r1.c0 = mac((*m12).r1.c0, u, v1.r1.c0); }
             { let u = ob4_3(g.g4);
-              (*m03).r1.c0 = mac((*m03).r1.c0, u, v0.r1.c0); (*m13).r1.c0 = mac((*m13).r1.c0, u, v1.r1.c0);
-              if ROWS > 4u { (*m23).r1.c0 = mac((*m23).r1.c0, u, v2.r1.c0); (*m33).r1.c0 = mac((*m33).r1.c0, u, v3.r1.c0); } }
+              (*m03).r1.c0 = mac((*m03).r1.c0, u, v0.r1.c0); (*m13).r1.c0 = mac((*m13).r1.c0, u, v1.r1.c0); }
             { let u = ob4_0(g.g5);
-              (*m00).r1.c1 = mac((*m00).r1.c1, u, v0.r1.c1); (*m10).r1.c1 = mac((*m10).r1.c1, u, v1.r1.c1);
-              if ROWS > 4u { (*m20).r1.c1 = mac((*m20).r1.c1, u, v2.r1.c1); (*m30).r1.c1 = mac((*m30).r1.c1, u, v3.r1.c1); } }
+              (*m00).r1.c1 = mac((*m00).r1.c1, u, v0.r1.c1); (*m10).r1.c1 = mac((*m10).r1.c1, u, v1.r1.c1); }
             { let u = ob4_1(g.g5);
-              (*m01).r1.c1 = mac((*m01).r1.c1, u, v0.r1.c1); (*m11).r1.c1 = mac((*m11).r1.c1, u, v1.r1.c1);
-              if ROWS > 4u { (*m21).r1.c1 = mac((*m21).r1.c1, u, v2.r1.c1); (*m31).r1.c1 = mac((*m31).r1.c1, u, v3.r1.c1); } }
+              (*m01).r1.c1 = mac((*m01).r1.c1, u, v0.r1.c1); (*m11).r1.c1 = mac((*m11).r1.c1, u, v1.r1.c1); }
             { let u = ob4_2(g.g5);
-              (*m02).r1.c1 = mac((*m02).r1.c1, u, v0.r1.c1); (*m12).r1.c1 = mac((*m12).r1.c1, u, v1.r1.c1);
-              if ROWS > 4u { (*m22).r1.c1 = mac((*m22).r1.c1, u, v2.r1.c1); (*m32).r1.c1 = mac((*m32).r1.c1, u, v3.r1.c1); } }
+              (*m02).r1.c1 = mac((*m02).r1.c1, u, v0.r1.c1); (*m12).r1.c1 = mac((*m12).r1.c1, u, v1.r1.c1); }
             { let u = ob4_3(g.g5);
-              (*m03).r1.c1 = mac((*m03).r1.c1, u, v0.r1.c1); (*m13).r1.c1 = mac((*m13).r1.c1, u, v1.r1.c1);
-              if ROWS > 4u { (*m23).r1.c1 = mac((*m23).r1.c1, u, v2.r1.c1); (*m33).r1.c1 = mac((*m33).r1.c1, u, v3.r1.c1); } }
+              (*m03).r1.c1 = mac((*m03).r1.c1, u, v0.r1.c1); (*m13).r1.c1 = mac((*m13).r1.c1, u, v1.r1.c1); }
             { let u = ob4_0(g.g6);
-              (*m00).r1.c2 = mac((*m00).r1.c2, u, v0.r1.c2); (*m10).r1.c2 = mac((*m10).r1.c2, u, v1.r1.c2);
-              if ROWS > 4u { (*m20).r1.c2 = mac((*m20).r1.c2, u, v2.r1.c2); (*m30).r1.c2 = mac((*m30).r1.c2, u, v3.r1.c2); } }
+              (*m00).r1.c2 = mac((*m00).r1.c2, u, v0.r1.c2); (*m10).r1.c2 = mac((*m10).r1.c2, u, v1.r1.c2); }
             { let u = ob4_1(g.g6);
-              (*m01).r1.c2 = mac((*m01).r1.c2, u, v0.r1.c2); (*m11).r1.c2 = mac((*m11).r1.c2, u, v1.r1.c2);
-              if ROWS > 4u { (*m21).r1.c2 = mac((*m21).r1.c2, u, v2.r1.c2); (*m31).r1.c2 = mac((*m31).r1.c2, u, v3.r1.c2); } }
+              (*m01).r1.c2 = mac((*m01).r1.c2, u, v0.r1.c2); (*m11).r1.c2 = mac((*m11).r1.c2, u, v1.r1.c2); }
             { let u = ob4_2(g.g6);
-              (*m02).r1.c2 = mac((*m02).r1.c2, u, v0.r1.c2); (*m12).r1.c2 = mac((*m12).r1.c2, u, v1.r1.c2);
-              if ROWS > 4u { (*m22).r1.c2 = mac((*m22).r1.c2, u, v2.r1.c2); (*m32).r1.c2 = mac((*m32).r1.c2, u, v3.r1.c2); } }
+              (*m02).r1.c2 = mac((*m02).r1.c2, u, v0.r1.c2); (*m12).r1.c2 = mac((*m12).r1.c2, u, v1.r1.c2); }
             { let u = ob4_3(g.g6);
-              (*m03).r1.c2 = mac((*m03).r1.c2, u, v0.r1.c2); (*m13).r1.c2 = mac((*m13).r1.c2, u, v1.r1.c2);
-              if ROWS > 4u { (*m23).r1.c2 = mac((*m23).r1.c2, u, v2.r1.c2); (*m33).r1.c2 = mac((*m33).r1.c2, u, v3.r1.c2); } }
+              (*m03).r1.c2 = mac((*m03).r1.c2, u, v0.r1.c2); (*m13).r1.c2 = mac((*m13).r1.c2, u, v1.r1.c2); }
             { let u = ob4_0(g.g7);
-              (*m00).r1.c3 = mac((*m00).r1.c3, u, v0.r1.c3); (*m10).r1.c3 = mac((*m10).r1.c3, u, v1.r1.c3);
-              if ROWS > 4u { (*m20).r1.c3 = mac((*m20).r1.c3, u, v2.r1.c3); (*m30).r1.c3 = mac((*m30).r1.c3, u, v3.r1.c3); } }
+              (*m00).r1.c3 = mac((*m00).r1.c3, u, v0.r1.c3); (*m10).r1.c3 = mac((*m10).r1.c3, u, v1.r1.c3); }
             { let u = ob4_1(g.g7);
-              (*m01).r1.c3 = mac((*m01).r1.c3, u, v0.r1.c3); (*m11).r1.c3 = mac((*m11).r1.c3, u, v1.r1.c3);
-              if ROWS > 4u { (*m21).r1.c3 = mac((*m21).r1.c3, u, v2.r1.c3); (*m31).r1.c3 = mac((*m31).r1.c3, u, v3.r1.c3); } }
+              (*m01).r1.c3 = mac((*m01).r1.c3, u, v0.r1.c3); (*m11).r1.c3 = mac((*m11).r1.c3, u, v1.r1.c3); }
             { let u = ob4_2(g.g7);
-              (*m02).r1.c3 = mac((*m02).r1.c3, u, v0.r1.c3); (*m12).r1.c3 = mac((*m12).r1.c3, u, v1.r1.c3);
-              if ROWS > 4u { (*m22).r1.c3 = mac((*m22).r1.c3, u, v2.r1.c3); (*m32).r1.c3 = mac((*m32).r1.c3, u, v3.r1.c3); } }
+              (*m02).r1.c3 = mac((*m02).r1.c3, u, v0.r1.c3); (*m12).r1.c3 = mac((*m12).r1.c3, u, v1.r1.c3); }
             { let u = ob4_3(g.g7);
-              (*m03).r1.c3 = mac((*m03).r1.c3, u, v0.r1.c3); (*m13).r1.c3 = mac((*m13).r1.c3, u, v1.r1.c3);
-              if ROWS > 4u { (*m23).r1.c3 = mac((*m23).r1.c3, u, v2.r1.c3); (*m33).r1.c3 = mac((*m33).r1.c3, u, v3.r1.c3); } }
+              (*m03).r1.c3 = mac((*m03).r1.c3, u, v0.r1.c3); (*m13).r1.c3 = mac((*m13).r1.c3, u, v1.r1.c3); }
             continuing { break if once(); }
         }
         loop {
             { let u = ob4_0(g.g8);
-              (*m00).r2.c0 = mac((*m00).r2.c0, u, v0.r2.c0); (*m10).r2.c0 = mac((*m10).r2.c0, u, v1.r2.c0);
-              if ROWS > 4u { (*m20).r2.c0 = mac((*m20).r2.c0, u, v2.r2.c0); (*m30).r2.c0 = mac((*m30).r2.c0, u, v3.r2.c0); } }
+              (*m00).r2.c0 = mac((*m00).r2.c0, u, v0.r2.c0); (*m10).r2.c0 = mac((*m10).r2.c0, u, v1.r2.c0); }
             { let u = ob4_1(g.g8);
-              (*m01).r2.c0 = mac((*m01).r2.c0, u, v0.r2.c0); (*m11).r2.c0 = mac((*m11).r2.c0, u, v1.r2.c0);
-              if ROWS > 4u { (*m21).r2.c0 = mac((*m21).r2.c0, u, v2.r2.c0); (*m31).r2.c0 = mac((*m31).r2.c0, u, v3.r2.c0); } }
+              (*m01).r2.c0 = mac((*m01).r2.c0, u, v0.r2.c0); (*m11).r2.c0 = mac((*m11).r2.c0, u, v1.r2.c0); }
             { let u = ob4_2(g.g8);
-              (*m02).r2.c0 = mac((*m02).r2.c0, u, v0.r2.c0); (*m12).r2.c0 = mac((*m12).r2.c0, u, v1.r2.c0);
-              if ROWS > 4u { (*m22).r2.c0 = mac((*m22).r2.c0, u, v2.r2.c0); (*m32).r2.c0 = mac((*m32).r2.c0, u, v3.r2.c0); } }
+              (*m02).r2.c0 = mac((*m02).r2.c0, u, v0.r2.c0); (*m12).r2.c0 = mac((*m12).r2.c0, u, v1.r2.c0); }
             { let u = ob4_3(g.g8);
-              (*m03).r2.c0 = mac((*m03).r2.c0, u, v0.r2.c0); (*m13).r2.c0 = mac((*m13).r2.c0, u, v1.r2.c0);
-              if ROWS > 4u { (*m23).r2.c0 = mac((*m23).r2.c0, u, v2.r2.c0); (*m33).r2.c0 = mac((*m33).r2.c0, u, v3.r2.c0); } }
+              (*m03).r2.c0 = mac((*m03).r2.c0, u, v0.r2.c0); (*m13).r2.c0 = mac((*m13).r2.c0, u, v1.r2.c0); }
             { let u = ob4_0(g.g9);
-              (*m00).r2.c1 = mac((*m00).r2.c1, u, v0.r2.c1); (*m10).r2.c1 = mac((*m10).r2.c1, u, v1.r2.c1);
-              if ROWS > 4u { (*m20).r2.c1 = mac((*m20).r2.c1, u, v2.r2.c1); (*m30).r2.c1 = mac((*m30).r2.c1, u, v3.r2.c1); } }
+              (*m00).r2.c1 = mac((*m00).r2.c1, u, v0.r2.c1); (*m10).r2.c1 = mac((*m10).r2.c1, u, v1.r2.c1); }
             { let u = ob4_1(g.g9);
-              (*m01).r2.c1 = mac((*m01).r2.c1, u, v0.r2.c1); (*m11).r2.c1 = mac((*m11).r2.c1, u, v1.r2.c1);
-              if ROWS > 4u { (*m21).r2.c1 = mac((*m21).r2.c1, u, v2.r2.c1); (*m31).r2.c1 = mac((*m31).r2.c1, u, v3.r2.c1); } }
+              (*m01).r2.c1 = mac((*m01).r2.c1, u, v0.r2.c1); (*m11).r2.c1 = mac((*m11).r2.c1, u, v1.r2.c1); }
             { let u = ob4_2(g.g9);
-              (*m02).r2.c1 = mac((*m02).r2.c1, u, v0.r2.c1); (*m12).r2.c1 = mac((*m12).r2.c1, u, v1.r2.c1);
-              if ROWS > 4u { (*m22).r2.c1 = mac((*m22).r2.c1, u, v2.r2.c1); (*m32).r2.c1 = mac((*m32).r2.c1, u, v3.r2.c1); } }
+              (*m02).r2.c1 = mac((*m02).r2.c1, u, v0.r2.c1); (*m12).r2.c1 = mac((*m12).r2.c1, u, v1.r2.c1); }
             { let u = ob4_3(g.g9);
-              (*m03).r2.c1 = mac((*m03).r2.c1, u, v0.r2.c1); (*m13).r2.c1 = mac((*m13).r2.c1, u, v1.r2.c1);
-              if ROWS > 4u { (*m23).r2.c1 = mac((*m23).r2.c1, u, v2.r2.c1); (*m33).r2.c1 = mac((*m33).r2.c1, u, v3.r2.c1); } }
+              (*m03).r2.c1 = mac((*m03).r2.c1, u, v0.r2.c1); (*m13).r2.c1 = mac((*m13).r2.c1, u, v1.r2.c1); }
             { let u = ob4_0(g.g10);
-              (*m00).r2.c2 = mac((*m00).r2.c2, u, v0.r2.c2); (*m10).r2.c2 = mac((*m10).r2.c2, u, v1.r2.c2);
-              if ROWS > 4u { (*m20).r2.c2 = mac((*m20).r2.c2, u, v2.r2.c2); (*m30).r2.c2 = mac((*m30).r2.c2, u, v3.r2.c2); } }
+              (*m00).r2.c2 = mac((*m00).r2.c2, u, v0.r2.c2); (*m10).r2.c2 = mac((*m10).r2.c2, u, v1.r2.c2); }
             { let u = ob4_1(g.g10);
-              (*m01).r2.c2 = mac((*m01).r2.c2, u, v0.r2.c2); (*m11).r2.c2 = mac((*m11).r2.c2, u, v1.r2.c2);
-              if ROWS > 4u { (*m21).r2.c2 = mac((*m21).r2.c2, u, v2.r2.c2); (*m31).r2.c2 = mac((*m31).r2.c2, u, v3.r2.c2); } }
+              (*m01).r2.c2 = mac((*m01).r2.c2, u, v0.r2.c2); (*m11).r2.c2 = mac((*m11).r2.c2, u, v1.r2.c2); }
             { let u = ob4_2(g.g10);
-              (*m02).r2.c2 = mac((*m02).r2.c2, u, v0.r2.c2); (*m12).r2.c2 = mac((*m12).r2.c2, u, v1.r2.c2);
-              if ROWS > 4u { (*m22).r2.c2 = mac((*m22).r2.c2, u, v2.r2.c2); (*m32).r2.c2 = mac((*m32).r2.c2, u, v3.r2.c2); } }
+              (*m02).r2.c2 = mac((*m02).r2.c2, u, v0.r2.c2); (*m12).r2.c2 = mac((*m12).r2.c2, u, v1.r2.c2); }
             { let u = ob4_3(g.g10);
-              (*m03).r2.c2 = mac((*m03).r2.c2, u, v0.r2.c2); (*m13).r2.c2 = mac((*m13).r2.c2, u, v1.r2.c2);
-              if ROWS > 4u { (*m23).r2.c2 = mac((*m23).r2.c2, u, v2.r2.c2); (*m33).r2.c2 = mac((*m33).r2.c2, u, v3.r2.c2); } }
+              (*m03).r2.c2 = mac((*m03).r2.c2, u, v0.r2.c2); (*m13).r2.c2 = mac((*m13).r2.c2, u, v1.r2.c2); }
             { let u = ob4_0(g.g11);
-              (*m00).r2.c3 = mac((*m00).r2.c3, u, v0.r2.c3); (*m10).r2.c3 = mac((*m10).r2.c3, u, v1.r2.c3);
-              if ROWS > 4u { (*m20).r2.c3 = mac((*m20).r2.c3, u, v2.r2.c3); (*m30).r2.c3 = mac((*m30).r2.c3, u, v3.r2.c3); } }
+              (*m00).r2.c3 = mac((*m00).r2.c3, u, v0.r2.c3); (*m10).r2.c3 = mac((*m10).r2.c3, u, v1.r2.c3); }
             { let u = ob4_1(g.g11);
-              (*m01).r2.c3 = mac((*m01).r2.c3, u, v0.r2.c3); (*m11).r2.c3 = mac((*m11).r2.c3, u, v1.r2.c3);
-              if ROWS > 4u { (*m21).r2.c3 = mac((*m21).r2.c3, u, v2.r2.c3); (*m31).r2.c3 = mac((*m31).r2.c3, u, v3.r2.c3); } }
+              (*m01).r2.c3 = mac((*m01).r2.c3, u, v0.r2.c3); (*m11).r2.c3 = mac((*m11).r2.c3, u, v1.r2.c3); }
             { let u = ob4_2(g.g11);
-              (*m02).r2.c3 = mac((*m02).r2.c3, u, v0.r2.c3); (*m12).r2.c3 = mac((*m12).r2.c3, u, v1.r2.c3);
-              if ROWS > 4u { (*m22).r2.c3 = mac((*m22).r2.c3, u, v2.r2.c3); (*m32).r2.c3 = mac((*m32).r2.c3, u, v3.r2.c3); } }
+              (*m02).r2.c3 = mac((*m02).r2.c3, u, v0.r2.c3); (*m12).r2.c3 = mac((*m12).r2.c3, u, v1.r2.c3); }
             { let u = ob4_3(g.g11);
-              (*m03).r2.c3 = mac((*m03).r2.c3, u, v0.r2.c3); (*m13).r2.c3 = mac((*m13).r2.c3, u, v1.r2.c3);
-              if ROWS > 4u { (*m23).r2.c3 = mac((*m23).r2.c3, u, v2.r2.c3); (*m33).r2.c3 = mac((*m33).r2.c3, u, v3.r2.c3); } }
+              (*m03).r2.c3 = mac((*m03).r2.c3, u, v0.r2.c3); (*m13).r2.c3 = mac((*m13).r2.c3, u, v1.r2.c3); }
             { let u = ob4_0(g.g12);
-              (*m00).r3.c0 = mac((*m00).r3.c0, u, v0.r3.c0); (*m10).r3.c0 = mac((*m10).r3.c0, u, v1.r3.c0);
-              if ROWS > 4u { (*m20).r3.c0 = mac((*m20).r3.c0, u, v2.r3.c0); (*m30).r3.c0 = mac((*m30).r3.c0, u, v3.r3.c0); } }
+              (*m00).r3.c0 = mac((*m00).r3.c0, u, v0.r3.c0); (*m10).r3.c0 = mac((*m10).r3.c0, u, v1.r3.c0); }
             { let u = ob4_1(g.g12);
-              (*m01).r3.c0 = mac((*m01).r3.c0, u, v0.r3.c0); (*m11).r3.c0 = mac((*m11).r3.c0, u, v1.r3.c0);
-              if ROWS > 4u { (*m21).r3.c0 = mac((*m21).r3.c0, u, v2.r3.c0); (*m31).r3.c0 = mac((*m31).r3.c0, u, v3.r3.c0); } }
+              (*m01).r3.c0 = mac((*m01).r3.c0, u, v0.r3.c0); (*m11).r3.c0 = mac((*m11).r3.c0, u, v1.r3.c0); }
             { let u = ob4_2(g.g12);
-              (*m02).r3.c0 = mac((*m02).r3.c0, u, v0.r3.c0); (*m12).r3.c0 = mac((*m12).r3.c0, u, v1.r3.c0);
-              if ROWS > 4u { (*m22).r3.c0 = mac((*m22).r3.c0, u, v2.r3.c0); (*m32).r3.c0 = mac((*m32).r3.c0, u, v3.r3.c0); } }
+              (*m02).r3.c0 = mac((*m02).r3.c0, u, v0.r3.c0); (*m12).r3.c0 = mac((*m12).r3.c0, u, v1.r3.c0); }
             { let u = ob4_3(g.g12);
-              (*m03).r3.c0 = mac((*m03).r3.c0, u, v0.r3.c0); (*m13).r3.c0 = mac((*m13).r3.c0, u, v1.r3.c0);
-              if ROWS > 4u { (*m23).r3.c0 = mac((*m23).r3.c0, u, v2.r3.c0); (*m33).r3.c0 = mac((*m33).r3.c0, u, v3.r3.c0); } }
+              (*m03).r3.c0 = mac((*m03).r3.c0, u, v0.r3.c0); (*m13).r3.c0 = mac((*m13).r3.c0, u, v1.r3.c0); }
             { let u = ob4_0(g.g13);
-              (*m00).r3.c1 = mac((*m00).r3.c1, u, v0.r3.c1); (*m10).r3.c1 = mac((*m10).r3.c1, u, v1.r3.c1);
-              if ROWS > 4u { (*m20).r3.c1 = mac((*m20).r3.c1, u, v2.r3.c1); (*m30).r3.c1 = mac((*m30).r3.c1, u, v3.r3.c1); } }
+              (*m00).r3.c1 = mac((*m00).r3.c1, u, v0.r3.c1); (*m10).r3.c1 = mac((*m10).r3.c1, u, v1.r3.c1); }
             { let u = ob4_1(g.g13);
-              (*m01).r3.c1 = mac((*m01).r3.c1, u, v0.r3.c1); (*m11).r3.c1 = mac((*m11).r3.c1, u, v1.r3.c1);
-              if ROWS > 4u { (*m21).r3.c1 = mac((*m21).r3.c1, u, v2.r3.c1); (*m31).r3.c1 = mac((*m31).r3.c1, u, v3.r3.c1); } }
+              (*m01).r3.c1 = mac((*m01).r3.c1, u, v0.r3.c1); (*m11).r3.c1 = mac((*m11).r3.c1, u, v1.r3.c1); }
             { let u = ob4_2(g.g13);
-              (*m02).r3.c1 = mac((*m02).r3.c1, u, v0.r3.c1); (*m12).r3.c1 = mac((*m12).r3.c1, u, v1.r3.c1);
-              if ROWS > 4u { (*m22).r3.c1 = mac((*m22).r3.c1, u, v2.r3.c1); (*m32).r3.c1 = mac((*m32).r3.c1, u, v3.r3.c1); } }
+              (*m02).r3.c1 = mac((*m02).r3.c1, u, v0.r3.c1); (*m12).r3.c1 = mac((*m12).r3.c1, u, v1.r3.c1); }
             { let u = ob4_3(g.g13);
-              (*m03).r3.c1 = mac((*m03).r3.c1, u, v0.r3.c1); (*m13).r3.c1 = mac((*m13).r3.c1, u, v1.r3.c1);
-              if ROWS > 4u { (*m23).r3.c1 = mac((*m23).r3.c1, u, v2.r3.c1); (*m33).r3.c1 = mac((*m33).r3.c1, u, v3.r3.c1); } }
+              (*m03).r3.c1 = mac((*m03).r3.c1, u, v0.r3.c1); (*m13).r3.c1 = mac((*m13).r3.c1, u, v1.r3.c1); }
             { let u = ob4_0(g.g14);
-              (*m00).r3.c2 = mac((*m00).r3.c2, u, v0.r3.c2); (*m10).r3.c2 = mac((*m10).r3.c2, u, v1.r3.c2);
-              if ROWS > 4u { (*m20).r3.c2 = mac((*m20).r3.c2, u, v2.r3.c2); (*m30).r3.c2 = mac((*m30).r3.c2, u, v3.r3.c2); } }
+              (*m00).r3.c2 = mac((*m00).r3.c2, u, v0.r3.c2); (*m10).r3.c2 = mac((*m10).r3.c2, u, v1.r3.c2); }
             { let u = ob4_1(g.g14);
-              (*m01).r3.c2 = mac((*m01).r3.c2, u, v0.r3.c2); (*m11).r3.c2 = mac((*m11).r3.c2, u, v1.r3.c2);
-              if ROWS > 4u { (*m21).r3.c2 = mac((*m21).r3.c2, u, v2.r3.c2); (*m31).r3.c2 = mac((*m31).r3.c2, u, v3.r3.c2); } }
+              (*m01).r3.c2 = mac((*m01).r3.c2, u, v0.r3.c2); (*m11).r3.c2 = mac((*m11).r3.c2, u, v1.r3.c2); }
             { let u = ob4_2(g.g14);
-              (*m02).r3.c2 = mac((*m02).r3.c2, u, v0.r3.c2); (*m12).r3.c2 = mac((*m12).r3.c2, u, v1.r3.c2);
-              if ROWS > 4u { (*m22).r3.c2 = mac((*m22).r3.c2, u, v2.r3.c2); (*m32).r3.c2 = mac((*m32).r3.c2, u, v3.r3.c2); } }
+              (*m02).r3.c2 = mac((*m02).r3.c2, u, v0.r3.c2); (*m12).r3.c2 = mac((*m12).r3.c2, u, v1.r3.c2); }
             { let u = ob4_3(g.g14);
-              (*m03).r3.c2 = mac((*m03).r3.c2, u, v0.r3.c2); (*m13).r3.c2 = mac((*m13).r3.c2, u, v1.r3.c2);
-              if ROWS > 4u { (*m23).r3.c2 = mac((*m23).r3.c2, u, v2.r3.c2); (*m33).r3.c2 = mac((*m33).r3.c2, u, v3.r3.c2); } }
+              (*m03).r3.c2 = mac((*m03).r3.c2, u, v0.r3.c2); (*m13).r3.c2 = mac((*m13).r3.c2, u, v1.r3.c2); }
             { let u = ob4_0(g.g15);
-              (*m00).r3.c3 = mac((*m00).r3.c3, u, v0.r3.c3); (*m10).r3.c3 = mac((*m10).r3.c3, u, v1.r3.c3);
-              if ROWS > 4u { (*m20).r3.c3 = mac((*m20).r3.c3, u, v2.r3.c3); (*m30).r3.c3 = mac((*m30).r3.c3, u, v3.r3.c3); } }
+              (*m00).r3.c3 = mac((*m00).r3.c3, u, v0.r3.c3); (*m10).r3.c3 = mac((*m10).r3.c3, u, v1.r3.c3); }
             { let u = ob4_1(g.g15);
-              (*m01).r3.c3 = mac((*m01).r3.c3, u, v0.r3.c3); (*m11).r3.c3 = mac((*m11).r3.c3, u, v1.r3.c3);
-              if ROWS > 4u { (*m21).r3.c3 = mac((*m21).r3.c3, u, v2.r3.c3); (*m31).r3.c3 = mac((*m31).r3.c3, u, v3.r3.c3); } }
+              (*m01).r3.c3 = mac((*m01).r3.c3, u, v0.r3.c3); (*m11).r3.c3 = mac((*m11).r3.c3, u, v1.r3.c3); }
             { let u = ob4_2(g.g15);
-              (*m02).r3.c3 = mac((*m02).r3.c3, u, v0.r3.c3); (*m12).r3.c3 = mac((*m12).r3.c3, u, v1.r3.c3);
-              if ROWS > 4u { (*m22).r3.c3 = mac((*m22).r3.c3, u, v2.r3.c3); (*m32).r3.c3 = mac((*m32).r3.c3, u, v3.r3.c3); } }
+              (*m02).r3.c3 = mac((*m02).r3.c3, u, v0.r3.c3); (*m12).r3.c3 = mac((*m12).r3.c3, u, v1.r3.c3); }
             { let u = ob4_3(g.g15);
-              (*m03).r3.c3 = mac((*m03).r3.c3, u, v0.r3.c3); (*m13).r3.c3 = mac((*m13).r3.c3, u, v1.r3.c3);
-              if ROWS > 4u { (*m23).r3.c3 = mac((*m23).r3.c3, u, v2.r3.c3); (*m33).r3.c3 = mac((*m33).r3.c3, u, v3.r3.c3); } }
+              (*m03).r3.c3 = mac((*m03).r3.c3, u, v0.r3.c3); (*m13).r3.c3 = mac((*m13).r3.c3, u, v1.r3.c3); }
             continuing { break if once(); }
         }
     }
 }
+// ---- end generated ----
 
 // `winograd` with its weights loaded across the subgroup, in one-dimensional workgroups of WG_X x
 // WG_Y invocations (subgroup builtins need them) laid out as `winograd`'s.
@@ -481,26 +358,18 @@ fn winograd_lanes(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocatio
     let z = Quad(vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0));
     var m00 = Wino(z, z, z, z);
     var m01 = m00;
-    var m10 = m00;
-    var m11 = m00;
-    var m20 = m00;
-    var m21 = m00;
-    var m30 = m00;
-    var m31 = m00;
     var m02 = m00;
     var m03 = m00;
+    var m10 = m00;
+    var m11 = m00;
     var m12 = m00;
     var m13 = m00;
-    var m22 = m00;
-    var m23 = m00;
-    var m32 = m00;
-    var m33 = m00;
     let xi = i32(x);
     let yi = i32(y0);
     // Source a's blocks, then b's, in one loop (none of b on a reset frame's hidden state).
     let blocks = params.cin4_a + select(0u, params.cin4_b, SOURCE_B);
     for (var c = 0u; c < blocks; c++) {
-        wino_step(&m00, &m01, &m02, &m03, &m10, &m11, &m12, &m13, &m20, &m21, &m22, &m23, &m30, &m31, &m32, &m33, c, w, xi, yi);
+        wino_step(&m00, &m01, &m02, &m03, &m10, &m11, &m12, &m13, c, w, xi, yi);
     }
     if !inside {
         return;
@@ -524,17 +393,5 @@ fn winograd_lanes(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocatio
         if second { wino_store(m11, b1, x, y0 + 2u, ob0 + 1u); }
         if third { wino_store(m12, b2, x, y0 + 2u, ob0 + 2u); }
         if fourth { wino_store(m13, b3, x, y0 + 2u, ob0 + 3u); }
-    }
-    if ROWS > 4u && y0 + 4u < params.height {
-        wino_store(m20, b0, x, y0 + 4u, ob0);
-        if second { wino_store(m21, b1, x, y0 + 4u, ob0 + 1u); }
-        if third { wino_store(m22, b2, x, y0 + 4u, ob0 + 2u); }
-        if fourth { wino_store(m23, b3, x, y0 + 4u, ob0 + 3u); }
-    }
-    if ROWS > 4u && y0 + 6u < params.height {
-        wino_store(m30, b0, x, y0 + 6u, ob0);
-        if second { wino_store(m31, b1, x, y0 + 6u, ob0 + 1u); }
-        if third { wino_store(m32, b2, x, y0 + 6u, ob0 + 2u); }
-        if fourth { wino_store(m33, b3, x, y0 + 6u, ob0 + 3u); }
     }
 }

@@ -5,8 +5,8 @@
 // two-column lanes tiles; it uses their declarations (Quad, mac, lane, Column, Gather, gather,
 // the ob<OB>_<k> broadcasts, the overrides).
 //
-// An invocation computes ROWS / 4 stacked 4x4 output tiles (ROWS = 4 or 8) of 4 columns for OB
-// output blocks (1, 2 or 4). Each input block costs 6 columns of ROWS + 2 fetched texels, their
+// An invocation computes one 4x4 output tile (ROWS = 4) of 4 columns for OB output blocks (1, 2
+// or 4). Each input block costs 6 columns of 6 fetched texels, their
 // transforms V = B^T d B (additions and multiplies by 2, 4, 5), and per tile and output block 36
 // products of a 6x6 weight matrix with a vec4: 144 multiply-adds per 16 outputs and input block
 // where F(2x2, 3x3) takes 256 and the direct sum 576, and 60 fetched texels per 32 outputs where
@@ -17,7 +17,7 @@
 // Its weights are texels of the plan's weight texture (binding 7, kernels::ConvPlan), not the
 // weight buffer: on lavapipe a storage- or uniform-buffer load at a per-lane address is a loop
 // over the lanes, a texel load one vector gather, and the gathers were about 40% of this kernel's
-// time from a storage buffer (docs/PERF.md, session 23). They sit as `winograd_lanes` reads them
+// time from a storage buffer (`docs/perf/lavapipe-2026-11-25-s23.log`). They sit as `winograd_lanes` reads them
 // with 36 positions for 16: input block cb, position p = 6 i + c, input lane l, output block j at
 // texel w + ((cb * 36 + p) * 4 + l) * OB + j (w = params.weight_texel + group z * group_stride),
 // then OB biases; each 16 of them are gathered over the lanes (`gather`) just before their
@@ -148,7 +148,7 @@ fn wino4_store(m: Wino6, bias: vec4<f32>, x: u32, y0: u32, layer: u32) {
 // The output goes into binding 5 (`partial`) as the texture's rows, layer by layer, and the
 // frame copies it into `dst` after the conv (kernels::ConvVariant::staged, CPU drivers only).
 // On lavapipe a texel store of rgba32float is four loops over the lanes, one per 32-bit word,
-// and a buffer store of a vec4 is one: 0.68-0.86x the time (docs/PERF.md, sessions 25 and 28).
+// and a buffer store of a vec4 is one: 0.68-0.86x the time (`docs/perf/lavapipe-2026-12-01-s25.log`, `docs/perf/lavapipe-2026-12-02-s28.log`).
 override OUT_BUFFER: bool = false;
 
 // The four pixels of a row from pixel `i` of the staged buffer on, in 32-bit words (where the
@@ -193,14 +193,16 @@ fn window6(t: Source, mode: u32, layer: u32, x: i32, y0: i32) -> Window6 {
 // the transformed tiles m<t><j> (tile t from the top, output block j) whose top-left output is
 // (x, y0): the window's 6 columns are fetched once, each of its rows transformed once, and
 // each position's weights, taken from the lanes once, go to both tiles before the next
-// position's. The body is unrolled per OB, the overrides dropping the others: 36 x 4 x 2
-// products of a 4x4 and a vec4 at most (the 8 transformed tiles, 288 vec4s, stay in the stack
-// between blocks), in three basic blocks of two tile rows each (`once`: one block took twice
-// the compile time). As written it is the kernel's only copy of that body: one loop runs over
+// position's. The body is unrolled per OB, the overrides dropping the others: 36 x 4 products
+// of a 4x4 and a vec4 at most (the 4 transformed tiles, 144 vec4s, stay in the stack between
+// blocks), in three basic blocks of two tile rows each (`once`: one block takes twice the
+// compile time). It is generated (tests/engine/generated.rs). As written it is the kernel's
+// only copy of that body: one loop runs over
 // both sources' blocks, the window alone chosen per source, so LLVM compiles the body once.
 // The module of two-source convs runs it from a loop per source instead
 // (kernels::TWO_SOURCE_LOOPS: lavapipe fetched both windows for every block).
-fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<function, Wino6>, m03: ptr<function, Wino6>, m10: ptr<function, Wino6>, m11: ptr<function, Wino6>, m12: ptr<function, Wino6>, m13: ptr<function, Wino6>, cb: u32, w: u32, x: i32, y0: i32) {
+// ---- generated: wino4_step ----
+fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<function, Wino6>, m03: ptr<function, Wino6>, cb: u32, w: u32, x: i32, y0: i32) {
     var k: Window6;
     if !SOURCE_B || cb < params.cin4_a {
         k = window6(src_a, MODE_A, cb, x, y0);
@@ -220,1000 +222,484 @@ fn wino4_step(m00: ptr<function, Wino6>, m01: ptr<function, Wino6>, m02: ptr<fun
     let e4 = hex_b(k0.v4, k1.v4, k2.v4, k3.v4, k4.v4, k5.v4);
     let e5 = hex_b(k0.v5, k1.v5, k2.v5, k3.v5, k4.v5, k5.v5);
     let v0 = wino6_v(e0, e1, e2, e3, e4, e5);
-    var v1 = v0;
-    if ROWS > 4u {
-        let e6 = hex_b(k0.v6, k1.v6, k2.v6, k3.v6, k4.v6, k5.v6);
-        let e7 = hex_b(k0.v7, k1.v7, k2.v7, k3.v7, k4.v7, k5.v7);
-        let e8 = hex_b(k0.v8, k1.v8, k2.v8, k3.v8, k4.v8, k5.v8);
-        let e9 = hex_b(k0.v9, k1.v9, k2.v9, k3.v9, k4.v9, k5.v9);
-        v1 = wino6_v(e4, e5, e6, e7, e8, e9);
-    }
     let base = w + cb * 144u * OB;
-    // Position p = 6 i + c of each tile (Wino6's r<i>.c<c>), block by block, each gather of 16
-    // vec4s loaded just before the positions it holds.
+    // Position p = 6 i + c of the tile (Wino6's r<i>.c<c>), block by block; tile rows 0 and
+    // 1, 2 and 3, 4 and 5, each pair in a loop that runs once: a basic block of its own for
+    // LLVM (conv_common.wgsl's `once`).
     if OB == 1u {
-        // Tile rows 0 and 1, 2 and 3, 4 and 5, each pair in a loop that runs once: a basic
-        // block of its own for LLVM (conv_common.wgsl's `once`).
         loop {
             {
             let g = gather(base + 0u);
-            { let u = ob1_0(g);
-              (*m00).r0.c0 = mac((*m00).r0.c0, u, v0.r0.c0);
-              if ROWS > 4u { (*m10).r0.c0 = mac((*m10).r0.c0, u, v1.r0.c0); } }
-            { let u = ob1_1(g);
-              (*m00).r0.c1 = mac((*m00).r0.c1, u, v0.r0.c1);
-              if ROWS > 4u { (*m10).r0.c1 = mac((*m10).r0.c1, u, v1.r0.c1); } }
-            { let u = ob1_2(g);
-              (*m00).r0.c2 = mac((*m00).r0.c2, u, v0.r0.c2);
-              if ROWS > 4u { (*m10).r0.c2 = mac((*m10).r0.c2, u, v1.r0.c2); } }
-            { let u = ob1_3(g);
-              (*m00).r0.c3 = mac((*m00).r0.c3, u, v0.r0.c3);
-              if ROWS > 4u { (*m10).r0.c3 = mac((*m10).r0.c3, u, v1.r0.c3); } }
+            { let u = ob1_0(g); (*m00).r0.c0 = mac((*m00).r0.c0, u, v0.r0.c0); }
+            { let u = ob1_1(g); (*m00).r0.c1 = mac((*m00).r0.c1, u, v0.r0.c1); }
+            { let u = ob1_2(g); (*m00).r0.c2 = mac((*m00).r0.c2, u, v0.r0.c2); }
+            { let u = ob1_3(g); (*m00).r0.c3 = mac((*m00).r0.c3, u, v0.r0.c3); }
             }
             {
             let g = gather(base + 16u);
-            { let u = ob1_0(g);
-              (*m00).r0.c4 = mac((*m00).r0.c4, u, v0.r0.c4);
-              if ROWS > 4u { (*m10).r0.c4 = mac((*m10).r0.c4, u, v1.r0.c4); } }
-            { let u = ob1_1(g);
-              (*m00).r0.c5 = mac((*m00).r0.c5, u, v0.r0.c5);
-              if ROWS > 4u { (*m10).r0.c5 = mac((*m10).r0.c5, u, v1.r0.c5); } }
-            { let u = ob1_2(g);
-              (*m00).r1.c0 = mac((*m00).r1.c0, u, v0.r1.c0);
-              if ROWS > 4u { (*m10).r1.c0 = mac((*m10).r1.c0, u, v1.r1.c0); } }
-            { let u = ob1_3(g);
-              (*m00).r1.c1 = mac((*m00).r1.c1, u, v0.r1.c1);
-              if ROWS > 4u { (*m10).r1.c1 = mac((*m10).r1.c1, u, v1.r1.c1); } }
+            { let u = ob1_0(g); (*m00).r0.c4 = mac((*m00).r0.c4, u, v0.r0.c4); }
+            { let u = ob1_1(g); (*m00).r0.c5 = mac((*m00).r0.c5, u, v0.r0.c5); }
+            { let u = ob1_2(g); (*m00).r1.c0 = mac((*m00).r1.c0, u, v0.r1.c0); }
+            { let u = ob1_3(g); (*m00).r1.c1 = mac((*m00).r1.c1, u, v0.r1.c1); }
             }
             {
             let g = gather(base + 32u);
-            { let u = ob1_0(g);
-              (*m00).r1.c2 = mac((*m00).r1.c2, u, v0.r1.c2);
-              if ROWS > 4u { (*m10).r1.c2 = mac((*m10).r1.c2, u, v1.r1.c2); } }
-            { let u = ob1_1(g);
-              (*m00).r1.c3 = mac((*m00).r1.c3, u, v0.r1.c3);
-              if ROWS > 4u { (*m10).r1.c3 = mac((*m10).r1.c3, u, v1.r1.c3); } }
-            { let u = ob1_2(g);
-              (*m00).r1.c4 = mac((*m00).r1.c4, u, v0.r1.c4);
-              if ROWS > 4u { (*m10).r1.c4 = mac((*m10).r1.c4, u, v1.r1.c4); } }
-            { let u = ob1_3(g);
-              (*m00).r1.c5 = mac((*m00).r1.c5, u, v0.r1.c5);
-              if ROWS > 4u { (*m10).r1.c5 = mac((*m10).r1.c5, u, v1.r1.c5); } }
+            { let u = ob1_0(g); (*m00).r1.c2 = mac((*m00).r1.c2, u, v0.r1.c2); }
+            { let u = ob1_1(g); (*m00).r1.c3 = mac((*m00).r1.c3, u, v0.r1.c3); }
+            { let u = ob1_2(g); (*m00).r1.c4 = mac((*m00).r1.c4, u, v0.r1.c4); }
+            { let u = ob1_3(g); (*m00).r1.c5 = mac((*m00).r1.c5, u, v0.r1.c5); }
             }
             continuing { break if once(); }
         }
         loop {
             {
             let g = gather(base + 48u);
-            { let u = ob1_0(g);
-              (*m00).r2.c0 = mac((*m00).r2.c0, u, v0.r2.c0);
-              if ROWS > 4u { (*m10).r2.c0 = mac((*m10).r2.c0, u, v1.r2.c0); } }
-            { let u = ob1_1(g);
-              (*m00).r2.c1 = mac((*m00).r2.c1, u, v0.r2.c1);
-              if ROWS > 4u { (*m10).r2.c1 = mac((*m10).r2.c1, u, v1.r2.c1); } }
-            { let u = ob1_2(g);
-              (*m00).r2.c2 = mac((*m00).r2.c2, u, v0.r2.c2);
-              if ROWS > 4u { (*m10).r2.c2 = mac((*m10).r2.c2, u, v1.r2.c2); } }
-            { let u = ob1_3(g);
-              (*m00).r2.c3 = mac((*m00).r2.c3, u, v0.r2.c3);
-              if ROWS > 4u { (*m10).r2.c3 = mac((*m10).r2.c3, u, v1.r2.c3); } }
+            { let u = ob1_0(g); (*m00).r2.c0 = mac((*m00).r2.c0, u, v0.r2.c0); }
+            { let u = ob1_1(g); (*m00).r2.c1 = mac((*m00).r2.c1, u, v0.r2.c1); }
+            { let u = ob1_2(g); (*m00).r2.c2 = mac((*m00).r2.c2, u, v0.r2.c2); }
+            { let u = ob1_3(g); (*m00).r2.c3 = mac((*m00).r2.c3, u, v0.r2.c3); }
             }
             {
             let g = gather(base + 64u);
-            { let u = ob1_0(g);
-              (*m00).r2.c4 = mac((*m00).r2.c4, u, v0.r2.c4);
-              if ROWS > 4u { (*m10).r2.c4 = mac((*m10).r2.c4, u, v1.r2.c4); } }
-            { let u = ob1_1(g);
-              (*m00).r2.c5 = mac((*m00).r2.c5, u, v0.r2.c5);
-              if ROWS > 4u { (*m10).r2.c5 = mac((*m10).r2.c5, u, v1.r2.c5); } }
-            { let u = ob1_2(g);
-              (*m00).r3.c0 = mac((*m00).r3.c0, u, v0.r3.c0);
-              if ROWS > 4u { (*m10).r3.c0 = mac((*m10).r3.c0, u, v1.r3.c0); } }
-            { let u = ob1_3(g);
-              (*m00).r3.c1 = mac((*m00).r3.c1, u, v0.r3.c1);
-              if ROWS > 4u { (*m10).r3.c1 = mac((*m10).r3.c1, u, v1.r3.c1); } }
+            { let u = ob1_0(g); (*m00).r2.c4 = mac((*m00).r2.c4, u, v0.r2.c4); }
+            { let u = ob1_1(g); (*m00).r2.c5 = mac((*m00).r2.c5, u, v0.r2.c5); }
+            { let u = ob1_2(g); (*m00).r3.c0 = mac((*m00).r3.c0, u, v0.r3.c0); }
+            { let u = ob1_3(g); (*m00).r3.c1 = mac((*m00).r3.c1, u, v0.r3.c1); }
             }
             {
             let g = gather(base + 80u);
-            { let u = ob1_0(g);
-              (*m00).r3.c2 = mac((*m00).r3.c2, u, v0.r3.c2);
-              if ROWS > 4u { (*m10).r3.c2 = mac((*m10).r3.c2, u, v1.r3.c2); } }
-            { let u = ob1_1(g);
-              (*m00).r3.c3 = mac((*m00).r3.c3, u, v0.r3.c3);
-              if ROWS > 4u { (*m10).r3.c3 = mac((*m10).r3.c3, u, v1.r3.c3); } }
-            { let u = ob1_2(g);
-              (*m00).r3.c4 = mac((*m00).r3.c4, u, v0.r3.c4);
-              if ROWS > 4u { (*m10).r3.c4 = mac((*m10).r3.c4, u, v1.r3.c4); } }
-            { let u = ob1_3(g);
-              (*m00).r3.c5 = mac((*m00).r3.c5, u, v0.r3.c5);
-              if ROWS > 4u { (*m10).r3.c5 = mac((*m10).r3.c5, u, v1.r3.c5); } }
+            { let u = ob1_0(g); (*m00).r3.c2 = mac((*m00).r3.c2, u, v0.r3.c2); }
+            { let u = ob1_1(g); (*m00).r3.c3 = mac((*m00).r3.c3, u, v0.r3.c3); }
+            { let u = ob1_2(g); (*m00).r3.c4 = mac((*m00).r3.c4, u, v0.r3.c4); }
+            { let u = ob1_3(g); (*m00).r3.c5 = mac((*m00).r3.c5, u, v0.r3.c5); }
             }
             continuing { break if once(); }
         }
         loop {
             {
             let g = gather(base + 96u);
-            { let u = ob1_0(g);
-              (*m00).r4.c0 = mac((*m00).r4.c0, u, v0.r4.c0);
-              if ROWS > 4u { (*m10).r4.c0 = mac((*m10).r4.c0, u, v1.r4.c0); } }
-            { let u = ob1_1(g);
-              (*m00).r4.c1 = mac((*m00).r4.c1, u, v0.r4.c1);
-              if ROWS > 4u { (*m10).r4.c1 = mac((*m10).r4.c1, u, v1.r4.c1); } }
-            { let u = ob1_2(g);
-              (*m00).r4.c2 = mac((*m00).r4.c2, u, v0.r4.c2);
-              if ROWS > 4u { (*m10).r4.c2 = mac((*m10).r4.c2, u, v1.r4.c2); } }
-            { let u = ob1_3(g);
-              (*m00).r4.c3 = mac((*m00).r4.c3, u, v0.r4.c3);
-              if ROWS > 4u { (*m10).r4.c3 = mac((*m10).r4.c3, u, v1.r4.c3); } }
+            { let u = ob1_0(g); (*m00).r4.c0 = mac((*m00).r4.c0, u, v0.r4.c0); }
+            { let u = ob1_1(g); (*m00).r4.c1 = mac((*m00).r4.c1, u, v0.r4.c1); }
+            { let u = ob1_2(g); (*m00).r4.c2 = mac((*m00).r4.c2, u, v0.r4.c2); }
+            { let u = ob1_3(g); (*m00).r4.c3 = mac((*m00).r4.c3, u, v0.r4.c3); }
             }
             {
             let g = gather(base + 112u);
-            { let u = ob1_0(g);
-              (*m00).r4.c4 = mac((*m00).r4.c4, u, v0.r4.c4);
-              if ROWS > 4u { (*m10).r4.c4 = mac((*m10).r4.c4, u, v1.r4.c4); } }
-            { let u = ob1_1(g);
-              (*m00).r4.c5 = mac((*m00).r4.c5, u, v0.r4.c5);
-              if ROWS > 4u { (*m10).r4.c5 = mac((*m10).r4.c5, u, v1.r4.c5); } }
-            { let u = ob1_2(g);
-              (*m00).r5.c0 = mac((*m00).r5.c0, u, v0.r5.c0);
-              if ROWS > 4u { (*m10).r5.c0 = mac((*m10).r5.c0, u, v1.r5.c0); } }
-            { let u = ob1_3(g);
-              (*m00).r5.c1 = mac((*m00).r5.c1, u, v0.r5.c1);
-              if ROWS > 4u { (*m10).r5.c1 = mac((*m10).r5.c1, u, v1.r5.c1); } }
+            { let u = ob1_0(g); (*m00).r4.c4 = mac((*m00).r4.c4, u, v0.r4.c4); }
+            { let u = ob1_1(g); (*m00).r4.c5 = mac((*m00).r4.c5, u, v0.r4.c5); }
+            { let u = ob1_2(g); (*m00).r5.c0 = mac((*m00).r5.c0, u, v0.r5.c0); }
+            { let u = ob1_3(g); (*m00).r5.c1 = mac((*m00).r5.c1, u, v0.r5.c1); }
             }
             {
             let g = gather(base + 128u);
-            { let u = ob1_0(g);
-              (*m00).r5.c2 = mac((*m00).r5.c2, u, v0.r5.c2);
-              if ROWS > 4u { (*m10).r5.c2 = mac((*m10).r5.c2, u, v1.r5.c2); } }
-            { let u = ob1_1(g);
-              (*m00).r5.c3 = mac((*m00).r5.c3, u, v0.r5.c3);
-              if ROWS > 4u { (*m10).r5.c3 = mac((*m10).r5.c3, u, v1.r5.c3); } }
-            { let u = ob1_2(g);
-              (*m00).r5.c4 = mac((*m00).r5.c4, u, v0.r5.c4);
-              if ROWS > 4u { (*m10).r5.c4 = mac((*m10).r5.c4, u, v1.r5.c4); } }
-            { let u = ob1_3(g);
-              (*m00).r5.c5 = mac((*m00).r5.c5, u, v0.r5.c5);
-              if ROWS > 4u { (*m10).r5.c5 = mac((*m10).r5.c5, u, v1.r5.c5); } }
+            { let u = ob1_0(g); (*m00).r5.c2 = mac((*m00).r5.c2, u, v0.r5.c2); }
+            { let u = ob1_1(g); (*m00).r5.c3 = mac((*m00).r5.c3, u, v0.r5.c3); }
+            { let u = ob1_2(g); (*m00).r5.c4 = mac((*m00).r5.c4, u, v0.r5.c4); }
+            { let u = ob1_3(g); (*m00).r5.c5 = mac((*m00).r5.c5, u, v0.r5.c5); }
             }
             continuing { break if once(); }
         }
     } else if OB == 2u {
-        // Tile rows 0 and 1, 2 and 3, 4 and 5, each pair in a loop that runs once: a basic
-        // block of its own for LLVM (conv_common.wgsl's `once`).
         loop {
             {
             let g = gather(base + 0u);
-            { let u = ob2_00(g);
-              (*m00).r0.c0 = mac((*m00).r0.c0, u, v0.r0.c0);
-              if ROWS > 4u { (*m10).r0.c0 = mac((*m10).r0.c0, u, v1.r0.c0); } }
-            { let u = ob2_01(g);
-              (*m01).r0.c0 = mac((*m01).r0.c0, u, v0.r0.c0);
-              if ROWS > 4u { (*m11).r0.c0 = mac((*m11).r0.c0, u, v1.r0.c0); } }
-            { let u = ob2_10(g);
-              (*m00).r0.c1 = mac((*m00).r0.c1, u, v0.r0.c1);
-              if ROWS > 4u { (*m10).r0.c1 = mac((*m10).r0.c1, u, v1.r0.c1); } }
-            { let u = ob2_11(g);
-              (*m01).r0.c1 = mac((*m01).r0.c1, u, v0.r0.c1);
-              if ROWS > 4u { (*m11).r0.c1 = mac((*m11).r0.c1, u, v1.r0.c1); } }
+            { let u = ob2_00(g); (*m00).r0.c0 = mac((*m00).r0.c0, u, v0.r0.c0); }
+            { let u = ob2_01(g); (*m01).r0.c0 = mac((*m01).r0.c0, u, v0.r0.c0); }
+            { let u = ob2_10(g); (*m00).r0.c1 = mac((*m00).r0.c1, u, v0.r0.c1); }
+            { let u = ob2_11(g); (*m01).r0.c1 = mac((*m01).r0.c1, u, v0.r0.c1); }
             }
             {
             let g = gather(base + 16u);
-            { let u = ob2_00(g);
-              (*m00).r0.c2 = mac((*m00).r0.c2, u, v0.r0.c2);
-              if ROWS > 4u { (*m10).r0.c2 = mac((*m10).r0.c2, u, v1.r0.c2); } }
-            { let u = ob2_01(g);
-              (*m01).r0.c2 = mac((*m01).r0.c2, u, v0.r0.c2);
-              if ROWS > 4u { (*m11).r0.c2 = mac((*m11).r0.c2, u, v1.r0.c2); } }
-            { let u = ob2_10(g);
-              (*m00).r0.c3 = mac((*m00).r0.c3, u, v0.r0.c3);
-              if ROWS > 4u { (*m10).r0.c3 = mac((*m10).r0.c3, u, v1.r0.c3); } }
-            { let u = ob2_11(g);
-              (*m01).r0.c3 = mac((*m01).r0.c3, u, v0.r0.c3);
-              if ROWS > 4u { (*m11).r0.c3 = mac((*m11).r0.c3, u, v1.r0.c3); } }
+            { let u = ob2_00(g); (*m00).r0.c2 = mac((*m00).r0.c2, u, v0.r0.c2); }
+            { let u = ob2_01(g); (*m01).r0.c2 = mac((*m01).r0.c2, u, v0.r0.c2); }
+            { let u = ob2_10(g); (*m00).r0.c3 = mac((*m00).r0.c3, u, v0.r0.c3); }
+            { let u = ob2_11(g); (*m01).r0.c3 = mac((*m01).r0.c3, u, v0.r0.c3); }
             }
             {
             let g = gather(base + 32u);
-            { let u = ob2_00(g);
-              (*m00).r0.c4 = mac((*m00).r0.c4, u, v0.r0.c4);
-              if ROWS > 4u { (*m10).r0.c4 = mac((*m10).r0.c4, u, v1.r0.c4); } }
-            { let u = ob2_01(g);
-              (*m01).r0.c4 = mac((*m01).r0.c4, u, v0.r0.c4);
-              if ROWS > 4u { (*m11).r0.c4 = mac((*m11).r0.c4, u, v1.r0.c4); } }
-            { let u = ob2_10(g);
-              (*m00).r0.c5 = mac((*m00).r0.c5, u, v0.r0.c5);
-              if ROWS > 4u { (*m10).r0.c5 = mac((*m10).r0.c5, u, v1.r0.c5); } }
-            { let u = ob2_11(g);
-              (*m01).r0.c5 = mac((*m01).r0.c5, u, v0.r0.c5);
-              if ROWS > 4u { (*m11).r0.c5 = mac((*m11).r0.c5, u, v1.r0.c5); } }
+            { let u = ob2_00(g); (*m00).r0.c4 = mac((*m00).r0.c4, u, v0.r0.c4); }
+            { let u = ob2_01(g); (*m01).r0.c4 = mac((*m01).r0.c4, u, v0.r0.c4); }
+            { let u = ob2_10(g); (*m00).r0.c5 = mac((*m00).r0.c5, u, v0.r0.c5); }
+            { let u = ob2_11(g); (*m01).r0.c5 = mac((*m01).r0.c5, u, v0.r0.c5); }
             }
             {
             let g = gather(base + 48u);
-            { let u = ob2_00(g);
-              (*m00).r1.c0 = mac((*m00).r1.c0, u, v0.r1.c0);
-              if ROWS > 4u { (*m10).r1.c0 = mac((*m10).r1.c0, u, v1.r1.c0); } }
-            { let u = ob2_01(g);
-              (*m01).r1.c0 = mac((*m01).r1.c0, u, v0.r1.c0);
-              if ROWS > 4u { (*m11).r1.c0 = mac((*m11).r1.c0, u, v1.r1.c0); } }
-            { let u = ob2_10(g);
-              (*m00).r1.c1 = mac((*m00).r1.c1, u, v0.r1.c1);
-              if ROWS > 4u { (*m10).r1.c1 = mac((*m10).r1.c1, u, v1.r1.c1); } }
-            { let u = ob2_11(g);
-              (*m01).r1.c1 = mac((*m01).r1.c1, u, v0.r1.c1);
-              if ROWS > 4u { (*m11).r1.c1 = mac((*m11).r1.c1, u, v1.r1.c1); } }
+            { let u = ob2_00(g); (*m00).r1.c0 = mac((*m00).r1.c0, u, v0.r1.c0); }
+            { let u = ob2_01(g); (*m01).r1.c0 = mac((*m01).r1.c0, u, v0.r1.c0); }
+            { let u = ob2_10(g); (*m00).r1.c1 = mac((*m00).r1.c1, u, v0.r1.c1); }
+            { let u = ob2_11(g); (*m01).r1.c1 = mac((*m01).r1.c1, u, v0.r1.c1); }
             }
             {
             let g = gather(base + 64u);
-            { let u = ob2_00(g);
-              (*m00).r1.c2 = mac((*m00).r1.c2, u, v0.r1.c2);
-              if ROWS > 4u { (*m10).r1.c2 = mac((*m10).r1.c2, u, v1.r1.c2); } }
-            { let u = ob2_01(g);
-              (*m01).r1.c2 = mac((*m01).r1.c2, u, v0.r1.c2);
-              if ROWS > 4u { (*m11).r1.c2 = mac((*m11).r1.c2, u, v1.r1.c2); } }
-            { let u = ob2_10(g);
-              (*m00).r1.c3 = mac((*m00).r1.c3, u, v0.r1.c3);
-              if ROWS > 4u { (*m10).r1.c3 = mac((*m10).r1.c3, u, v1.r1.c3); } }
-            { let u = ob2_11(g);
-              (*m01).r1.c3 = mac((*m01).r1.c3, u, v0.r1.c3);
-              if ROWS > 4u { (*m11).r1.c3 = mac((*m11).r1.c3, u, v1.r1.c3); } }
+            { let u = ob2_00(g); (*m00).r1.c2 = mac((*m00).r1.c2, u, v0.r1.c2); }
+            { let u = ob2_01(g); (*m01).r1.c2 = mac((*m01).r1.c2, u, v0.r1.c2); }
+            { let u = ob2_10(g); (*m00).r1.c3 = mac((*m00).r1.c3, u, v0.r1.c3); }
+            { let u = ob2_11(g); (*m01).r1.c3 = mac((*m01).r1.c3, u, v0.r1.c3); }
             }
             {
             let g = gather(base + 80u);
-            { let u = ob2_00(g);
-              (*m00).r1.c4 = mac((*m00).r1.c4, u, v0.r1.c4);
-              if ROWS > 4u { (*m10).r1.c4 = mac((*m10).r1.c4, u, v1.r1.c4); } }
-            { let u = ob2_01(g);
-              (*m01).r1.c4 = mac((*m01).r1.c4, u, v0.r1.c4);
-              if ROWS > 4u { (*m11).r1.c4 = mac((*m11).r1.c4, u, v1.r1.c4); } }
-            { let u = ob2_10(g);
-              (*m00).r1.c5 = mac((*m00).r1.c5, u, v0.r1.c5);
-              if ROWS > 4u { (*m10).r1.c5 = mac((*m10).r1.c5, u, v1.r1.c5); } }
-            { let u = ob2_11(g);
-              (*m01).r1.c5 = mac((*m01).r1.c5, u, v0.r1.c5);
-              if ROWS > 4u { (*m11).r1.c5 = mac((*m11).r1.c5, u, v1.r1.c5); } }
+            { let u = ob2_00(g); (*m00).r1.c4 = mac((*m00).r1.c4, u, v0.r1.c4); }
+            { let u = ob2_01(g); (*m01).r1.c4 = mac((*m01).r1.c4, u, v0.r1.c4); }
+            { let u = ob2_10(g); (*m00).r1.c5 = mac((*m00).r1.c5, u, v0.r1.c5); }
+            { let u = ob2_11(g); (*m01).r1.c5 = mac((*m01).r1.c5, u, v0.r1.c5); }
             }
             continuing { break if once(); }
         }
         loop {
             {
             let g = gather(base + 96u);
-            { let u = ob2_00(g);
-              (*m00).r2.c0 = mac((*m00).r2.c0, u, v0.r2.c0);
-              if ROWS > 4u { (*m10).r2.c0 = mac((*m10).r2.c0, u, v1.r2.c0); } }
-            { let u = ob2_01(g);
-              (*m01).r2.c0 = mac((*m01).r2.c0, u, v0.r2.c0);
-              if ROWS > 4u { (*m11).r2.c0 = mac((*m11).r2.c0, u, v1.r2.c0); } }
-            { let u = ob2_10(g);
-              (*m00).r2.c1 = mac((*m00).r2.c1, u, v0.r2.c1);
-              if ROWS > 4u { (*m10).r2.c1 = mac((*m10).r2.c1, u, v1.r2.c1); } }
-            { let u = ob2_11(g);
-              (*m01).r2.c1 = mac((*m01).r2.c1, u, v0.r2.c1);
-              if ROWS > 4u { (*m11).r2.c1 = mac((*m11).r2.c1, u, v1.r2.c1); } }
+            { let u = ob2_00(g); (*m00).r2.c0 = mac((*m00).r2.c0, u, v0.r2.c0); }
+            { let u = ob2_01(g); (*m01).r2.c0 = mac((*m01).r2.c0, u, v0.r2.c0); }
+            { let u = ob2_10(g); (*m00).r2.c1 = mac((*m00).r2.c1, u, v0.r2.c1); }
+            { let u = ob2_11(g); (*m01).r2.c1 = mac((*m01).r2.c1, u, v0.r2.c1); }
             }
             {
             let g = gather(base + 112u);
-            { let u = ob2_00(g);
-              (*m00).r2.c2 = mac((*m00).r2.c2, u, v0.r2.c2);
-              if ROWS > 4u { (*m10).r2.c2 = mac((*m10).r2.c2, u, v1.r2.c2); } }
-            { let u = ob2_01(g);
-              (*m01).r2.c2 = mac((*m01).r2.c2, u, v0.r2.c2);
-              if ROWS > 4u { (*m11).r2.c2 = mac((*m11).r2.c2, u, v1.r2.c2); } }
-            { let u = ob2_10(g);
-              (*m00).r2.c3 = mac((*m00).r2.c3, u, v0.r2.c3);
-              if ROWS > 4u { (*m10).r2.c3 = mac((*m10).r2.c3, u, v1.r2.c3); } }
-            { let u = ob2_11(g);
-              (*m01).r2.c3 = mac((*m01).r2.c3, u, v0.r2.c3);
-              if ROWS > 4u { (*m11).r2.c3 = mac((*m11).r2.c3, u, v1.r2.c3); } }
+            { let u = ob2_00(g); (*m00).r2.c2 = mac((*m00).r2.c2, u, v0.r2.c2); }
+            { let u = ob2_01(g); (*m01).r2.c2 = mac((*m01).r2.c2, u, v0.r2.c2); }
+            { let u = ob2_10(g); (*m00).r2.c3 = mac((*m00).r2.c3, u, v0.r2.c3); }
+            { let u = ob2_11(g); (*m01).r2.c3 = mac((*m01).r2.c3, u, v0.r2.c3); }
             }
             {
             let g = gather(base + 128u);
-            { let u = ob2_00(g);
-              (*m00).r2.c4 = mac((*m00).r2.c4, u, v0.r2.c4);
-              if ROWS > 4u { (*m10).r2.c4 = mac((*m10).r2.c4, u, v1.r2.c4); } }
-            { let u = ob2_01(g);
-              (*m01).r2.c4 = mac((*m01).r2.c4, u, v0.r2.c4);
-              if ROWS > 4u { (*m11).r2.c4 = mac((*m11).r2.c4, u, v1.r2.c4); } }
-            { let u = ob2_10(g);
-              (*m00).r2.c5 = mac((*m00).r2.c5, u, v0.r2.c5);
-              if ROWS > 4u { (*m10).r2.c5 = mac((*m10).r2.c5, u, v1.r2.c5); } }
-            { let u = ob2_11(g);
-              (*m01).r2.c5 = mac((*m01).r2.c5, u, v0.r2.c5);
-              if ROWS > 4u { (*m11).r2.c5 = mac((*m11).r2.c5, u, v1.r2.c5); } }
+            { let u = ob2_00(g); (*m00).r2.c4 = mac((*m00).r2.c4, u, v0.r2.c4); }
+            { let u = ob2_01(g); (*m01).r2.c4 = mac((*m01).r2.c4, u, v0.r2.c4); }
+            { let u = ob2_10(g); (*m00).r2.c5 = mac((*m00).r2.c5, u, v0.r2.c5); }
+            { let u = ob2_11(g); (*m01).r2.c5 = mac((*m01).r2.c5, u, v0.r2.c5); }
             }
             {
             let g = gather(base + 144u);
-            { let u = ob2_00(g);
-              (*m00).r3.c0 = mac((*m00).r3.c0, u, v0.r3.c0);
-              if ROWS > 4u { (*m10).r3.c0 = mac((*m10).r3.c0, u, v1.r3.c0); } }
-            { let u = ob2_01(g);
-              (*m01).r3.c0 = mac((*m01).r3.c0, u, v0.r3.c0);
-              if ROWS > 4u { (*m11).r3.c0 = mac((*m11).r3.c0, u, v1.r3.c0); } }
-            { let u = ob2_10(g);
-              (*m00).r3.c1 = mac((*m00).r3.c1, u, v0.r3.c1);
-              if ROWS > 4u { (*m10).r3.c1 = mac((*m10).r3.c1, u, v1.r3.c1); } }
-            { let u = ob2_11(g);
-              (*m01).r3.c1 = mac((*m01).r3.c1, u, v0.r3.c1);
-              if ROWS > 4u { (*m11).r3.c1 = mac((*m11).r3.c1, u, v1.r3.c1); } }
+            { let u = ob2_00(g); (*m00).r3.c0 = mac((*m00).r3.c0, u, v0.r3.c0); }
+            { let u = ob2_01(g); (*m01).r3.c0 = mac((*m01).r3.c0, u, v0.r3.c0); }
+            { let u = ob2_10(g); (*m00).r3.c1 = mac((*m00).r3.c1, u, v0.r3.c1); }
+            { let u = ob2_11(g); (*m01).r3.c1 = mac((*m01).r3.c1, u, v0.r3.c1); }
             }
             {
             let g = gather(base + 160u);
-            { let u = ob2_00(g);
-              (*m00).r3.c2 = mac((*m00).r3.c2, u, v0.r3.c2);
-              if ROWS > 4u { (*m10).r3.c2 = mac((*m10).r3.c2, u, v1.r3.c2); } }
-            { let u = ob2_01(g);
-              (*m01).r3.c2 = mac((*m01).r3.c2, u, v0.r3.c2);
-              if ROWS > 4u { (*m11).r3.c2 = mac((*m11).r3.c2, u, v1.r3.c2); } }
-            { let u = ob2_10(g);
-              (*m00).r3.c3 = mac((*m00).r3.c3, u, v0.r3.c3);
-              if ROWS > 4u { (*m10).r3.c3 = mac((*m10).r3.c3, u, v1.r3.c3); } }
-            { let u = ob2_11(g);
-              (*m01).r3.c3 = mac((*m01).r3.c3, u, v0.r3.c3);
-              if ROWS > 4u { (*m11).r3.c3 = mac((*m11).r3.c3, u, v1.r3.c3); } }
+            { let u = ob2_00(g); (*m00).r3.c2 = mac((*m00).r3.c2, u, v0.r3.c2); }
+            { let u = ob2_01(g); (*m01).r3.c2 = mac((*m01).r3.c2, u, v0.r3.c2); }
+            { let u = ob2_10(g); (*m00).r3.c3 = mac((*m00).r3.c3, u, v0.r3.c3); }
+            { let u = ob2_11(g); (*m01).r3.c3 = mac((*m01).r3.c3, u, v0.r3.c3); }
             }
             {
             let g = gather(base + 176u);
-            { let u = ob2_00(g);
-              (*m00).r3.c4 = mac((*m00).r3.c4, u, v0.r3.c4);
-              if ROWS > 4u { (*m10).r3.c4 = mac((*m10).r3.c4, u, v1.r3.c4); } }
-            { let u = ob2_01(g);
-              (*m01).r3.c4 = mac((*m01).r3.c4, u, v0.r3.c4);
-              if ROWS > 4u { (*m11).r3.c4 = mac((*m11).r3.c4, u, v1.r3.c4); } }
-            { let u = ob2_10(g);
-              (*m00).r3.c5 = mac((*m00).r3.c5, u, v0.r3.c5);
-              if ROWS > 4u { (*m10).r3.c5 = mac((*m10).r3.c5, u, v1.r3.c5); } }
-            { let u = ob2_11(g);
-              (*m01).r3.c5 = mac((*m01).r3.c5, u, v0.r3.c5);
-              if ROWS > 4u { (*m11).r3.c5 = mac((*m11).r3.c5, u, v1.r3.c5); } }
+            { let u = ob2_00(g); (*m00).r3.c4 = mac((*m00).r3.c4, u, v0.r3.c4); }
+            { let u = ob2_01(g); (*m01).r3.c4 = mac((*m01).r3.c4, u, v0.r3.c4); }
+            { let u = ob2_10(g); (*m00).r3.c5 = mac((*m00).r3.c5, u, v0.r3.c5); }
+            { let u = ob2_11(g); (*m01).r3.c5 = mac((*m01).r3.c5, u, v0.r3.c5); }
             }
             continuing { break if once(); }
         }
         loop {
             {
             let g = gather(base + 192u);
-            { let u = ob2_00(g);
-              (*m00).r4.c0 = mac((*m00).r4.c0, u, v0.r4.c0);
-              if ROWS > 4u { (*m10).r4.c0 = mac((*m10).r4.c0, u, v1.r4.c0); } }
-            { let u = ob2_01(g);
-              (*m01).r4.c0 = mac((*m01).r4.c0, u, v0.r4.c0);
-              if ROWS > 4u { (*m11).r4.c0 = mac((*m11).r4.c0, u, v1.r4.c0); } }
-            { let u = ob2_10(g);
-              (*m00).r4.c1 = mac((*m00).r4.c1, u, v0.r4.c1);
-              if ROWS > 4u { (*m10).r4.c1 = mac((*m10).r4.c1, u, v1.r4.c1); } }
-            { let u = ob2_11(g);
-              (*m01).r4.c1 = mac((*m01).r4.c1, u, v0.r4.c1);
-              if ROWS > 4u { (*m11).r4.c1 = mac((*m11).r4.c1, u, v1.r4.c1); } }
+            { let u = ob2_00(g); (*m00).r4.c0 = mac((*m00).r4.c0, u, v0.r4.c0); }
+            { let u = ob2_01(g); (*m01).r4.c0 = mac((*m01).r4.c0, u, v0.r4.c0); }
+            { let u = ob2_10(g); (*m00).r4.c1 = mac((*m00).r4.c1, u, v0.r4.c1); }
+            { let u = ob2_11(g); (*m01).r4.c1 = mac((*m01).r4.c1, u, v0.r4.c1); }
             }
             {
             let g = gather(base + 208u);
-            { let u = ob2_00(g);
-              (*m00).r4.c2 = mac((*m00).r4.c2, u, v0.r4.c2);
-              if ROWS > 4u { (*m10).r4.c2 = mac((*m10).r4.c2, u, v1.r4.c2); } }
-            { let u = ob2_01(g);
-              (*m01).r4.c2 = mac((*m01).r4.c2, u, v0.r4.c2);
-              if ROWS > 4u { (*m11).r4.c2 = mac((*m11).r4.c2, u, v1.r4.c2); } }
-            { let u = ob2_10(g);
-              (*m00).r4.c3 = mac((*m00).r4.c3, u, v0.r4.c3);
-              if ROWS > 4u { (*m10).r4.c3 = mac((*m10).r4.c3, u, v1.r4.c3); } }
-            { let u = ob2_11(g);
-              (*m01).r4.c3 = mac((*m01).r4.c3, u, v0.r4.c3);
-              if ROWS > 4u { (*m11).r4.c3 = mac((*m11).r4.c3, u, v1.r4.c3); } }
+            { let u = ob2_00(g); (*m00).r4.c2 = mac((*m00).r4.c2, u, v0.r4.c2); }
+            { let u = ob2_01(g); (*m01).r4.c2 = mac((*m01).r4.c2, u, v0.r4.c2); }
+            { let u = ob2_10(g); (*m00).r4.c3 = mac((*m00).r4.c3, u, v0.r4.c3); }
+            { let u = ob2_11(g); (*m01).r4.c3 = mac((*m01).r4.c3, u, v0.r4.c3); }
             }
             {
             let g = gather(base + 224u);
-            { let u = ob2_00(g);
-              (*m00).r4.c4 = mac((*m00).r4.c4, u, v0.r4.c4);
-              if ROWS > 4u { (*m10).r4.c4 = mac((*m10).r4.c4, u, v1.r4.c4); } }
-            { let u = ob2_01(g);
-              (*m01).r4.c4 = mac((*m01).r4.c4, u, v0.r4.c4);
-              if ROWS > 4u { (*m11).r4.c4 = mac((*m11).r4.c4, u, v1.r4.c4); } }
-            { let u = ob2_10(g);
-              (*m00).r4.c5 = mac((*m00).r4.c5, u, v0.r4.c5);
-              if ROWS > 4u { (*m10).r4.c5 = mac((*m10).r4.c5, u, v1.r4.c5); } }
-            { let u = ob2_11(g);
-              (*m01).r4.c5 = mac((*m01).r4.c5, u, v0.r4.c5);
-              if ROWS > 4u { (*m11).r4.c5 = mac((*m11).r4.c5, u, v1.r4.c5); } }
+            { let u = ob2_00(g); (*m00).r4.c4 = mac((*m00).r4.c4, u, v0.r4.c4); }
+            { let u = ob2_01(g); (*m01).r4.c4 = mac((*m01).r4.c4, u, v0.r4.c4); }
+            { let u = ob2_10(g); (*m00).r4.c5 = mac((*m00).r4.c5, u, v0.r4.c5); }
+            { let u = ob2_11(g); (*m01).r4.c5 = mac((*m01).r4.c5, u, v0.r4.c5); }
             }
             {
             let g = gather(base + 240u);
-            { let u = ob2_00(g);
-              (*m00).r5.c0 = mac((*m00).r5.c0, u, v0.r5.c0);
-              if ROWS > 4u { (*m10).r5.c0 = mac((*m10).r5.c0, u, v1.r5.c0); } }
-            { let u = ob2_01(g);
-              (*m01).r5.c0 = mac((*m01).r5.c0, u, v0.r5.c0);
-              if ROWS > 4u { (*m11).r5.c0 = mac((*m11).r5.c0, u, v1.r5.c0); } }
-            { let u = ob2_10(g);
-              (*m00).r5.c1 = mac((*m00).r5.c1, u, v0.r5.c1);
-              if ROWS > 4u { (*m10).r5.c1 = mac((*m10).r5.c1, u, v1.r5.c1); } }
-            { let u = ob2_11(g);
-              (*m01).r5.c1 = mac((*m01).r5.c1, u, v0.r5.c1);
-              if ROWS > 4u { (*m11).r5.c1 = mac((*m11).r5.c1, u, v1.r5.c1); } }
+            { let u = ob2_00(g); (*m00).r5.c0 = mac((*m00).r5.c0, u, v0.r5.c0); }
+            { let u = ob2_01(g); (*m01).r5.c0 = mac((*m01).r5.c0, u, v0.r5.c0); }
+            { let u = ob2_10(g); (*m00).r5.c1 = mac((*m00).r5.c1, u, v0.r5.c1); }
+            { let u = ob2_11(g); (*m01).r5.c1 = mac((*m01).r5.c1, u, v0.r5.c1); }
             }
             {
             let g = gather(base + 256u);
-            { let u = ob2_00(g);
-              (*m00).r5.c2 = mac((*m00).r5.c2, u, v0.r5.c2);
-              if ROWS > 4u { (*m10).r5.c2 = mac((*m10).r5.c2, u, v1.r5.c2); } }
-            { let u = ob2_01(g);
-              (*m01).r5.c2 = mac((*m01).r5.c2, u, v0.r5.c2);
-              if ROWS > 4u { (*m11).r5.c2 = mac((*m11).r5.c2, u, v1.r5.c2); } }
-            { let u = ob2_10(g);
-              (*m00).r5.c3 = mac((*m00).r5.c3, u, v0.r5.c3);
-              if ROWS > 4u { (*m10).r5.c3 = mac((*m10).r5.c3, u, v1.r5.c3); } }
-            { let u = ob2_11(g);
-              (*m01).r5.c3 = mac((*m01).r5.c3, u, v0.r5.c3);
-              if ROWS > 4u { (*m11).r5.c3 = mac((*m11).r5.c3, u, v1.r5.c3); } }
+            { let u = ob2_00(g); (*m00).r5.c2 = mac((*m00).r5.c2, u, v0.r5.c2); }
+            { let u = ob2_01(g); (*m01).r5.c2 = mac((*m01).r5.c2, u, v0.r5.c2); }
+            { let u = ob2_10(g); (*m00).r5.c3 = mac((*m00).r5.c3, u, v0.r5.c3); }
+            { let u = ob2_11(g); (*m01).r5.c3 = mac((*m01).r5.c3, u, v0.r5.c3); }
             }
             {
             let g = gather(base + 272u);
-            { let u = ob2_00(g);
-              (*m00).r5.c4 = mac((*m00).r5.c4, u, v0.r5.c4);
-              if ROWS > 4u { (*m10).r5.c4 = mac((*m10).r5.c4, u, v1.r5.c4); } }
-            { let u = ob2_01(g);
-              (*m01).r5.c4 = mac((*m01).r5.c4, u, v0.r5.c4);
-              if ROWS > 4u { (*m11).r5.c4 = mac((*m11).r5.c4, u, v1.r5.c4); } }
-            { let u = ob2_10(g);
-              (*m00).r5.c5 = mac((*m00).r5.c5, u, v0.r5.c5);
-              if ROWS > 4u { (*m10).r5.c5 = mac((*m10).r5.c5, u, v1.r5.c5); } }
-            { let u = ob2_11(g);
-              (*m01).r5.c5 = mac((*m01).r5.c5, u, v0.r5.c5);
-              if ROWS > 4u { (*m11).r5.c5 = mac((*m11).r5.c5, u, v1.r5.c5); } }
+            { let u = ob2_00(g); (*m00).r5.c4 = mac((*m00).r5.c4, u, v0.r5.c4); }
+            { let u = ob2_01(g); (*m01).r5.c4 = mac((*m01).r5.c4, u, v0.r5.c4); }
+            { let u = ob2_10(g); (*m00).r5.c5 = mac((*m00).r5.c5, u, v0.r5.c5); }
+            { let u = ob2_11(g); (*m01).r5.c5 = mac((*m01).r5.c5, u, v0.r5.c5); }
             }
             continuing { break if once(); }
         }
     } else {
-        // Tile rows 0 and 1, 2 and 3, 4 and 5, each pair in a loop that runs once: a basic
-        // block of its own for LLVM (conv_common.wgsl's `once`).
         loop {
             {
             let g = gather(base + 0u);
-            { let u = ob4_0(g);
-              (*m00).r0.c0 = mac((*m00).r0.c0, u, v0.r0.c0);
-              if ROWS > 4u { (*m10).r0.c0 = mac((*m10).r0.c0, u, v1.r0.c0); } }
-            { let u = ob4_1(g);
-              (*m01).r0.c0 = mac((*m01).r0.c0, u, v0.r0.c0);
-              if ROWS > 4u { (*m11).r0.c0 = mac((*m11).r0.c0, u, v1.r0.c0); } }
-            { let u = ob4_2(g);
-              (*m02).r0.c0 = mac((*m02).r0.c0, u, v0.r0.c0);
-              if ROWS > 4u { (*m12).r0.c0 = mac((*m12).r0.c0, u, v1.r0.c0); } }
-            { let u = ob4_3(g);
-              (*m03).r0.c0 = mac((*m03).r0.c0, u, v0.r0.c0);
-              if ROWS > 4u { (*m13).r0.c0 = mac((*m13).r0.c0, u, v1.r0.c0); } }
+            { let u = ob4_0(g); (*m00).r0.c0 = mac((*m00).r0.c0, u, v0.r0.c0); }
+            { let u = ob4_1(g); (*m01).r0.c0 = mac((*m01).r0.c0, u, v0.r0.c0); }
+            { let u = ob4_2(g); (*m02).r0.c0 = mac((*m02).r0.c0, u, v0.r0.c0); }
+            { let u = ob4_3(g); (*m03).r0.c0 = mac((*m03).r0.c0, u, v0.r0.c0); }
             }
             {
             let g = gather(base + 16u);
-            { let u = ob4_0(g);
-              (*m00).r0.c1 = mac((*m00).r0.c1, u, v0.r0.c1);
-              if ROWS > 4u { (*m10).r0.c1 = mac((*m10).r0.c1, u, v1.r0.c1); } }
-            { let u = ob4_1(g);
-              (*m01).r0.c1 = mac((*m01).r0.c1, u, v0.r0.c1);
-              if ROWS > 4u { (*m11).r0.c1 = mac((*m11).r0.c1, u, v1.r0.c1); } }
-            { let u = ob4_2(g);
-              (*m02).r0.c1 = mac((*m02).r0.c1, u, v0.r0.c1);
-              if ROWS > 4u { (*m12).r0.c1 = mac((*m12).r0.c1, u, v1.r0.c1); } }
-            { let u = ob4_3(g);
-              (*m03).r0.c1 = mac((*m03).r0.c1, u, v0.r0.c1);
-              if ROWS > 4u { (*m13).r0.c1 = mac((*m13).r0.c1, u, v1.r0.c1); } }
+            { let u = ob4_0(g); (*m00).r0.c1 = mac((*m00).r0.c1, u, v0.r0.c1); }
+            { let u = ob4_1(g); (*m01).r0.c1 = mac((*m01).r0.c1, u, v0.r0.c1); }
+            { let u = ob4_2(g); (*m02).r0.c1 = mac((*m02).r0.c1, u, v0.r0.c1); }
+            { let u = ob4_3(g); (*m03).r0.c1 = mac((*m03).r0.c1, u, v0.r0.c1); }
             }
             {
             let g = gather(base + 32u);
-            { let u = ob4_0(g);
-              (*m00).r0.c2 = mac((*m00).r0.c2, u, v0.r0.c2);
-              if ROWS > 4u { (*m10).r0.c2 = mac((*m10).r0.c2, u, v1.r0.c2); } }
-            { let u = ob4_1(g);
-              (*m01).r0.c2 = mac((*m01).r0.c2, u, v0.r0.c2);
-              if ROWS > 4u { (*m11).r0.c2 = mac((*m11).r0.c2, u, v1.r0.c2); } }
-            { let u = ob4_2(g);
-              (*m02).r0.c2 = mac((*m02).r0.c2, u, v0.r0.c2);
-              if ROWS > 4u { (*m12).r0.c2 = mac((*m12).r0.c2, u, v1.r0.c2); } }
-            { let u = ob4_3(g);
-              (*m03).r0.c2 = mac((*m03).r0.c2, u, v0.r0.c2);
-              if ROWS > 4u { (*m13).r0.c2 = mac((*m13).r0.c2, u, v1.r0.c2); } }
+            { let u = ob4_0(g); (*m00).r0.c2 = mac((*m00).r0.c2, u, v0.r0.c2); }
+            { let u = ob4_1(g); (*m01).r0.c2 = mac((*m01).r0.c2, u, v0.r0.c2); }
+            { let u = ob4_2(g); (*m02).r0.c2 = mac((*m02).r0.c2, u, v0.r0.c2); }
+            { let u = ob4_3(g); (*m03).r0.c2 = mac((*m03).r0.c2, u, v0.r0.c2); }
             }
             {
             let g = gather(base + 48u);
-            { let u = ob4_0(g);
-              (*m00).r0.c3 = mac((*m00).r0.c3, u, v0.r0.c3);
-              if ROWS > 4u { (*m10).r0.c3 = mac((*m10).r0.c3, u, v1.r0.c3); } }
-            { let u = ob4_1(g);
-              (*m01).r0.c3 = mac((*m01).r0.c3, u, v0.r0.c3);
-              if ROWS > 4u { (*m11).r0.c3 = mac((*m11).r0.c3, u, v1.r0.c3); } }
-            { let u = ob4_2(g);
-              (*m02).r0.c3 = mac((*m02).r0.c3, u, v0.r0.c3);
-              if ROWS > 4u { (*m12).r0.c3 = mac((*m12).r0.c3, u, v1.r0.c3); } }
-            { let u = ob4_3(g);
-              (*m03).r0.c3 = mac((*m03).r0.c3, u, v0.r0.c3);
-              if ROWS > 4u { (*m13).r0.c3 = mac((*m13).r0.c3, u, v1.r0.c3); } }
+            { let u = ob4_0(g); (*m00).r0.c3 = mac((*m00).r0.c3, u, v0.r0.c3); }
+            { let u = ob4_1(g); (*m01).r0.c3 = mac((*m01).r0.c3, u, v0.r0.c3); }
+            { let u = ob4_2(g); (*m02).r0.c3 = mac((*m02).r0.c3, u, v0.r0.c3); }
+            { let u = ob4_3(g); (*m03).r0.c3 = mac((*m03).r0.c3, u, v0.r0.c3); }
             }
             {
             let g = gather(base + 64u);
-            { let u = ob4_0(g);
-              (*m00).r0.c4 = mac((*m00).r0.c4, u, v0.r0.c4);
-              if ROWS > 4u { (*m10).r0.c4 = mac((*m10).r0.c4, u, v1.r0.c4); } }
-            { let u = ob4_1(g);
-              (*m01).r0.c4 = mac((*m01).r0.c4, u, v0.r0.c4);
-              if ROWS > 4u { (*m11).r0.c4 = mac((*m11).r0.c4, u, v1.r0.c4); } }
-            { let u = ob4_2(g);
-              (*m02).r0.c4 = mac((*m02).r0.c4, u, v0.r0.c4);
-              if ROWS > 4u { (*m12).r0.c4 = mac((*m12).r0.c4, u, v1.r0.c4); } }
-            { let u = ob4_3(g);
-              (*m03).r0.c4 = mac((*m03).r0.c4, u, v0.r0.c4);
-              if ROWS > 4u { (*m13).r0.c4 = mac((*m13).r0.c4, u, v1.r0.c4); } }
+            { let u = ob4_0(g); (*m00).r0.c4 = mac((*m00).r0.c4, u, v0.r0.c4); }
+            { let u = ob4_1(g); (*m01).r0.c4 = mac((*m01).r0.c4, u, v0.r0.c4); }
+            { let u = ob4_2(g); (*m02).r0.c4 = mac((*m02).r0.c4, u, v0.r0.c4); }
+            { let u = ob4_3(g); (*m03).r0.c4 = mac((*m03).r0.c4, u, v0.r0.c4); }
             }
             {
             let g = gather(base + 80u);
-            { let u = ob4_0(g);
-              (*m00).r0.c5 = mac((*m00).r0.c5, u, v0.r0.c5);
-              if ROWS > 4u { (*m10).r0.c5 = mac((*m10).r0.c5, u, v1.r0.c5); } }
-            { let u = ob4_1(g);
-              (*m01).r0.c5 = mac((*m01).r0.c5, u, v0.r0.c5);
-              if ROWS > 4u { (*m11).r0.c5 = mac((*m11).r0.c5, u, v1.r0.c5); } }
-            { let u = ob4_2(g);
-              (*m02).r0.c5 = mac((*m02).r0.c5, u, v0.r0.c5);
-              if ROWS > 4u { (*m12).r0.c5 = mac((*m12).r0.c5, u, v1.r0.c5); } }
-            { let u = ob4_3(g);
-              (*m03).r0.c5 = mac((*m03).r0.c5, u, v0.r0.c5);
-              if ROWS > 4u { (*m13).r0.c5 = mac((*m13).r0.c5, u, v1.r0.c5); } }
+            { let u = ob4_0(g); (*m00).r0.c5 = mac((*m00).r0.c5, u, v0.r0.c5); }
+            { let u = ob4_1(g); (*m01).r0.c5 = mac((*m01).r0.c5, u, v0.r0.c5); }
+            { let u = ob4_2(g); (*m02).r0.c5 = mac((*m02).r0.c5, u, v0.r0.c5); }
+            { let u = ob4_3(g); (*m03).r0.c5 = mac((*m03).r0.c5, u, v0.r0.c5); }
             }
             {
             let g = gather(base + 96u);
-            { let u = ob4_0(g);
-              (*m00).r1.c0 = mac((*m00).r1.c0, u, v0.r1.c0);
-              if ROWS > 4u { (*m10).r1.c0 = mac((*m10).r1.c0, u, v1.r1.c0); } }
-            { let u = ob4_1(g);
-              (*m01).r1.c0 = mac((*m01).r1.c0, u, v0.r1.c0);
-              if ROWS > 4u { (*m11).r1.c0 = mac((*m11).r1.c0, u, v1.r1.c0); } }
-            { let u = ob4_2(g);
-              (*m02).r1.c0 = mac((*m02).r1.c0, u, v0.r1.c0);
-              if ROWS > 4u { (*m12).r1.c0 = mac((*m12).r1.c0, u, v1.r1.c0); } }
-            { let u = ob4_3(g);
-              (*m03).r1.c0 = mac((*m03).r1.c0, u, v0.r1.c0);
-              if ROWS > 4u { (*m13).r1.c0 = mac((*m13).r1.c0, u, v1.r1.c0); } }
+            { let u = ob4_0(g); (*m00).r1.c0 = mac((*m00).r1.c0, u, v0.r1.c0); }
+            { let u = ob4_1(g); (*m01).r1.c0 = mac((*m01).r1.c0, u, v0.r1.c0); }
+            { let u = ob4_2(g); (*m02).r1.c0 = mac((*m02).r1.c0, u, v0.r1.c0); }
+            { let u = ob4_3(g); (*m03).r1.c0 = mac((*m03).r1.c0, u, v0.r1.c0); }
             }
             {
             let g = gather(base + 112u);
-            { let u = ob4_0(g);
-              (*m00).r1.c1 = mac((*m00).r1.c1, u, v0.r1.c1);
-              if ROWS > 4u { (*m10).r1.c1 = mac((*m10).r1.c1, u, v1.r1.c1); } }
-            { let u = ob4_1(g);
-              (*m01).r1.c1 = mac((*m01).r1.c1, u, v0.r1.c1);
-              if ROWS > 4u { (*m11).r1.c1 = mac((*m11).r1.c1, u, v1.r1.c1); } }
-            { let u = ob4_2(g);
-              (*m02).r1.c1 = mac((*m02).r1.c1, u, v0.r1.c1);
-              if ROWS > 4u { (*m12).r1.c1 = mac((*m12).r1.c1, u, v1.r1.c1); } }
-            { let u = ob4_3(g);
-              (*m03).r1.c1 = mac((*m03).r1.c1, u, v0.r1.c1);
-              if ROWS > 4u { (*m13).r1.c1 = mac((*m13).r1.c1, u, v1.r1.c1); } }
+            { let u = ob4_0(g); (*m00).r1.c1 = mac((*m00).r1.c1, u, v0.r1.c1); }
+            { let u = ob4_1(g); (*m01).r1.c1 = mac((*m01).r1.c1, u, v0.r1.c1); }
+            { let u = ob4_2(g); (*m02).r1.c1 = mac((*m02).r1.c1, u, v0.r1.c1); }
+            { let u = ob4_3(g); (*m03).r1.c1 = mac((*m03).r1.c1, u, v0.r1.c1); }
             }
             {
             let g = gather(base + 128u);
-            { let u = ob4_0(g);
-              (*m00).r1.c2 = mac((*m00).r1.c2, u, v0.r1.c2);
-              if ROWS > 4u { (*m10).r1.c2 = mac((*m10).r1.c2, u, v1.r1.c2); } }
-            { let u = ob4_1(g);
-              (*m01).r1.c2 = mac((*m01).r1.c2, u, v0.r1.c2);
-              if ROWS > 4u { (*m11).r1.c2 = mac((*m11).r1.c2, u, v1.r1.c2); } }
-            { let u = ob4_2(g);
-              (*m02).r1.c2 = mac((*m02).r1.c2, u, v0.r1.c2);
-              if ROWS > 4u { (*m12).r1.c2 = mac((*m12).r1.c2, u, v1.r1.c2); } }
-            { let u = ob4_3(g);
-              (*m03).r1.c2 = mac((*m03).r1.c2, u, v0.r1.c2);
-              if ROWS > 4u { (*m13).r1.c2 = mac((*m13).r1.c2, u, v1.r1.c2); } }
+            { let u = ob4_0(g); (*m00).r1.c2 = mac((*m00).r1.c2, u, v0.r1.c2); }
+            { let u = ob4_1(g); (*m01).r1.c2 = mac((*m01).r1.c2, u, v0.r1.c2); }
+            { let u = ob4_2(g); (*m02).r1.c2 = mac((*m02).r1.c2, u, v0.r1.c2); }
+            { let u = ob4_3(g); (*m03).r1.c2 = mac((*m03).r1.c2, u, v0.r1.c2); }
             }
             {
             let g = gather(base + 144u);
-            { let u = ob4_0(g);
-              (*m00).r1.c3 = mac((*m00).r1.c3, u, v0.r1.c3);
-              if ROWS > 4u { (*m10).r1.c3 = mac((*m10).r1.c3, u, v1.r1.c3); } }
-            { let u = ob4_1(g);
-              (*m01).r1.c3 = mac((*m01).r1.c3, u, v0.r1.c3);
-              if ROWS > 4u { (*m11).r1.c3 = mac((*m11).r1.c3, u, v1.r1.c3); } }
-            { let u = ob4_2(g);
-              (*m02).r1.c3 = mac((*m02).r1.c3, u, v0.r1.c3);
-              if ROWS > 4u { (*m12).r1.c3 = mac((*m12).r1.c3, u, v1.r1.c3); } }
-            { let u = ob4_3(g);
-              (*m03).r1.c3 = mac((*m03).r1.c3, u, v0.r1.c3);
-              if ROWS > 4u { (*m13).r1.c3 = mac((*m13).r1.c3, u, v1.r1.c3); } }
+            { let u = ob4_0(g); (*m00).r1.c3 = mac((*m00).r1.c3, u, v0.r1.c3); }
+            { let u = ob4_1(g); (*m01).r1.c3 = mac((*m01).r1.c3, u, v0.r1.c3); }
+            { let u = ob4_2(g); (*m02).r1.c3 = mac((*m02).r1.c3, u, v0.r1.c3); }
+            { let u = ob4_3(g); (*m03).r1.c3 = mac((*m03).r1.c3, u, v0.r1.c3); }
             }
             {
             let g = gather(base + 160u);
-            { let u = ob4_0(g);
-              (*m00).r1.c4 = mac((*m00).r1.c4, u, v0.r1.c4);
-              if ROWS > 4u { (*m10).r1.c4 = mac((*m10).r1.c4, u, v1.r1.c4); } }
-            { let u = ob4_1(g);
-              (*m01).r1.c4 = mac((*m01).r1.c4, u, v0.r1.c4);
-              if ROWS > 4u { (*m11).r1.c4 = mac((*m11).r1.c4, u, v1.r1.c4); } }
-            { let u = ob4_2(g);
-              (*m02).r1.c4 = mac((*m02).r1.c4, u, v0.r1.c4);
-              if ROWS > 4u { (*m12).r1.c4 = mac((*m12).r1.c4, u, v1.r1.c4); } }
-            { let u = ob4_3(g);
-              (*m03).r1.c4 = mac((*m03).r1.c4, u, v0.r1.c4);
-              if ROWS > 4u { (*m13).r1.c4 = mac((*m13).r1.c4, u, v1.r1.c4); } }
+            { let u = ob4_0(g); (*m00).r1.c4 = mac((*m00).r1.c4, u, v0.r1.c4); }
+            { let u = ob4_1(g); (*m01).r1.c4 = mac((*m01).r1.c4, u, v0.r1.c4); }
+            { let u = ob4_2(g); (*m02).r1.c4 = mac((*m02).r1.c4, u, v0.r1.c4); }
+            { let u = ob4_3(g); (*m03).r1.c4 = mac((*m03).r1.c4, u, v0.r1.c4); }
             }
             {
             let g = gather(base + 176u);
-            { let u = ob4_0(g);
-              (*m00).r1.c5 = mac((*m00).r1.c5, u, v0.r1.c5);
-              if ROWS > 4u { (*m10).r1.c5 = mac((*m10).r1.c5, u, v1.r1.c5); } }
-            { let u = ob4_1(g);
-              (*m01).r1.c5 = mac((*m01).r1.c5, u, v0.r1.c5);
-              if ROWS > 4u { (*m11).r1.c5 = mac((*m11).r1.c5, u, v1.r1.c5); } }
-            { let u = ob4_2(g);
-              (*m02).r1.c5 = mac((*m02).r1.c5, u, v0.r1.c5);
-              if ROWS > 4u { (*m12).r1.c5 = mac((*m12).r1.c5, u, v1.r1.c5); } }
-            { let u = ob4_3(g);
-              (*m03).r1.c5 = mac((*m03).r1.c5, u, v0.r1.c5);
-              if ROWS > 4u { (*m13).r1.c5 = mac((*m13).r1.c5, u, v1.r1.c5); } }
+            { let u = ob4_0(g); (*m00).r1.c5 = mac((*m00).r1.c5, u, v0.r1.c5); }
+            { let u = ob4_1(g); (*m01).r1.c5 = mac((*m01).r1.c5, u, v0.r1.c5); }
+            { let u = ob4_2(g); (*m02).r1.c5 = mac((*m02).r1.c5, u, v0.r1.c5); }
+            { let u = ob4_3(g); (*m03).r1.c5 = mac((*m03).r1.c5, u, v0.r1.c5); }
             }
             continuing { break if once(); }
         }
         loop {
             {
             let g = gather(base + 192u);
-            { let u = ob4_0(g);
-              (*m00).r2.c0 = mac((*m00).r2.c0, u, v0.r2.c0);
-              if ROWS > 4u { (*m10).r2.c0 = mac((*m10).r2.c0, u, v1.r2.c0); } }
-            { let u = ob4_1(g);
-              (*m01).r2.c0 = mac((*m01).r2.c0, u, v0.r2.c0);
-              if ROWS > 4u { (*m11).r2.c0 = mac((*m11).r2.c0, u, v1.r2.c0); } }
-            { let u = ob4_2(g);
-              (*m02).r2.c0 = mac((*m02).r2.c0, u, v0.r2.c0);
-              if ROWS > 4u { (*m12).r2.c0 = mac((*m12).r2.c0, u, v1.r2.c0); } }
-            { let u = ob4_3(g);
-              (*m03).r2.c0 = mac((*m03).r2.c0, u, v0.r2.c0);
-              if ROWS > 4u { (*m13).r2.c0 = mac((*m13).r2.c0, u, v1.r2.c0); } }
+            { let u = ob4_0(g); (*m00).r2.c0 = mac((*m00).r2.c0, u, v0.r2.c0); }
+            { let u = ob4_1(g); (*m01).r2.c0 = mac((*m01).r2.c0, u, v0.r2.c0); }
+            { let u = ob4_2(g); (*m02).r2.c0 = mac((*m02).r2.c0, u, v0.r2.c0); }
+            { let u = ob4_3(g); (*m03).r2.c0 = mac((*m03).r2.c0, u, v0.r2.c0); }
             }
             {
             let g = gather(base + 208u);
-            { let u = ob4_0(g);
-              (*m00).r2.c1 = mac((*m00).r2.c1, u, v0.r2.c1);
-              if ROWS > 4u { (*m10).r2.c1 = mac((*m10).r2.c1, u, v1.r2.c1); } }
-            { let u = ob4_1(g);
-              (*m01).r2.c1 = mac((*m01).r2.c1, u, v0.r2.c1);
-              if ROWS > 4u { (*m11).r2.c1 = mac((*m11).r2.c1, u, v1.r2.c1); } }
-            { let u = ob4_2(g);
-              (*m02).r2.c1 = mac((*m02).r2.c1, u, v0.r2.c1);
-              if ROWS > 4u { (*m12).r2.c1 = mac((*m12).r2.c1, u, v1.r2.c1); } }
-            { let u = ob4_3(g);
-              (*m03).r2.c1 = mac((*m03).r2.c1, u, v0.r2.c1);
-              if ROWS > 4u { (*m13).r2.c1 = mac((*m13).r2.c1, u, v1.r2.c1); } }
+            { let u = ob4_0(g); (*m00).r2.c1 = mac((*m00).r2.c1, u, v0.r2.c1); }
+            { let u = ob4_1(g); (*m01).r2.c1 = mac((*m01).r2.c1, u, v0.r2.c1); }
+            { let u = ob4_2(g); (*m02).r2.c1 = mac((*m02).r2.c1, u, v0.r2.c1); }
+            { let u = ob4_3(g); (*m03).r2.c1 = mac((*m03).r2.c1, u, v0.r2.c1); }
             }
             {
             let g = gather(base + 224u);
-            { let u = ob4_0(g);
-              (*m00).r2.c2 = mac((*m00).r2.c2, u, v0.r2.c2);
-              if ROWS > 4u { (*m10).r2.c2 = mac((*m10).r2.c2, u, v1.r2.c2); } }
-            { let u = ob4_1(g);
-              (*m01).r2.c2 = mac((*m01).r2.c2, u, v0.r2.c2);
-              if ROWS > 4u { (*m11).r2.c2 = mac((*m11).r2.c2, u, v1.r2.c2); } }
-            { let u = ob4_2(g);
-              (*m02).r2.c2 = mac((*m02).r2.c2, u, v0.r2.c2);
-              if ROWS > 4u { (*m12).r2.c2 = mac((*m12).r2.c2, u, v1.r2.c2); } }
-            { let u = ob4_3(g);
-              (*m03).r2.c2 = mac((*m03).r2.c2, u, v0.r2.c2);
-              if ROWS > 4u { (*m13).r2.c2 = mac((*m13).r2.c2, u, v1.r2.c2); } }
+            { let u = ob4_0(g); (*m00).r2.c2 = mac((*m00).r2.c2, u, v0.r2.c2); }
+            { let u = ob4_1(g); (*m01).r2.c2 = mac((*m01).r2.c2, u, v0.r2.c2); }
+            { let u = ob4_2(g); (*m02).r2.c2 = mac((*m02).r2.c2, u, v0.r2.c2); }
+            { let u = ob4_3(g); (*m03).r2.c2 = mac((*m03).r2.c2, u, v0.r2.c2); }
             }
             {
             let g = gather(base + 240u);
-            { let u = ob4_0(g);
-              (*m00).r2.c3 = mac((*m00).r2.c3, u, v0.r2.c3);
-              if ROWS > 4u { (*m10).r2.c3 = mac((*m10).r2.c3, u, v1.r2.c3); } }
-            { let u = ob4_1(g);
-              (*m01).r2.c3 = mac((*m01).r2.c3, u, v0.r2.c3);
-              if ROWS > 4u { (*m11).r2.c3 = mac((*m11).r2.c3, u, v1.r2.c3); } }
-            { let u = ob4_2(g);
-              (*m02).r2.c3 = mac((*m02).r2.c3, u, v0.r2.c3);
-              if ROWS > 4u { (*m12).r2.c3 = mac((*m12).r2.c3, u, v1.r2.c3); } }
-            { let u = ob4_3(g);
-              (*m03).r2.c3 = mac((*m03).r2.c3, u, v0.r2.c3);
-              if ROWS > 4u { (*m13).r2.c3 = mac((*m13).r2.c3, u, v1.r2.c3); } }
+            { let u = ob4_0(g); (*m00).r2.c3 = mac((*m00).r2.c3, u, v0.r2.c3); }
+            { let u = ob4_1(g); (*m01).r2.c3 = mac((*m01).r2.c3, u, v0.r2.c3); }
+            { let u = ob4_2(g); (*m02).r2.c3 = mac((*m02).r2.c3, u, v0.r2.c3); }
+            { let u = ob4_3(g); (*m03).r2.c3 = mac((*m03).r2.c3, u, v0.r2.c3); }
             }
             {
             let g = gather(base + 256u);
-            { let u = ob4_0(g);
-              (*m00).r2.c4 = mac((*m00).r2.c4, u, v0.r2.c4);
-              if ROWS > 4u { (*m10).r2.c4 = mac((*m10).r2.c4, u, v1.r2.c4); } }
-            { let u = ob4_1(g);
-              (*m01).r2.c4 = mac((*m01).r2.c4, u, v0.r2.c4);
-              if ROWS > 4u { (*m11).r2.c4 = mac((*m11).r2.c4, u, v1.r2.c4); } }
-            { let u = ob4_2(g);
-              (*m02).r2.c4 = mac((*m02).r2.c4, u, v0.r2.c4);
-              if ROWS > 4u { (*m12).r2.c4 = mac((*m12).r2.c4, u, v1.r2.c4); } }
-            { let u = ob4_3(g);
-              (*m03).r2.c4 = mac((*m03).r2.c4, u, v0.r2.c4);
-              if ROWS > 4u { (*m13).r2.c4 = mac((*m13).r2.c4, u, v1.r2.c4); } }
+            { let u = ob4_0(g); (*m00).r2.c4 = mac((*m00).r2.c4, u, v0.r2.c4); }
+            { let u = ob4_1(g); (*m01).r2.c4 = mac((*m01).r2.c4, u, v0.r2.c4); }
+            { let u = ob4_2(g); (*m02).r2.c4 = mac((*m02).r2.c4, u, v0.r2.c4); }
+            { let u = ob4_3(g); (*m03).r2.c4 = mac((*m03).r2.c4, u, v0.r2.c4); }
             }
             {
             let g = gather(base + 272u);
-            { let u = ob4_0(g);
-              (*m00).r2.c5 = mac((*m00).r2.c5, u, v0.r2.c5);
-              if ROWS > 4u { (*m10).r2.c5 = mac((*m10).r2.c5, u, v1.r2.c5); } }
-            { let u = ob4_1(g);
-              (*m01).r2.c5 = mac((*m01).r2.c5, u, v0.r2.c5);
-              if ROWS > 4u { (*m11).r2.c5 = mac((*m11).r2.c5, u, v1.r2.c5); } }
-            { let u = ob4_2(g);
-              (*m02).r2.c5 = mac((*m02).r2.c5, u, v0.r2.c5);
-              if ROWS > 4u { (*m12).r2.c5 = mac((*m12).r2.c5, u, v1.r2.c5); } }
-            { let u = ob4_3(g);
-              (*m03).r2.c5 = mac((*m03).r2.c5, u, v0.r2.c5);
-              if ROWS > 4u { (*m13).r2.c5 = mac((*m13).r2.c5, u, v1.r2.c5); } }
+            { let u = ob4_0(g); (*m00).r2.c5 = mac((*m00).r2.c5, u, v0.r2.c5); }
+            { let u = ob4_1(g); (*m01).r2.c5 = mac((*m01).r2.c5, u, v0.r2.c5); }
+            { let u = ob4_2(g); (*m02).r2.c5 = mac((*m02).r2.c5, u, v0.r2.c5); }
+            { let u = ob4_3(g); (*m03).r2.c5 = mac((*m03).r2.c5, u, v0.r2.c5); }
             }
             {
             let g = gather(base + 288u);
-            { let u = ob4_0(g);
-              (*m00).r3.c0 = mac((*m00).r3.c0, u, v0.r3.c0);
-              if ROWS > 4u { (*m10).r3.c0 = mac((*m10).r3.c0, u, v1.r3.c0); } }
-            { let u = ob4_1(g);
-              (*m01).r3.c0 = mac((*m01).r3.c0, u, v0.r3.c0);
-              if ROWS > 4u { (*m11).r3.c0 = mac((*m11).r3.c0, u, v1.r3.c0); } }
-            { let u = ob4_2(g);
-              (*m02).r3.c0 = mac((*m02).r3.c0, u, v0.r3.c0);
-              if ROWS > 4u { (*m12).r3.c0 = mac((*m12).r3.c0, u, v1.r3.c0); } }
-            { let u = ob4_3(g);
-              (*m03).r3.c0 = mac((*m03).r3.c0, u, v0.r3.c0);
-              if ROWS > 4u { (*m13).r3.c0 = mac((*m13).r3.c0, u, v1.r3.c0); } }
+            { let u = ob4_0(g); (*m00).r3.c0 = mac((*m00).r3.c0, u, v0.r3.c0); }
+            { let u = ob4_1(g); (*m01).r3.c0 = mac((*m01).r3.c0, u, v0.r3.c0); }
+            { let u = ob4_2(g); (*m02).r3.c0 = mac((*m02).r3.c0, u, v0.r3.c0); }
+            { let u = ob4_3(g); (*m03).r3.c0 = mac((*m03).r3.c0, u, v0.r3.c0); }
             }
             {
             let g = gather(base + 304u);
-            { let u = ob4_0(g);
-              (*m00).r3.c1 = mac((*m00).r3.c1, u, v0.r3.c1);
-              if ROWS > 4u { (*m10).r3.c1 = mac((*m10).r3.c1, u, v1.r3.c1); } }
-            { let u = ob4_1(g);
-              (*m01).r3.c1 = mac((*m01).r3.c1, u, v0.r3.c1);
-              if ROWS > 4u { (*m11).r3.c1 = mac((*m11).r3.c1, u, v1.r3.c1); } }
-            { let u = ob4_2(g);
-              (*m02).r3.c1 = mac((*m02).r3.c1, u, v0.r3.c1);
-              if ROWS > 4u { (*m12).r3.c1 = mac((*m12).r3.c1, u, v1.r3.c1); } }
-            { let u = ob4_3(g);
-              (*m03).r3.c1 = mac((*m03).r3.c1, u, v0.r3.c1);
-              if ROWS > 4u { (*m13).r3.c1 = mac((*m13).r3.c1, u, v1.r3.c1); } }
+            { let u = ob4_0(g); (*m00).r3.c1 = mac((*m00).r3.c1, u, v0.r3.c1); }
+            { let u = ob4_1(g); (*m01).r3.c1 = mac((*m01).r3.c1, u, v0.r3.c1); }
+            { let u = ob4_2(g); (*m02).r3.c1 = mac((*m02).r3.c1, u, v0.r3.c1); }
+            { let u = ob4_3(g); (*m03).r3.c1 = mac((*m03).r3.c1, u, v0.r3.c1); }
             }
             {
             let g = gather(base + 320u);
-            { let u = ob4_0(g);
-              (*m00).r3.c2 = mac((*m00).r3.c2, u, v0.r3.c2);
-              if ROWS > 4u { (*m10).r3.c2 = mac((*m10).r3.c2, u, v1.r3.c2); } }
-            { let u = ob4_1(g);
-              (*m01).r3.c2 = mac((*m01).r3.c2, u, v0.r3.c2);
-              if ROWS > 4u { (*m11).r3.c2 = mac((*m11).r3.c2, u, v1.r3.c2); } }
-            { let u = ob4_2(g);
-              (*m02).r3.c2 = mac((*m02).r3.c2, u, v0.r3.c2);
-              if ROWS > 4u { (*m12).r3.c2 = mac((*m12).r3.c2, u, v1.r3.c2); } }
-            { let u = ob4_3(g);
-              (*m03).r3.c2 = mac((*m03).r3.c2, u, v0.r3.c2);
-              if ROWS > 4u { (*m13).r3.c2 = mac((*m13).r3.c2, u, v1.r3.c2); } }
+            { let u = ob4_0(g); (*m00).r3.c2 = mac((*m00).r3.c2, u, v0.r3.c2); }
+            { let u = ob4_1(g); (*m01).r3.c2 = mac((*m01).r3.c2, u, v0.r3.c2); }
+            { let u = ob4_2(g); (*m02).r3.c2 = mac((*m02).r3.c2, u, v0.r3.c2); }
+            { let u = ob4_3(g); (*m03).r3.c2 = mac((*m03).r3.c2, u, v0.r3.c2); }
             }
             {
             let g = gather(base + 336u);
-            { let u = ob4_0(g);
-              (*m00).r3.c3 = mac((*m00).r3.c3, u, v0.r3.c3);
-              if ROWS > 4u { (*m10).r3.c3 = mac((*m10).r3.c3, u, v1.r3.c3); } }
-            { let u = ob4_1(g);
-              (*m01).r3.c3 = mac((*m01).r3.c3, u, v0.r3.c3);
-              if ROWS > 4u { (*m11).r3.c3 = mac((*m11).r3.c3, u, v1.r3.c3); } }
-            { let u = ob4_2(g);
-              (*m02).r3.c3 = mac((*m02).r3.c3, u, v0.r3.c3);
-              if ROWS > 4u { (*m12).r3.c3 = mac((*m12).r3.c3, u, v1.r3.c3); } }
-            { let u = ob4_3(g);
-              (*m03).r3.c3 = mac((*m03).r3.c3, u, v0.r3.c3);
-              if ROWS > 4u { (*m13).r3.c3 = mac((*m13).r3.c3, u, v1.r3.c3); } }
+            { let u = ob4_0(g); (*m00).r3.c3 = mac((*m00).r3.c3, u, v0.r3.c3); }
+            { let u = ob4_1(g); (*m01).r3.c3 = mac((*m01).r3.c3, u, v0.r3.c3); }
+            { let u = ob4_2(g); (*m02).r3.c3 = mac((*m02).r3.c3, u, v0.r3.c3); }
+            { let u = ob4_3(g); (*m03).r3.c3 = mac((*m03).r3.c3, u, v0.r3.c3); }
             }
             {
             let g = gather(base + 352u);
-            { let u = ob4_0(g);
-              (*m00).r3.c4 = mac((*m00).r3.c4, u, v0.r3.c4);
-              if ROWS > 4u { (*m10).r3.c4 = mac((*m10).r3.c4, u, v1.r3.c4); } }
-            { let u = ob4_1(g);
-              (*m01).r3.c4 = mac((*m01).r3.c4, u, v0.r3.c4);
-              if ROWS > 4u { (*m11).r3.c4 = mac((*m11).r3.c4, u, v1.r3.c4); } }
-            { let u = ob4_2(g);
-              (*m02).r3.c4 = mac((*m02).r3.c4, u, v0.r3.c4);
-              if ROWS > 4u { (*m12).r3.c4 = mac((*m12).r3.c4, u, v1.r3.c4); } }
-            { let u = ob4_3(g);
-              (*m03).r3.c4 = mac((*m03).r3.c4, u, v0.r3.c4);
-              if ROWS > 4u { (*m13).r3.c4 = mac((*m13).r3.c4, u, v1.r3.c4); } }
+            { let u = ob4_0(g); (*m00).r3.c4 = mac((*m00).r3.c4, u, v0.r3.c4); }
+            { let u = ob4_1(g); (*m01).r3.c4 = mac((*m01).r3.c4, u, v0.r3.c4); }
+            { let u = ob4_2(g); (*m02).r3.c4 = mac((*m02).r3.c4, u, v0.r3.c4); }
+            { let u = ob4_3(g); (*m03).r3.c4 = mac((*m03).r3.c4, u, v0.r3.c4); }
             }
             {
             let g = gather(base + 368u);
-            { let u = ob4_0(g);
-              (*m00).r3.c5 = mac((*m00).r3.c5, u, v0.r3.c5);
-              if ROWS > 4u { (*m10).r3.c5 = mac((*m10).r3.c5, u, v1.r3.c5); } }
-            { let u = ob4_1(g);
-              (*m01).r3.c5 = mac((*m01).r3.c5, u, v0.r3.c5);
-              if ROWS > 4u { (*m11).r3.c5 = mac((*m11).r3.c5, u, v1.r3.c5); } }
-            { let u = ob4_2(g);
-              (*m02).r3.c5 = mac((*m02).r3.c5, u, v0.r3.c5);
-              if ROWS > 4u { (*m12).r3.c5 = mac((*m12).r3.c5, u, v1.r3.c5); } }
-            { let u = ob4_3(g);
-              (*m03).r3.c5 = mac((*m03).r3.c5, u, v0.r3.c5);
-              if ROWS > 4u { (*m13).r3.c5 = mac((*m13).r3.c5, u, v1.r3.c5); } }
+            { let u = ob4_0(g); (*m00).r3.c5 = mac((*m00).r3.c5, u, v0.r3.c5); }
+            { let u = ob4_1(g); (*m01).r3.c5 = mac((*m01).r3.c5, u, v0.r3.c5); }
+            { let u = ob4_2(g); (*m02).r3.c5 = mac((*m02).r3.c5, u, v0.r3.c5); }
+            { let u = ob4_3(g); (*m03).r3.c5 = mac((*m03).r3.c5, u, v0.r3.c5); }
             }
             continuing { break if once(); }
         }
         loop {
             {
             let g = gather(base + 384u);
-            { let u = ob4_0(g);
-              (*m00).r4.c0 = mac((*m00).r4.c0, u, v0.r4.c0);
-              if ROWS > 4u { (*m10).r4.c0 = mac((*m10).r4.c0, u, v1.r4.c0); } }
-            { let u = ob4_1(g);
-              (*m01).r4.c0 = mac((*m01).r4.c0, u, v0.r4.c0);
-              if ROWS > 4u { (*m11).r4.c0 = mac((*m11).r4.c0, u, v1.r4.c0); } }
-            { let u = ob4_2(g);
-              (*m02).r4.c0 = mac((*m02).r4.c0, u, v0.r4.c0);
-              if ROWS > 4u { (*m12).r4.c0 = mac((*m12).r4.c0, u, v1.r4.c0); } }
-            { let u = ob4_3(g);
-              (*m03).r4.c0 = mac((*m03).r4.c0, u, v0.r4.c0);
-              if ROWS > 4u { (*m13).r4.c0 = mac((*m13).r4.c0, u, v1.r4.c0); } }
+            { let u = ob4_0(g); (*m00).r4.c0 = mac((*m00).r4.c0, u, v0.r4.c0); }
+            { let u = ob4_1(g); (*m01).r4.c0 = mac((*m01).r4.c0, u, v0.r4.c0); }
+            { let u = ob4_2(g); (*m02).r4.c0 = mac((*m02).r4.c0, u, v0.r4.c0); }
+            { let u = ob4_3(g); (*m03).r4.c0 = mac((*m03).r4.c0, u, v0.r4.c0); }
             }
             {
             let g = gather(base + 400u);
-            { let u = ob4_0(g);
-              (*m00).r4.c1 = mac((*m00).r4.c1, u, v0.r4.c1);
-              if ROWS > 4u { (*m10).r4.c1 = mac((*m10).r4.c1, u, v1.r4.c1); } }
-            { let u = ob4_1(g);
-              (*m01).r4.c1 = mac((*m01).r4.c1, u, v0.r4.c1);
-              if ROWS > 4u { (*m11).r4.c1 = mac((*m11).r4.c1, u, v1.r4.c1); } }
-            { let u = ob4_2(g);
-              (*m02).r4.c1 = mac((*m02).r4.c1, u, v0.r4.c1);
-              if ROWS > 4u { (*m12).r4.c1 = mac((*m12).r4.c1, u, v1.r4.c1); } }
-            { let u = ob4_3(g);
-              (*m03).r4.c1 = mac((*m03).r4.c1, u, v0.r4.c1);
-              if ROWS > 4u { (*m13).r4.c1 = mac((*m13).r4.c1, u, v1.r4.c1); } }
+            { let u = ob4_0(g); (*m00).r4.c1 = mac((*m00).r4.c1, u, v0.r4.c1); }
+            { let u = ob4_1(g); (*m01).r4.c1 = mac((*m01).r4.c1, u, v0.r4.c1); }
+            { let u = ob4_2(g); (*m02).r4.c1 = mac((*m02).r4.c1, u, v0.r4.c1); }
+            { let u = ob4_3(g); (*m03).r4.c1 = mac((*m03).r4.c1, u, v0.r4.c1); }
             }
             {
             let g = gather(base + 416u);
-            { let u = ob4_0(g);
-              (*m00).r4.c2 = mac((*m00).r4.c2, u, v0.r4.c2);
-              if ROWS > 4u { (*m10).r4.c2 = mac((*m10).r4.c2, u, v1.r4.c2); } }
-            { let u = ob4_1(g);
-              (*m01).r4.c2 = mac((*m01).r4.c2, u, v0.r4.c2);
-              if ROWS > 4u { (*m11).r4.c2 = mac((*m11).r4.c2, u, v1.r4.c2); } }
-            { let u = ob4_2(g);
-              (*m02).r4.c2 = mac((*m02).r4.c2, u, v0.r4.c2);
-              if ROWS > 4u { (*m12).r4.c2 = mac((*m12).r4.c2, u, v1.r4.c2); } }
-            { let u = ob4_3(g);
-              (*m03).r4.c2 = mac((*m03).r4.c2, u, v0.r4.c2);
-              if ROWS > 4u { (*m13).r4.c2 = mac((*m13).r4.c2, u, v1.r4.c2); } }
+            { let u = ob4_0(g); (*m00).r4.c2 = mac((*m00).r4.c2, u, v0.r4.c2); }
+            { let u = ob4_1(g); (*m01).r4.c2 = mac((*m01).r4.c2, u, v0.r4.c2); }
+            { let u = ob4_2(g); (*m02).r4.c2 = mac((*m02).r4.c2, u, v0.r4.c2); }
+            { let u = ob4_3(g); (*m03).r4.c2 = mac((*m03).r4.c2, u, v0.r4.c2); }
             }
             {
             let g = gather(base + 432u);
-            { let u = ob4_0(g);
-              (*m00).r4.c3 = mac((*m00).r4.c3, u, v0.r4.c3);
-              if ROWS > 4u { (*m10).r4.c3 = mac((*m10).r4.c3, u, v1.r4.c3); } }
-            { let u = ob4_1(g);
-              (*m01).r4.c3 = mac((*m01).r4.c3, u, v0.r4.c3);
-              if ROWS > 4u { (*m11).r4.c3 = mac((*m11).r4.c3, u, v1.r4.c3); } }
-            { let u = ob4_2(g);
-              (*m02).r4.c3 = mac((*m02).r4.c3, u, v0.r4.c3);
-              if ROWS > 4u { (*m12).r4.c3 = mac((*m12).r4.c3, u, v1.r4.c3); } }
-            { let u = ob4_3(g);
-              (*m03).r4.c3 = mac((*m03).r4.c3, u, v0.r4.c3);
-              if ROWS > 4u { (*m13).r4.c3 = mac((*m13).r4.c3, u, v1.r4.c3); } }
+            { let u = ob4_0(g); (*m00).r4.c3 = mac((*m00).r4.c3, u, v0.r4.c3); }
+            { let u = ob4_1(g); (*m01).r4.c3 = mac((*m01).r4.c3, u, v0.r4.c3); }
+            { let u = ob4_2(g); (*m02).r4.c3 = mac((*m02).r4.c3, u, v0.r4.c3); }
+            { let u = ob4_3(g); (*m03).r4.c3 = mac((*m03).r4.c3, u, v0.r4.c3); }
             }
             {
             let g = gather(base + 448u);
-            { let u = ob4_0(g);
-              (*m00).r4.c4 = mac((*m00).r4.c4, u, v0.r4.c4);
-              if ROWS > 4u { (*m10).r4.c4 = mac((*m10).r4.c4, u, v1.r4.c4); } }
-            { let u = ob4_1(g);
-              (*m01).r4.c4 = mac((*m01).r4.c4, u, v0.r4.c4);
-              if ROWS > 4u { (*m11).r4.c4 = mac((*m11).r4.c4, u, v1.r4.c4); } }
-            { let u = ob4_2(g);
-              (*m02).r4.c4 = mac((*m02).r4.c4, u, v0.r4.c4);
-              if ROWS > 4u { (*m12).r4.c4 = mac((*m12).r4.c4, u, v1.r4.c4); } }
-            { let u = ob4_3(g);
-              (*m03).r4.c4 = mac((*m03).r4.c4, u, v0.r4.c4);
-              if ROWS > 4u { (*m13).r4.c4 = mac((*m13).r4.c4, u, v1.r4.c4); } }
+            { let u = ob4_0(g); (*m00).r4.c4 = mac((*m00).r4.c4, u, v0.r4.c4); }
+            { let u = ob4_1(g); (*m01).r4.c4 = mac((*m01).r4.c4, u, v0.r4.c4); }
+            { let u = ob4_2(g); (*m02).r4.c4 = mac((*m02).r4.c4, u, v0.r4.c4); }
+            { let u = ob4_3(g); (*m03).r4.c4 = mac((*m03).r4.c4, u, v0.r4.c4); }
             }
             {
             let g = gather(base + 464u);
-            { let u = ob4_0(g);
-              (*m00).r4.c5 = mac((*m00).r4.c5, u, v0.r4.c5);
-              if ROWS > 4u { (*m10).r4.c5 = mac((*m10).r4.c5, u, v1.r4.c5); } }
-            { let u = ob4_1(g);
-              (*m01).r4.c5 = mac((*m01).r4.c5, u, v0.r4.c5);
-              if ROWS > 4u { (*m11).r4.c5 = mac((*m11).r4.c5, u, v1.r4.c5); } }
-            { let u = ob4_2(g);
-              (*m02).r4.c5 = mac((*m02).r4.c5, u, v0.r4.c5);
-              if ROWS > 4u { (*m12).r4.c5 = mac((*m12).r4.c5, u, v1.r4.c5); } }
-            { let u = ob4_3(g);
-              (*m03).r4.c5 = mac((*m03).r4.c5, u, v0.r4.c5);
-              if ROWS > 4u { (*m13).r4.c5 = mac((*m13).r4.c5, u, v1.r4.c5); } }
+            { let u = ob4_0(g); (*m00).r4.c5 = mac((*m00).r4.c5, u, v0.r4.c5); }
+            { let u = ob4_1(g); (*m01).r4.c5 = mac((*m01).r4.c5, u, v0.r4.c5); }
+            { let u = ob4_2(g); (*m02).r4.c5 = mac((*m02).r4.c5, u, v0.r4.c5); }
+            { let u = ob4_3(g); (*m03).r4.c5 = mac((*m03).r4.c5, u, v0.r4.c5); }
             }
             {
             let g = gather(base + 480u);
-            { let u = ob4_0(g);
-              (*m00).r5.c0 = mac((*m00).r5.c0, u, v0.r5.c0);
-              if ROWS > 4u { (*m10).r5.c0 = mac((*m10).r5.c0, u, v1.r5.c0); } }
-            { let u = ob4_1(g);
-              (*m01).r5.c0 = mac((*m01).r5.c0, u, v0.r5.c0);
-              if ROWS > 4u { (*m11).r5.c0 = mac((*m11).r5.c0, u, v1.r5.c0); } }
-            { let u = ob4_2(g);
-              (*m02).r5.c0 = mac((*m02).r5.c0, u, v0.r5.c0);
-              if ROWS > 4u { (*m12).r5.c0 = mac((*m12).r5.c0, u, v1.r5.c0); } }
-            { let u = ob4_3(g);
-              (*m03).r5.c0 = mac((*m03).r5.c0, u, v0.r5.c0);
-              if ROWS > 4u { (*m13).r5.c0 = mac((*m13).r5.c0, u, v1.r5.c0); } }
+            { let u = ob4_0(g); (*m00).r5.c0 = mac((*m00).r5.c0, u, v0.r5.c0); }
+            { let u = ob4_1(g); (*m01).r5.c0 = mac((*m01).r5.c0, u, v0.r5.c0); }
+            { let u = ob4_2(g); (*m02).r5.c0 = mac((*m02).r5.c0, u, v0.r5.c0); }
+            { let u = ob4_3(g); (*m03).r5.c0 = mac((*m03).r5.c0, u, v0.r5.c0); }
             }
             {
             let g = gather(base + 496u);
-            { let u = ob4_0(g);
-              (*m00).r5.c1 = mac((*m00).r5.c1, u, v0.r5.c1);
-              if ROWS > 4u { (*m10).r5.c1 = mac((*m10).r5.c1, u, v1.r5.c1); } }
-            { let u = ob4_1(g);
-              (*m01).r5.c1 = mac((*m01).r5.c1, u, v0.r5.c1);
-              if ROWS > 4u { (*m11).r5.c1 = mac((*m11).r5.c1, u, v1.r5.c1); } }
-            { let u = ob4_2(g);
-              (*m02).r5.c1 = mac((*m02).r5.c1, u, v0.r5.c1);
-              if ROWS > 4u { (*m12).r5.c1 = mac((*m12).r5.c1, u, v1.r5.c1); } }
-            { let u = ob4_3(g);
-              (*m03).r5.c1 = mac((*m03).r5.c1, u, v0.r5.c1);
-              if ROWS > 4u { (*m13).r5.c1 = mac((*m13).r5.c1, u, v1.r5.c1); } }
+            { let u = ob4_0(g); (*m00).r5.c1 = mac((*m00).r5.c1, u, v0.r5.c1); }
+            { let u = ob4_1(g); (*m01).r5.c1 = mac((*m01).r5.c1, u, v0.r5.c1); }
+            { let u = ob4_2(g); (*m02).r5.c1 = mac((*m02).r5.c1, u, v0.r5.c1); }
+            { let u = ob4_3(g); (*m03).r5.c1 = mac((*m03).r5.c1, u, v0.r5.c1); }
             }
             {
             let g = gather(base + 512u);
-            { let u = ob4_0(g);
-              (*m00).r5.c2 = mac((*m00).r5.c2, u, v0.r5.c2);
-              if ROWS > 4u { (*m10).r5.c2 = mac((*m10).r5.c2, u, v1.r5.c2); } }
-            { let u = ob4_1(g);
-              (*m01).r5.c2 = mac((*m01).r5.c2, u, v0.r5.c2);
-              if ROWS > 4u { (*m11).r5.c2 = mac((*m11).r5.c2, u, v1.r5.c2); } }
-            { let u = ob4_2(g);
-              (*m02).r5.c2 = mac((*m02).r5.c2, u, v0.r5.c2);
-              if ROWS > 4u { (*m12).r5.c2 = mac((*m12).r5.c2, u, v1.r5.c2); } }
-            { let u = ob4_3(g);
-              (*m03).r5.c2 = mac((*m03).r5.c2, u, v0.r5.c2);
-              if ROWS > 4u { (*m13).r5.c2 = mac((*m13).r5.c2, u, v1.r5.c2); } }
+            { let u = ob4_0(g); (*m00).r5.c2 = mac((*m00).r5.c2, u, v0.r5.c2); }
+            { let u = ob4_1(g); (*m01).r5.c2 = mac((*m01).r5.c2, u, v0.r5.c2); }
+            { let u = ob4_2(g); (*m02).r5.c2 = mac((*m02).r5.c2, u, v0.r5.c2); }
+            { let u = ob4_3(g); (*m03).r5.c2 = mac((*m03).r5.c2, u, v0.r5.c2); }
             }
             {
             let g = gather(base + 528u);
-            { let u = ob4_0(g);
-              (*m00).r5.c3 = mac((*m00).r5.c3, u, v0.r5.c3);
-              if ROWS > 4u { (*m10).r5.c3 = mac((*m10).r5.c3, u, v1.r5.c3); } }
-            { let u = ob4_1(g);
-              (*m01).r5.c3 = mac((*m01).r5.c3, u, v0.r5.c3);
-              if ROWS > 4u { (*m11).r5.c3 = mac((*m11).r5.c3, u, v1.r5.c3); } }
-            { let u = ob4_2(g);
-              (*m02).r5.c3 = mac((*m02).r5.c3, u, v0.r5.c3);
-              if ROWS > 4u { (*m12).r5.c3 = mac((*m12).r5.c3, u, v1.r5.c3); } }
-            { let u = ob4_3(g);
-              (*m03).r5.c3 = mac((*m03).r5.c3, u, v0.r5.c3);
-              if ROWS > 4u { (*m13).r5.c3 = mac((*m13).r5.c3, u, v1.r5.c3); } }
+            { let u = ob4_0(g); (*m00).r5.c3 = mac((*m00).r5.c3, u, v0.r5.c3); }
+            { let u = ob4_1(g); (*m01).r5.c3 = mac((*m01).r5.c3, u, v0.r5.c3); }
+            { let u = ob4_2(g); (*m02).r5.c3 = mac((*m02).r5.c3, u, v0.r5.c3); }
+            { let u = ob4_3(g); (*m03).r5.c3 = mac((*m03).r5.c3, u, v0.r5.c3); }
             }
             {
             let g = gather(base + 544u);
-            { let u = ob4_0(g);
-              (*m00).r5.c4 = mac((*m00).r5.c4, u, v0.r5.c4);
-              if ROWS > 4u { (*m10).r5.c4 = mac((*m10).r5.c4, u, v1.r5.c4); } }
-            { let u = ob4_1(g);
-              (*m01).r5.c4 = mac((*m01).r5.c4, u, v0.r5.c4);
-              if ROWS > 4u { (*m11).r5.c4 = mac((*m11).r5.c4, u, v1.r5.c4); } }
-            { let u = ob4_2(g);
-              (*m02).r5.c4 = mac((*m02).r5.c4, u, v0.r5.c4);
-              if ROWS > 4u { (*m12).r5.c4 = mac((*m12).r5.c4, u, v1.r5.c4); } }
-            { let u = ob4_3(g);
-              (*m03).r5.c4 = mac((*m03).r5.c4, u, v0.r5.c4);
-              if ROWS > 4u { (*m13).r5.c4 = mac((*m13).r5.c4, u, v1.r5.c4); } }
+            { let u = ob4_0(g); (*m00).r5.c4 = mac((*m00).r5.c4, u, v0.r5.c4); }
+            { let u = ob4_1(g); (*m01).r5.c4 = mac((*m01).r5.c4, u, v0.r5.c4); }
+            { let u = ob4_2(g); (*m02).r5.c4 = mac((*m02).r5.c4, u, v0.r5.c4); }
+            { let u = ob4_3(g); (*m03).r5.c4 = mac((*m03).r5.c4, u, v0.r5.c4); }
             }
             {
             let g = gather(base + 560u);
-            { let u = ob4_0(g);
-              (*m00).r5.c5 = mac((*m00).r5.c5, u, v0.r5.c5);
-              if ROWS > 4u { (*m10).r5.c5 = mac((*m10).r5.c5, u, v1.r5.c5); } }
-            { let u = ob4_1(g);
-              (*m01).r5.c5 = mac((*m01).r5.c5, u, v0.r5.c5);
-              if ROWS > 4u { (*m11).r5.c5 = mac((*m11).r5.c5, u, v1.r5.c5); } }
-            { let u = ob4_2(g);
-              (*m02).r5.c5 = mac((*m02).r5.c5, u, v0.r5.c5);
-              if ROWS > 4u { (*m12).r5.c5 = mac((*m12).r5.c5, u, v1.r5.c5); } }
-            { let u = ob4_3(g);
-              (*m03).r5.c5 = mac((*m03).r5.c5, u, v0.r5.c5);
-              if ROWS > 4u { (*m13).r5.c5 = mac((*m13).r5.c5, u, v1.r5.c5); } }
+            { let u = ob4_0(g); (*m00).r5.c5 = mac((*m00).r5.c5, u, v0.r5.c5); }
+            { let u = ob4_1(g); (*m01).r5.c5 = mac((*m01).r5.c5, u, v0.r5.c5); }
+            { let u = ob4_2(g); (*m02).r5.c5 = mac((*m02).r5.c5, u, v0.r5.c5); }
+            { let u = ob4_3(g); (*m03).r5.c5 = mac((*m03).r5.c5, u, v0.r5.c5); }
             }
             continuing { break if once(); }
         }
     }
 }
+// ---- end generated ----
 
 // `winograd4_lanes`: F(4x4, 3x3) tiles in one-dimensional workgroups of WG_X x WG_Y invocations
 // (subgroup builtins need them), each WG_X invocations of a row 4 columns apart.
@@ -1238,16 +724,12 @@ fn winograd4_lanes(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocati
     var m01 = m00;
     var m02 = m00;
     var m03 = m00;
-    var m10 = m00;
-    var m11 = m00;
-    var m12 = m00;
-    var m13 = m00;
     let xi = i32(x);
     let yi = i32(y0);
     // Source a's blocks, then b's (none on a reset frame's hidden state: cin4_b = 0).
     let blocks = params.cin4_a + select(0u, params.cin4_b, SOURCE_B);
     for (var c = 0u; c < blocks; c++) {
-        wino4_step(&m00, &m01, &m02, &m03, &m10, &m11, &m12, &m13, c, w, xi, yi);
+        wino4_step(&m00, &m01, &m02, &m03, c, w, xi, yi);
     }
     if !inside {
         return;
@@ -1256,7 +738,7 @@ fn winograd4_lanes(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocati
     let second = OB > 1u && ob0 + 1u < params.cout4;
     let third = OB > 2u && ob0 + 2u < params.cout4;
     let fourth = OB > 2u && ob0 + 3u < params.cout4;
-    // Tile t's outputs at rows y0 + 4t .. y0 + 4t + 3 (wino4_store drops rows past the bottom).
+    // The tile's outputs at rows y0 .. y0 + 3 (wino4_store drops rows past the bottom).
     let b = texel_biases(bias_at);
     let b0 = b.c0;
     let b1 = b.c1;
@@ -1266,10 +748,4 @@ fn winograd4_lanes(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocati
     if second { wino4_store(m01, b1, x, y0, ob0 + 1u); }
     if third { wino4_store(m02, b2, x, y0, ob0 + 2u); }
     if fourth { wino4_store(m03, b3, x, y0, ob0 + 3u); }
-    if ROWS > 4u && y0 + 4u < params.height {
-        wino4_store(m10, b0, x, y0 + 4u, ob0);
-        if second { wino4_store(m11, b1, x, y0 + 4u, ob0 + 1u); }
-        if third { wino4_store(m12, b2, x, y0 + 4u, ob0 + 2u); }
-        if fourth { wino4_store(m13, b3, x, y0 + 4u, ob0 + 3u); }
-    }
 }

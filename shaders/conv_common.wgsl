@@ -14,9 +14,10 @@ override LEAKY: bool = true;
 // The conv reads a source b (a concatenation). Half the convs read one source: without the
 // second input-block loop their kernels carry half the multiply-add code, which lavapipe
 // compiles with LLVM at the first dispatch (the sample's cold first frame 0.84x of the time
-// with the loop everywhere; docs/PERF.md, session 8). The lanes kernels run one loop over
+// with the loop everywhere; `docs/perf/lavapipe-2026-11-23-s8.log`). The lanes kernels run one loop over
 // cat(a, b) and choose only the window's source per block; there SOURCE_B drops that choice
-// (one-source convs sharing the two-source pipelines made frames 1.04x as long, session 24).
+// (one-source convs sharing the two-source pipelines make frames 1.04x as long,
+// `docs/perf/lavapipe-2026-11-25-s24.log`).
 override SOURCE_B: bool = true;
 // Largest magnitude stored: f32::MAX for f32 activations, 65504 for f16 (no infinities).
 override STORE_MAX: f32 = 3.4028234e38;
@@ -67,7 +68,7 @@ fn max4(t: Source, p: vec2<i32>, layer: u32) -> vec4<f32> {
 // pixel outside the level reads texels outside its source and `fetch` need not test. Without
 // the test a fetch is one load, where the test made it a branch: llvmpipe keeps the returned
 // value in a variable whose every use LLVM's coroutine pass checks against every other, and
-// runs the test's compares and masks on each fetch (docs/PERF.md, session 28).
+// runs the test's compares and masks on each fetch (`docs/perf/lavapipe-2026-12-02-s28.log`).
 override OOB_ZERO: bool = false;
 
 // One channel block of a source at output-resolution pixel (x, y); zero outside (padding 1).
@@ -94,7 +95,7 @@ fn read_at(t: Source, mode: u32, x: i32, y: i32, layer: u32) -> vec4<f32> {
 // variable from the block's start to the variable's first use, so a body of thousands of
 // operations in one block compiles in time quadratic in its length: 40% of the F(4x4) 8x4
 // tile's compile was that scan. In three blocks per step that tile compiled in 7.6 s instead
-// of 15.8, for frames 1.01-1.07x as long (docs/PERF.md, session 27). The condition holds in every
+// of 15.8, for frames 1.01-1.07x as long (`docs/perf/lavapipe-2026-12-01-s27.log`). The condition holds in every
 // invocation that reaches such a loop (the kernels return first where ob0 >= cout4, so cout4
 // is at least 1), but the compiler cannot know it, so the loop and its blocks stay.
 fn once() -> bool {

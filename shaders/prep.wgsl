@@ -11,7 +11,7 @@
 // before the pass), which output.wgsl uses to bound the result. Prepared color is >= 0, so its
 // bits order like u32s and an atomicMax on the bits is a max on the values.
 //
-// Written for CPU drivers as much as GPUs (docs/PERF.md, session 17). A pixel's channels are
+// Written for CPU drivers as much as GPUs (`docs/perf/lavapipe-2026-11-24-s17.log`). A pixel's channels are
 // picked by comparisons with the override offsets, not gathered in an indexed local array
 // (lavapipe keeps such an array in per-lane scratch memory and writes it lane by lane). The
 // frame's maximum needs no workgroup memory or barrier (on lavapipe a barrier splits the

@@ -4,12 +4,17 @@
 //! Fixtures in tests/fixtures are written by weights-tool:
 //!     cd weights-tool && python -m rae_weights golden --out ../tests/fixtures
 
+mod frame_path;
+mod generated;
 mod golden;
 mod kernels;
+mod metrics;
+mod mma;
 mod shaders;
 mod stability;
 mod state;
 mod weights;
+mod winograd;
 
 use std::path::PathBuf;
 use std::sync::Mutex;

@@ -163,7 +163,7 @@ fn each_matrix_unit_entry_point_uses_only_its_workgroup_memory() {
     // Workgroup memory is the sum of the workgroup arrays an entry point uses, the byte count
     // ConvPlan checks against the device's limit: the split entry points keep their
     // remainders inside the window array (a second array made them 2.5x slower on the H100,
-    // docs/PERF.md session 15), so every entry point uses the same.
+    // `docs/perf/h100-2026-11-24-s15.log`), so every entry point uses the same.
     let source = mma_source(true);
     let module = naga::front::wgsl::parse_str(&source).unwrap_or_else(|e| panic!("{}", e.emit_to_string(&source)));
     let info =

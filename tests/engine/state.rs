@@ -322,10 +322,10 @@ fn tuned_tiles_and_storage_weights_give_the_frames_of_the_default_plan() {
     }
 }
 
-/// The profiled frame's first stage holds its dispatch. Lavapipe used to read the opening
-/// timestamp only at the first barrier, after prep ([`rae_core::denoiser::write_opening_timestamp`]):
-/// prep came out at 0.02 ms of a 64x64 frame beside the output kernel's 1.3 ms, and 0.36 ms with
-/// the spare query. The bound is the ratio of two kernels of one frame, not a speed; the best of
+/// The profiled frame's first stage holds its dispatch. Lavapipe reads an opening timestamp
+/// alone only at the first barrier, after prep ([`rae_core::denoiser::write_opening_timestamp`]
+/// writes a spare after it): without the spare prep comes out at 0.02 ms of a 64x64 frame beside
+/// the output kernel's 1.3 ms, with it 0.36 ms. The bound is the ratio of two kernels of one frame, not a speed; the best of
 /// five frames, after one that compiles the pipelines, so that a kernel slowed by the tests
 /// running beside it does not decide (one full run failed with the median of three).
 #[test]

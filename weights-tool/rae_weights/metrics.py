@@ -70,3 +70,36 @@ def sequence_metrics(outs: list[np.ndarray], refs: list[np.ndarray]) -> dict[str
     pairs = [temporal_error(outs[i - 1], outs[i], refs[i - 1], refs[i]) for i in range(1, len(outs))]
     m["temporal"] = float(np.mean(pairs)) if pairs else float("nan")
     return m
+
+
+#: Shared test vectors (tests/fixtures/metrics_vectors.safetensors): rae-core's metrics.rs and
+#: this module are both held to them.
+VECTORS_FILE = "metrics_vectors.safetensors"
+
+
+def shared_vectors(seed: int = 2026) -> dict[str, np.ndarray]:
+    """Frame pairs of result and reference ([H, W, 3] float32: ``caseK.x_prev``, ``x``,
+    ``r_prev``, ``r``) and their metrics by this module (``caseK.expected``: relmse, psnr, ssim,
+    temporal, float64). Cases: noise around a smooth HDR image; values up to 1e4 with negatives
+    and exact zeros; a result equal to its reference but for one pixel; a 1-pixel-high strip."""
+    rng = np.random.default_rng(seed)
+    cases = []
+    h, w = 9, 13
+    ramp = np.linspace(0.0, 3.0, h * w * 3, dtype=np.float32).reshape(h, w, 3)
+    r_prev = ramp
+    r = ramp * 1.1
+    cases.append((r_prev + rng.normal(0, 0.3, ramp.shape), r + rng.normal(0, 0.3, ramp.shape), r_prev, r))
+    wild = rng.uniform(-2.0, 1e4, (h, w, 3)) * (rng.uniform(size=(h, w, 3)) < 0.8)
+    cases.append((wild, wild[::-1], np.abs(wild[:, ::-1]) * 0.5, np.abs(wild) * 0.5))
+    one = r.copy()
+    one[4, 6] = [50.0, 0.0, 2.0]
+    cases.append((r_prev, one, r_prev, r))
+    strip = rng.uniform(0.0, 4.0, (1, 17, 3))
+    cases.append((strip, strip * 0.9 + 0.05, strip * 1.2, strip))
+    out: dict[str, np.ndarray] = {}
+    for k, (xp, x, rp, rr) in enumerate(cases):
+        xp, x, rp, rr = (np.ascontiguousarray(a, dtype=np.float32) for a in (xp, x, rp, rr))
+        out[f"case{k}.x_prev"], out[f"case{k}.x"], out[f"case{k}.r_prev"], out[f"case{k}.r"] = xp, x, rp, rr
+        expected = [relmse(x, rr), psnr(x, rr), ssim(x, rr), temporal_error(xp, x, rp, rr)]
+        out[f"case{k}.expected"] = np.array(expected, dtype=np.float64)
+    return out

@@ -123,33 +123,29 @@ enum Command {
         /// project's 2-core lavapipe machine; NVIDIA H100 SXM: 67,000).
         #[arg(long)]
         peak_gflops: Option<f64>,
-        /// Conv register tiles to time: ROWSxBLOCKS[wCOLS][gGROUPX][kSPLIT] (rows 1, 2, 4, 8, 16;
-        /// blocks 1, 2, 4 (4 with one column); columns 1, 2; workgroups 8, 16, 32, 64 wide;
-        /// input blocks split 1 to 16 ways), the same prefixed `lanes` (weights loaded across
-        /// the subgroup, devices with subgroups of 8 or more lanes; 4 blocks also in 2 columns,
-        /// two columns at most 8 rows, e.g. lanes8x2w2), winoROWSxBLOCKS[gGROUPX] (Winograd
-        /// F(2x2, 3x3); rows 2, 4), winolanesROWSxBLOCKS[gGROUPX] (Winograd with weights
-        /// across the subgroup, devices with subgroups of 8 or more lanes; rows 4, 8; blocks 1, 2, 4) or
-        /// wino4lanesROWSxBLOCKS[gGROUPX] (Winograd F(4x4, 3x3) in 4 columns, weights from a
-        /// texture across the subgroup, the same devices; rows 4, 8; blocks 1, 2, 4) for one
-        /// tile everywhere, `tuned` (each conv timed with every candidate on this device while
+        /// Conv register tiles to time, as rae_core::Tile and TileChoice parse them:
+        /// ROWSxBLOCKS[wCOLS][gGROUPX][kSPLIT] (rows 1, 2, 4, 8, 16; blocks 1, 2, 4 (4 with one
+        /// column); columns 1, 2; workgroups 8, 16, 32, 64 wide; input blocks split 1 to 16
+        /// ways), the same prefixed `lanes` (weights loaded across the subgroup, devices with
+        /// subgroups of 8 or more lanes; 4 blocks also in 2 columns, two columns at most 8 rows,
+        /// e.g. lanes8x2w2), winoROWSxBLOCKS[gGROUPX] (Winograd F(2x2, 3x3); rows 2, 4),
+        /// winolanes4xBLOCKS[gGROUPX] (Winograd with weights across the subgroup, the same
+        /// devices; blocks 1, 2, 4) or wino4lanes4xBLOCKS[gGROUPX] (Winograd F(4x4, 3x3) in 4
+        /// columns, weights from a texture across the subgroup, the same devices) for one tile
+        /// everywhere; `tuned` (each conv timed with every candidate on this device while
         /// building; on CPU drivers with subgroups of 8 or more lanes lanes8x2w2, lanes4x2w2,
-        /// winolanes8x4, winolanes4x4, wino4lanes8x4 and wino4lanes4x4), or `auto` (tuned-mma
-        /// on GPUs; on CPU drivers wino4lanes4x4 on levels of 32x32 and more, winolanes4x4 for
-        /// convs of 32+ channels below those (down to 16x16 on 16-lane subgroups, to 1x1 on
-        /// 8-lane ones), lanes8x2w2 for the others, lanes4x2w2 on levels of at most 8x8; 16x4
-        /// without subgroups: what `denoise` uses). `mma16`, `mma32`, `mma48`, `mma64`: the
-        /// matrix-unit kernel (f16 products summed in f32, 16 to 64 output channels per
-        /// workgroup; tensor cores where
+        /// winolanes4x4 and wino4lanes4x4); `auto` (tuned-mma on GPUs; on CPU drivers
+        /// wino4lanes4x4 on levels of 32x32 and more, winolanes4x4 for convs of 32+ channels
+        /// below those (down to 16x16 on 16-lane subgroups, to 1x1 on 8-lane ones), lanes8x2w2
+        /// for the others, lanes4x2w2 on levels of at most 8x8; 16x4 without subgroups: what
+        /// `denoise` uses). `mma16`, `mma32`, `mma48`, `mma64`: the matrix-unit kernel (f16
+        /// products summed in f32, 16 to 64 output channels per workgroup; tensor cores where
         /// wgpu's cooperative matrices have 16x16x16 f16 -> f32, emulated and slow elsewhere;
         /// storage weights and SHADER_F16); `mma16x3` to `mma64x3`: the same with every operand
-        /// split into two f16 halves and three products (f32-class results); `mma16x3p` to
-        /// `mma64x3p`: the split tiles reading each chunk's window ahead (not yet timed on a
-        /// GPU, so not among tuned-mma's candidates); `tuned-mma`:
+        /// split into two f16 halves and three products (f32-class results); `tuned-mma`:
         /// `tuned` with the split tiles (f32) or the plain ones (f16) among the candidates where
         /// the device has matrix units; `tuned:T+T+...`: tuned among these tiles only (fewer
-        /// pipelines to compile; with `--sources auto` it still picks each conv's source kind);
-        /// `tuned-mma+T+...`: tuned-mma with these tiles among its candidates too.
+        /// pipelines to compile; with `--sources auto` it still picks each conv's source kind).
         #[arg(long, value_delimiter = ',', default_value = "auto")]
         tile: Vec<String>,
         /// Where the convs read weights: `uniform` (64 KiB chunks), `storage` (one buffer, a

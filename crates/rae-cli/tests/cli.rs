@@ -184,7 +184,7 @@ fn a_cold_first_frame_gets_a_compile_helper_and_the_same_frames() {
     // says so; its dispatches must not touch the frames. A run without it, on the cache the
     // first one filled, gives the same pixels. One fixed tile, bench's reference tile on CPU
     // drivers: into this test's own empty cache the test took 39 s with it and 103 s with
-    // `auto`, whose F(4x4) pipelines take 10-20 s each (docs/PERF.md, session 26).
+    // `auto`, whose F(4x4) pipelines take 10-20 s each (`docs/perf/lavapipe-2026-12-01-s26.log`).
     let tmp = tempfile::tempdir().unwrap();
     let seq = seq_dir(&tmp);
     per_buffer_sequence(&seq, 2);
@@ -520,16 +520,72 @@ fn bench_32x32(frames: &str, extra: &[&str]) -> String {
     String::from_utf8(out.stdout).unwrap()
 }
 
+/// Every column name of bench's tables (the timing table and `--interleave`'s).
+const BENCH_COLUMNS: [&str; 20] = [
+    "size",
+    "precision",
+    "tile",
+    "weights",
+    "sources",
+    "build",
+    "total ms",
+    "upload",
+    "gpu",
+    "download",
+    "resident",
+    "pipelined",
+    "GFLOP/s",
+    "of peak",
+    "peak MiB",
+    "alloc MiB",
+    "err",
+    "median ms",
+    "fastest",
+    "vs first",
+];
+
+/// The rows of `bench`'s table for frame size `size`, each as column name -> value, found by
+/// the header: every column is right-aligned, so a value ends where its column's name ends
+/// (an `unsupported: ...` row has only the columns before its reason).
+fn bench_rows(text: &str, size: &str) -> Vec<std::collections::HashMap<&'static str, String>> {
+    let header = text.lines().find(|l| l.trim_start().starts_with("size ")).unwrap_or_else(|| panic!("a header: {text}"));
+    let ends: Vec<(&str, usize)> = BENCH_COLUMNS
+        .iter()
+        .filter_map(|&name| {
+            header
+                .match_indices(name)
+                .find(|&(at, _)| {
+                    let before = header[..at].chars().last().is_none_or(|c| c == ' ');
+                    let after = header[at + name.len()..].chars().next().is_none_or(|c| c == ' ');
+                    before && after
+                })
+                .map(|(at, _)| (name, at + name.len()))
+        })
+        .collect();
+    text.lines()
+        .filter(|l| l.split_whitespace().next() == Some(size))
+        .map(|row| {
+            let mut values = std::collections::HashMap::new();
+            let mut end = 0;
+            for word in row.split(' ') {
+                end += word.len();
+                if let Some(&(name, _)) = ends.iter().find(|&&(_, e)| e == end && !word.is_empty()) {
+                    values.insert(name, word.to_string());
+                }
+                end += 1;
+            }
+            values
+        })
+        .collect()
+}
+
 #[test]
 fn bench_times_sampled_and_storage_sources() {
     // The sources column says what each denoiser was built with; `auto` is storage textures on
     // lavapipe (sampled on GPUs). A small tile: each source kind is its own compile.
     let text = bench_32x32("1", &["--tile", "2x1", "--sources", "sampled,storage,auto"]);
-    let header: Vec<&str> = text.lines().find(|l| l.trim_start().starts_with("size ")).expect("a header").split_whitespace().collect();
-    let col = header.iter().position(|&h| h == "sources").expect("a sources column");
-    let rows: Vec<Vec<&str>> =
-        text.lines().map(|l| l.split_whitespace().collect::<Vec<_>>()).filter(|f| f.first() == Some(&"32x32")).collect();
-    assert_eq!(rows.iter().map(|f| f[col]).collect::<Vec<_>>(), ["sampled", "storage", "storage"], "{text}");
+    let rows = bench_rows(&text, "32x32");
+    assert_eq!(rows.iter().map(|r| r["sources"].as_str()).collect::<Vec<_>>(), ["sampled", "storage", "storage"], "{text}");
     let bad = rae().args(["bench", &fixture("weights_full.safetensors"), "--sizes", "32x32", "--sources", "buffer"]).output().unwrap();
     assert!(!bad.status.success());
     assert!(String::from_utf8_lossy(&bad.stderr).contains("sources `buffer`"), "{}", String::from_utf8_lossy(&bad.stderr));
@@ -549,27 +605,27 @@ fn bench_reports_each_combinations_error_and_skips_what_it_cannot_run() {
     let bench = |tiles: &str, memories: &str| {
         let text = bench_32x32("1", &["--warmup", "0", "--tile", tiles, "--weights-memory", memories]);
         assert!(text.lines().next().is_some_and(|l| l.ends_with("1 timed frames after 0 warm-up")), "{text}");
-        let header = text.lines().find(|l| l.trim_start().starts_with("size ")).expect("a header");
-        assert!(header.ends_with(" err"), "err is the last column: {header}");
-        let rows: Vec<String> = text.lines().filter(|l| l.split_whitespace().next() == Some("32x32")).map(str::to_string).collect();
-        (text, rows)
+        let rows = bench_rows(&text, "32x32");
+        let lines: Vec<String> = text.lines().filter(|l| l.split_whitespace().next() == Some("32x32")).map(str::to_string).collect();
+        (text, rows, lines)
     };
-    let (text, rows) = bench("auto,mma16,mma16x3", "storage");
+    let (text, rows, _) = bench("auto,mma16,mma16x3", "storage");
     assert!(text.contains(&format!("with the {REFERENCE_TILE} tile")), "bench's reference tile is REFERENCE_TILE: {text}");
-    let rows: Vec<Vec<&str>> = rows.iter().map(|l| l.split_whitespace().collect()).collect();
     assert_eq!(rows.len(), 3, "{text}");
-    let value = |row: &[&str]| -> f64 { row.last().unwrap().parse().unwrap_or_else(|_| panic!("err of {row:?}")) };
-    assert_eq!((rows[0][2], rows[0][3]), ("auto", "storage"), "{text}");
-    assert!(value(&rows[0]) < 1e-5, "{text}");
-    assert_eq!((rows[1][2], rows[1][3]), ("mma16", "storage"), "{text}");
-    assert!((1e-6..1e-2).contains(&value(&rows[1])), "{text}");
-    assert_eq!((rows[2][2], rows[2][3]), ("mma16x3", "storage"), "{text}");
-    assert!(value(&rows[2]) < value(&rows[1]) / 10.0, "split operands: {text}");
-    let (text, rows) = bench("mma16,mma16x3", "uniform");
+    let err = |k: usize| -> f64 { rows[k]["err"].parse().unwrap_or_else(|_| panic!("err of row {k}: {text}")) };
+    let tile = |k: usize| rows[k]["tile"].as_str();
+    let weights = |k: usize| rows[k]["weights"].as_str();
+    assert_eq!((tile(0), weights(0)), ("auto", "storage"), "{text}");
+    assert!(err(0) < 1e-5, "{text}");
+    assert_eq!((tile(1), weights(1)), ("mma16", "storage"), "{text}");
+    assert!((1e-6..1e-2).contains(&err(1)), "{text}");
+    assert_eq!((tile(2), weights(2)), ("mma16x3", "storage"), "{text}");
+    assert!(err(2) < err(1) / 10.0, "split operands: {text}");
+    let (text, rows, lines) = bench("mma16,mma16x3", "uniform");
     assert_eq!(rows.len(), 2, "{text}");
-    for row in &rows {
-        let f: Vec<&str> = row.split_whitespace().collect();
-        assert!(f[2].starts_with("mma16") && f[3] == "uniform" && f.contains(&"unsupported:") && row.contains("storage buffer"), "{text}");
+    for (row, line) in rows.iter().zip(&lines) {
+        assert!(row["tile"].starts_with("mma16") && row["weights"] == "uniform", "{text}");
+        assert!(line.contains("unsupported:") && line.contains("storage buffer"), "{text}");
     }
 }
 
@@ -580,12 +636,12 @@ fn bench_interleave_prints_a_row_per_combination_against_the_first() {
     // frames, and the 2x1 tile bench_times_sampled_and_storage_sources compiles (lavapipe
     // compiles each distinct pipeline for seconds, `auto`'s F(4x4) ones for 10-20).
     let text = bench_32x32("2", &["--tile", &format!("{REFERENCE_TILE},2x1,{REFERENCE_TILE}"), "--interleave"]);
-    let rows: Vec<Vec<&str>> =
-        text.lines().map(|l| l.split_whitespace().collect::<Vec<_>>()).filter(|f| f.first() == Some(&"32x32")).collect();
-    assert_eq!(rows.iter().map(|f| f[2]).collect::<Vec<_>>(), [REFERENCE_TILE, "2x1", REFERENCE_TILE], "{text}");
-    assert_eq!(rows[0][7], "1.000", "{text}");
-    for f in &rows {
-        let (median, fastest, ratio): (f64, f64, f64) = (f[5].parse().unwrap(), f[6].parse().unwrap(), f[7].parse().unwrap());
+    let rows = bench_rows(&text, "32x32");
+    assert_eq!(rows.iter().map(|r| r["tile"].as_str()).collect::<Vec<_>>(), [REFERENCE_TILE, "2x1", REFERENCE_TILE], "{text}");
+    assert_eq!(rows[0]["vs first"], "1.000", "{text}");
+    for r in &rows {
+        let number = |k: &str| -> f64 { r[k].parse().unwrap_or_else(|_| panic!("{k}: {text}")) };
+        let (median, fastest, ratio) = (number("median ms"), number("fastest"), number("vs first"));
         assert!(fastest > 0.0 && fastest <= median && ratio > 0.0, "{text}");
     }
 }

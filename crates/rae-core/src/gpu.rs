@@ -21,7 +21,7 @@ pub const LAVAPIPE_VECTOR_WIDTH: &str = "LP_NATIVE_VECTOR_WIDTH";
 ///
 /// Mesa 22.3 compiles for 256 bits on every AVX2 CPU, AVX-512 or not. On this project's
 /// machines (AMD EPYC with AVX-512) a 256x256 frame of the default network takes about 0.7x
-/// the time at 512 bits with bit-identical output (docs/PERF.md, "Lavapipe, session 11"): half
+/// the time at 512 bits with bit-identical output (`docs/perf/lavapipe-2026-11-24-s11.log`): half
 /// the instructions for the same work, where the unrolled conv bodies were bound by the CPU's
 /// front end. Tiles without weights across the lanes (`16x4`, for devices without subgroups)
 /// run 2x slower at 512 bits, their per-lane weight gathers twice as wide; lavapipe has

@@ -30,8 +30,263 @@ pub(super) fn texture(
     (t, v)
 }
 
+/// The activation textures of a [`Denoiser`]: the input, the hidden-state pairs, the
+/// temporaries shared by lifetime and the pooled copies, with the views a conv binds.
+struct Activations {
+    input_texture: wgpu::Texture,
+    input_view: wgpu::TextureView,
+    /// `[block][0|1]`: the ping-pong pair of each recurrent block.
+    hidden_textures: Vec<[wgpu::Texture; 2]>,
+    hidden: Vec<[wgpu::TextureView; 2]>,
+    /// Each temporary's slot ([`Graph::allocate_temps`]) and the slots' textures.
+    assign: Vec<usize>,
+    slots: Vec<(wgpu::Texture, wgpu::TextureView)>,
+    pooled: Vec<wgpu::TextureView>,
+    /// Every texture above, for readback and accounting.
+    textures: Vec<wgpu::Texture>,
+    bytes: u64,
+}
+
+impl Activations {
+    fn new(device: &wgpu::Device, graph: &Graph, pwidth: u32, pheight: u32, precision: Precision) -> Self {
+        let mut textures = Vec::new();
+        let mut bytes = 0u64;
+        let mut make = |label: &str, level: usize, channels: usize| {
+            let (w, h, l) = (pwidth >> level, pheight >> level, blocks(channels));
+            bytes += w as u64 * h as u64 * l as u64 * precision.texel_bytes();
+            let (t, v) = texture(device, label, w, h, l, precision.format());
+            textures.push(t.clone());
+            (t, v)
+        };
+        let (input_texture, input_view) = make("input", 0, graph.in_channels);
+        let pairs: Vec<[(wgpu::Texture, wgpu::TextureView); 2]> =
+            graph.hidden.iter().map(|&(c, level)| [make("hidden", level, c), make("hidden", level, c)]).collect();
+        let (assign, slot_sizes) = graph.allocate_temps();
+        let slots = slot_sizes.iter().map(|&(level, c)| make("temp", level, c)).collect();
+        let pooled = graph.pools.iter().map(|p| make("pooled", p.level, p.channels).1).collect();
+        Activations {
+            input_texture,
+            input_view,
+            hidden_textures: pairs.iter().map(|[a, b]| [a.0.clone(), b.0.clone()]).collect(),
+            hidden: pairs.iter().map(|[a, b]| [a.1.clone(), b.1.clone()]).collect(),
+            assign,
+            slots,
+            pooled,
+            textures,
+            bytes,
+        }
+    }
+
+    /// The view of `v` on a frame of parity `parity`.
+    fn view(&self, v: Value, parity: usize) -> &wgpu::TextureView {
+        match v {
+            Value::Input => &self.input_view,
+            Value::HiddenPrev(k) => &self.hidden[k][parity],
+            Value::HiddenNew(k) => &self.hidden[k][1 - parity],
+            Value::Temp(t) => &self.slots[self.assign[t]].1,
+            Value::Pooled(k) => &self.pooled[k],
+        }
+    }
+
+    /// The texture of a value a conv writes (a temporary or a new hidden state).
+    fn written(&self, v: Value, parity: usize) -> wgpu::Texture {
+        match v {
+            Value::HiddenNew(k) => self.hidden_textures[k][1 - parity].clone(),
+            Value::Temp(t) => self.slots[self.assign[t]].0.clone(),
+            _ => unreachable!("a conv writes a temporary or a new hidden state"),
+        }
+    }
+
+    /// The pooled value node `i`'s output is max-pooled into, if any.
+    fn pooled_by(&self, graph: &Graph, i: usize) -> Option<&wgpu::TextureView> {
+        graph.pools.iter().position(|p| p.after == i).map(|k| &self.pooled[k])
+    }
+}
+
+/// The frame padded to a multiple of `2^levels`, or why the device cannot take it.
+fn padded_size(device: &wgpu::Device, arch: &Arch, width: u32, height: u32) -> Result<(u32, u32)> {
+    let size_err = |reason: String| Error::FrameSize { width, height, reason };
+    if width == 0 || height == 0 {
+        return Err(size_err("empty frame".into()));
+    }
+    let multiple = 1u32 << arch.levels();
+    let (pwidth, pheight) = (width.next_multiple_of(multiple), height.next_multiple_of(multiple));
+    let max = device.limits().max_texture_dimension_2d;
+    if pwidth > max || pheight > max {
+        return Err(size_err(format!("exceeds the device's texture limit {max}")));
+    }
+    Ok((pwidth, pheight))
+}
+
+/// Every conv of `graph` as the plan takes it: its size at the padded frame, its sources,
+/// its weights from `weights` (found by the PyTorch module name).
+fn conv_specs<'a>(graph: &'a Graph, weights: &'a Weights, arch: &Arch, pwidth: u32, pheight: u32) -> Vec<ConvSpec<'a>> {
+    graph
+        .nodes
+        .iter()
+        .enumerate()
+        .map(|(i, n)| ConvSpec {
+            name: &n.name,
+            width: pwidth >> n.level,
+            height: pheight >> n.level,
+            ca: n.a.channels,
+            cb: n.b.map_or(0, |b| b.channels),
+            cout: n.cout,
+            weight: &weights.get(&format!("{}.weight", n.name)).expect("validated at load").data,
+            bias: &weights.get(&format!("{}.bias", n.name)).expect("validated at load").data,
+            read_a: n.a.read,
+            read_b: n.b.map_or(Read::Direct, |b| b.read),
+            leaky: n.leaky,
+            slope: arch.negative_slope,
+            b_is_hidden: n.b.is_some_and(|b| matches!(b.value, Value::HiddenPrev(_))),
+            pooled: graph.pools.iter().any(|p| p.after == i),
+        })
+        .collect()
+}
+
+/// Each conv's tile, source access and weight memory, and where tuned its finalists.
+struct Choices {
+    tiles: Vec<Tile>,
+    sources: Vec<SourceAccess>,
+    memories: Vec<WeightMemory>,
+    tuning: Vec<Vec<Finalist>>,
+}
+
+/// The choices `options` leave to the device, made: a fixed tile, the CPU drivers' rule per
+/// level, or each conv's fastest finalist of timing the device class's candidates
+/// ([`tune`]).
+#[allow(clippy::too_many_arguments)]
+fn choose(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    kernels: &mut Kernels,
+    graph: &Graph,
+    acts: &Activations,
+    specs: &[ConvSpec],
+    options: &Options,
+    memory: WeightMemory,
+) -> Result<Choices> {
+    let device_type = device.adapter_info().device_type;
+    let default_sources = kernels.source_access();
+    let fixed_mma = matches!(options.tiles, TileChoice::Fixed(t) if t.method.is_mma());
+    // A conv's weight memory under a tile: the caller's or a fixed Mma tile's choice, else
+    // storage for an Mma tile and by level otherwise. Tuning times each candidate with it, so
+    // that it times what the plan it picks will run. (The lanes module's tiles read the plan's
+    // weight texture, and the plan gives them storage: kernels::TEXEL_WEIGHTS.)
+    let memory_of = |tile: Tile, spec: &ConvSpec| -> WeightMemory {
+        if options.weights.is_some() || fixed_mma {
+            memory
+        } else if tile.method.is_mma() {
+            WeightMemory::Storage
+        } else {
+            WeightMemory::for_conv(device_type, spec.width, spec.height)
+        }
+    };
+    // Matrix-unit tiles join tuning where they run in hardware, with their weights in a
+    // storage buffer and room for their workgroup memory.
+    let mma = kernels.matrix_units()
+        && memory == WeightMemory::Storage
+        && device.limits().max_compute_workgroup_storage_size >= MMA_WORKGROUP_BYTES;
+    // CPU drivers with subgroups of 8 lanes or more tune among the lanes tiles.
+    let cpu_lanes = device_type == wgpu::DeviceType::Cpu && Tile::cpu(device) == Tile::CPU_LANES;
+    let base: &[Tile] = if cpu_lanes { &TUNE_TILES_CPU } else { &TUNE_TILES };
+    let candidates = tuning_candidates(options.tiles, options.precision, mma, base);
+    let timestamps = device.features().contains(wgpu::Features::TIMESTAMP_QUERY_INSIDE_PASSES);
+    let fixed = |t: Tile| (vec![t], vec![default_sources], Vec::new());
+    let (tiles, sources, tuning) = match options.tiles {
+        TileChoice::Fixed(t) => fixed(t),
+        TileChoice::Auto if device_type == wgpu::DeviceType::Cpu => {
+            let tiles = specs.iter().map(|s| Tile::cpu_for(device, s.width, s.height, blocks(s.ca) + blocks(s.cb))).collect();
+            (tiles, vec![default_sources], Vec::new())
+        }
+        _ if timestamps && !candidates.is_empty() => {
+            // Tuning times both source kinds unless the caller fixed one.
+            let other = if default_sources == SourceAccess::Sampled { SourceAccess::Storage } else { SourceAccess::Sampled };
+            let both = [default_sources, other];
+            let accesses = if options.sources.is_some() { &both[..1] } else { &both[..] };
+            // Sources, destination and pooled value of every conv at parity 0.
+            let views: Vec<NodeViews> = graph
+                .nodes
+                .iter()
+                .enumerate()
+                .map(|(i, n)| NodeViews {
+                    a: acts.view(n.a.value, 0).clone(),
+                    b: acts.view(n.b.map_or(n.a.value, |b| b.value), 0).clone(),
+                    out: acts.view(n.out, 0).clone(),
+                    pooled: acts.pooled_by(graph, i).cloned(),
+                })
+                .collect();
+            let finalists = tune(device, queue, kernels, specs, &views, &candidates, accesses, &memory_of)?;
+            let (tiles, sources) = finalists.iter().map(|f| (f[0].tile, f[0].sources)).unzip();
+            (tiles, sources, finalists)
+        }
+        _ => fixed(Tile::default()),
+    };
+    let memories = specs.iter().enumerate().map(|(i, s)| memory_of(per_conv(&tiles, i), s)).collect();
+    Ok(Choices { tiles, sources, memories, tuning })
+}
+
+/// The conv bind groups of both parities (the reset variant only changes the dynamic offset).
+fn conv_groups(device: &wgpu::Device, kernels: &Kernels, graph: &Graph, acts: &Activations, convs: &ConvPlan) -> [Vec<wgpu::BindGroup>; 2] {
+    std::array::from_fn(|parity| {
+        graph
+            .nodes
+            .iter()
+            .enumerate()
+            .map(|(i, node)| {
+                // A one-source conv binds its source a as b too (never read: its cin4_b is 0).
+                let src_b = acts.view(node.b.map_or(node.a.value, |b| b.value), parity);
+                let (a, out) = (acts.view(node.a.value, parity), acts.view(node.out, parity));
+                convs.bind_group(device, kernels, i, a, src_b, out, acts.pooled_by(graph, i))
+            })
+            .collect()
+    })
+}
+
+/// The pool passes' bind groups of both parities (a pool reads the state written this frame).
+fn pool_groups(device: &wgpu::Device, kernels: &Kernels, graph: &Graph, acts: &Activations) -> [Vec<wgpu::BindGroup>; 2] {
+    std::array::from_fn(|parity| {
+        graph
+            .pools
+            .iter()
+            .enumerate()
+            .map(|(i, p)| {
+                device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("pool"),
+                    layout: &kernels.pool_layout,
+                    entries: &[
+                        wgpu::BindGroupEntry {
+                            binding: 0,
+                            resource: wgpu::BindingResource::TextureView(acts.view(Value::HiddenNew(p.hidden), parity)),
+                        },
+                        wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&acts.pooled[i]) },
+                    ],
+                })
+            })
+            .collect()
+    })
+}
+
+/// prep.wgsl's layout for `arch`: where each input buffer's channels go, and the transfer.
+fn prep_layout(arch: &Arch, graph: &Graph) -> PrepLayout {
+    let mut offsets = [None; 5];
+    let mut ch = 0u32;
+    for b in &arch.inputs {
+        offsets[InputBuffer::ALL.iter().position(|x| x == b).expect("known buffer")] = Some(ch);
+        ch += b.channels() as u32;
+    }
+    PrepLayout {
+        offsets,
+        layers: blocks(graph.in_channels),
+        demodulate: arch.demodulate,
+        log1p: matches!(arch.transfer, Transfer::Log1p),
+        albedo_eps: arch.albedo_eps,
+    }
+}
+
 impl Denoiser {
-    /// [`Self::new`] with every choice spelled out: storage precision and the conv tile.
+    /// [`Self::new`] with every choice spelled out: storage precision, conv tiles, weight
+    /// memory, source access and staging ([`Options`]).
     pub fn with_options(
         device: &wgpu::Device,
         queue: &wgpu::Queue,
@@ -42,244 +297,57 @@ impl Denoiser {
     ) -> Result<Self> {
         let Options { precision, tiles, weights: chosen_memory, sources, staging } = options;
         let device_type = device.adapter_info().device_type;
+        let arch = weights.arch.clone();
+        let (pwidth, pheight) = padded_size(device, &arch, width, height)?;
+        let graph = Graph::new(&arch);
         // Mma tiles read storage weights: a fixed one picks them where the caller left it open.
         let fixed_mma = matches!(tiles, TileChoice::Fixed(t) if t.method.is_mma());
         let memory = chosen_memory.unwrap_or(if fixed_mma { WeightMemory::Storage } else { WeightMemory::for_device_type(device_type) });
-        let default_sources = sources.unwrap_or(SourceAccess::for_device_type(device_type));
-        let arch = weights.arch.clone();
-        let multiple = 1u32 << arch.levels();
-        let limits = device.limits();
-        let size_err = |reason: String| Error::FrameSize { width, height, reason };
-        if width == 0 || height == 0 {
-            return Err(size_err("empty frame".into()));
-        }
-        let (pwidth, pheight) = (width.next_multiple_of(multiple), height.next_multiple_of(multiple));
-        if pwidth > limits.max_texture_dimension_2d || pheight > limits.max_texture_dimension_2d {
-            return Err(size_err(format!("exceeds the device's texture limit {}", limits.max_texture_dimension_2d)));
-        }
-        let graph = Graph::new(&arch);
-        let mut kernels = Kernels::with_sources(device, precision, memory, default_sources);
+        let mut kernels = Kernels::with_sources(device, precision, memory, sources.unwrap_or(SourceAccess::for_device_type(device_type)));
         // The padded levels halve exactly, so the convs may read their zero padding from
         // outside the textures where the device reads zero there (before tuning makes any).
         kernels.pad_from_bounds();
-        let format = precision.format();
-        let mut textures = Vec::new();
-        let mut bytes = 0u64;
-        let mut make = |label: &str, level: usize, channels: usize| {
-            let (w, h, l) = (pwidth >> level, pheight >> level, blocks(channels));
-            bytes += w as u64 * h as u64 * l as u64 * precision.texel_bytes();
-            let (t, v) = texture(device, label, w, h, l, format);
-            textures.push(t.clone());
-            (t, v)
-        };
-
-        // Activations: input, hidden pairs, temporaries by lifetime.
-        let (input_texture, input_view) = make("input", 0, graph.in_channels);
-        let hidden_pairs: Vec<[(wgpu::Texture, wgpu::TextureView); 2]> =
-            graph.hidden.iter().map(|&(c, level)| [make("hidden", level, c), make("hidden", level, c)]).collect();
-        let hidden: Vec<[wgpu::TextureView; 2]> = hidden_pairs.iter().map(|[a, b]| [a.1.clone(), b.1.clone()]).collect();
-        let hidden_textures: Vec<[wgpu::Texture; 2]> = hidden_pairs.iter().map(|[a, b]| [a.0.clone(), b.0.clone()]).collect();
-        let (assign, slots) = graph.allocate_temps();
-        let slot_textures: Vec<(wgpu::Texture, wgpu::TextureView)> = slots.iter().map(|&(level, c)| make("temp", level, c)).collect();
-        let slot_views: Vec<wgpu::TextureView> = slot_textures.iter().map(|(_, v)| v.clone()).collect();
-        let pooled_views: Vec<wgpu::TextureView> = graph.pools.iter().map(|p| make("pooled", p.level, p.channels).1).collect();
-        let view = |v: Value, parity: usize| -> &wgpu::TextureView {
-            match v {
-                Value::Input => &input_view,
-                Value::HiddenPrev(k) => &hidden[k][parity],
-                Value::HiddenNew(k) => &hidden[k][1 - parity],
-                Value::Temp(t) => &slot_views[assign[t]],
-                Value::Pooled(k) => &pooled_views[k],
-            }
-        };
-        // The texture of a value a conv writes.
-        let written = |v: Value, parity: usize| -> wgpu::Texture {
-            match v {
-                Value::HiddenNew(k) => hidden_textures[k][1 - parity].clone(),
-                Value::Temp(t) => slot_textures[assign[t]].0.clone(),
-                _ => unreachable!("a conv writes a temporary or a new hidden state"),
-            }
-        };
-        let conv_outputs: [Vec<wgpu::Texture>; 2] =
-            std::array::from_fn(|parity| graph.nodes.iter().map(|n| written(n.out, parity)).collect());
-        let Value::Temp(out_temp) = graph.output else { unreachable!("the output is a temporary") };
-        let output_view = slot_views[assign[out_temp]].clone();
-
-        // Weights and parameters of every conv, in uniform chunks (see kernels::ConvPlan).
-        let tensors: Vec<_> = graph
-            .nodes
-            .iter()
-            .map(|n| {
-                let w = weights.get(&format!("{}.weight", n.name)).expect("validated at load");
-                let b = weights.get(&format!("{}.bias", n.name)).expect("validated at load");
-                (w, b)
-            })
-            .collect();
-        // The pooled value node i's output is max-pooled into, if any.
-        let pooled_by = |i: usize| graph.pools.iter().position(|p| p.after == i).map(|k| &pooled_views[k]);
-        let specs: Vec<ConvSpec> = graph
-            .nodes
-            .iter()
-            .zip(&tensors)
-            .enumerate()
-            .map(|(i, (n, (w, b)))| ConvSpec {
-                name: &n.name,
-                width: pwidth >> n.level,
-                height: pheight >> n.level,
-                ca: n.a.channels,
-                cb: n.b.map_or(0, |b| b.channels),
-                cout: n.cout,
-                weight: &w.data,
-                bias: &b.data,
-                read_a: n.a.read,
-                read_b: n.b.map_or(Read::Direct, |b| b.read),
-                leaky: n.leaky,
-                slope: arch.negative_slope,
-                b_is_hidden: n.b.is_some_and(|b| matches!(b.value, Value::HiddenPrev(_))),
-                pooled: pooled_by(i).is_some(),
-            })
-            .collect();
-        // Sources, destination and pooled value of every conv at parity 0 (for tuning).
-        let node_views: Vec<NodeViews> = graph
-            .nodes
-            .iter()
-            .enumerate()
-            .map(|(i, n)| NodeViews {
-                a: view(n.a.value, 0).clone(),
-                b: view(n.b.map_or(n.a.value, |b| b.value), 0).clone(),
-                out: view(n.out, 0).clone(),
-                pooled: pooled_by(i).cloned(),
-            })
-            .collect();
-        let timestamps = device.features().contains(wgpu::Features::TIMESTAMP_QUERY_INSIDE_PASSES);
-        // Tuning times both source kinds unless the caller fixed one.
-        let both = [default_sources, if default_sources == SourceAccess::Sampled { SourceAccess::Storage } else { SourceAccess::Sampled }];
-        let accesses = if sources.is_some() { &both[..1] } else { &both[..] };
-        // A conv's weight memory under a tile: the caller's or a fixed Mma tile's choice, else
-        // storage for an Mma tile and by level otherwise. Tuning times each candidate with it,
-        // so that it times what the plan it picks will run.
-        let memory_of = |tile: Tile, spec: &ConvSpec| -> WeightMemory {
-            if chosen_memory.is_some() || fixed_mma {
-                memory
-            } else if tile.method.is_mma() {
-                // Mma tiles read only storage weights.
-                WeightMemory::Storage
-            } else {
-                // (The lanes module's tiles read the plan's weight texture, and the plan gives
-                // them storage, which needs no 64 KiB chunk beside it: kernels::TEXEL_WEIGHTS.)
-                WeightMemory::for_conv(device_type, spec.width, spec.height)
-            }
-        };
-        let tune_among = |kernels: &mut Kernels, candidates: &[Tile]| {
-            tune(device, queue, kernels, &specs, &node_views, candidates, accesses, &memory_of)
-        };
-        // One tile and kind for every conv, or each conv's fastest tuning finalist.
-        let fixed = |t: Tile| (vec![t], vec![default_sources], Vec::new());
-        let picks = |finalists: Vec<Vec<Finalist>>| {
-            let (tiles, sources) = finalists.iter().map(|f| (f[0].tile, f[0].sources)).unzip();
-            (tiles, sources, finalists)
-        };
-        // Matrix-unit tiles join tuning where they run in hardware, with their weights in a
-        // storage buffer and room for their workgroup memory.
-        let mma = kernels.matrix_units()
-            && memory == WeightMemory::Storage
-            && device.limits().max_compute_workgroup_storage_size >= MMA_WORKGROUP_BYTES;
-        // CPU drivers with subgroups of 8 lanes or more tune among the lanes tiles, Winograd's
-        // among them (they run wherever the direct lanes tiles do): the direct ones take about
-        // twice as long there.
-        let lanes = device_type == wgpu::DeviceType::Cpu && Tile::cpu(device) == Tile::CPU_LANES;
-        let base: &[Tile] = if lanes { &TUNE_TILES_CPU } else { &TUNE_TILES };
-        let candidates = tuning_candidates(tiles, precision, mma, base);
-        let (tiles, conv_sources, tuning): (Vec<Tile>, Vec<SourceAccess>, Vec<Vec<Finalist>>) = match tiles {
-            TileChoice::Fixed(t) => fixed(t),
-            // The CPU tile by level (shorter on the smallest).
-            TileChoice::Auto if device_type == wgpu::DeviceType::Cpu => {
-                let tiles = specs.iter().map(|s| Tile::cpu_for(device, s.width, s.height, blocks(s.ca) + blocks(s.cb))).collect();
-                (tiles, vec![default_sources], Vec::new())
-            }
-            _ if timestamps && !candidates.is_empty() => picks(tune_among(&mut kernels, &candidates)?),
-            _ => fixed(Tile::default()),
-        };
-        let memories: Vec<WeightMemory> = specs.iter().enumerate().map(|(i, s)| memory_of(per_conv(&tiles, i), s)).collect();
+        let acts = Activations::new(device, &graph, pwidth, pheight, precision);
+        let specs = conv_specs(&graph, weights, &arch, pwidth, pheight);
+        let choices = choose(device, queue, &mut kernels, &graph, &acts, &specs, &options, memory)?;
         // On CPU drivers the F(4x4) convs write their outputs into a buffer that the frame copies
         // into their textures (Kernels::stage_outputs; record_with records the copies). Tuning,
         // above, timed the convs unstaged: a copy costs every candidate the same.
         if staging.unwrap_or(device_type == wgpu::DeviceType::Cpu) {
             kernels.stage_outputs();
         }
-        let convs = ConvPlan::with_choices(device, queue, &mut kernels, &specs, &tiles, &conv_sources, &memories)?;
-        debug_assert_eq!(bytes, activation_bytes(&graph, pwidth, pheight, precision));
-        bytes += convs.bytes();
-        // Bind groups of both parities (the reset variant only changes the dynamic offset).
-        let conv_groups: [Vec<wgpu::BindGroup>; 2] = std::array::from_fn(|parity| {
-            graph
-                .nodes
-                .iter()
-                .enumerate()
-                .map(|(i, node)| {
-                    // A one-source conv binds its source a as b too (never read: its cin4_b is 0).
-                    let src_b = view(node.b.map_or(node.a.value, |b| b.value), parity);
-                    convs.bind_group(device, &kernels, i, view(node.a.value, parity), src_b, view(node.out, parity), pooled_by(i))
-                })
-                .collect()
-        });
-
-        let pool_groups: [Vec<wgpu::BindGroup>; 2] = std::array::from_fn(|parity| {
-            graph
-                .pools
-                .iter()
-                .enumerate()
-                .map(|(i, p)| {
-                    device.create_bind_group(&wgpu::BindGroupDescriptor {
-                        label: Some("pool"),
-                        layout: &kernels.pool_layout,
-                        entries: &[
-                            wgpu::BindGroupEntry {
-                                binding: 0,
-                                resource: wgpu::BindingResource::TextureView(view(Value::HiddenNew(p.hidden), parity)),
-                            },
-                            wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&pooled_views[i]) },
-                        ],
-                    })
-                })
-                .collect()
-        });
-
-        // Prep and output uniforms.
-        let mut offsets = [None; 5];
-        let mut ch = 0u32;
-        for b in &arch.inputs {
-            offsets[InputBuffer::ALL.iter().position(|x| x == b).expect("known buffer")] = Some(ch);
-            ch += b.channels() as u32;
-        }
+        let convs = ConvPlan::with_choices(device, queue, &mut kernels, &specs, &choices.tiles, &choices.sources, &choices.memories)?;
+        debug_assert_eq!(acts.bytes, activation_bytes(&graph, pwidth, pheight, precision));
+        let conv_outputs: [Vec<wgpu::Texture>; 2] =
+            std::array::from_fn(|parity| graph.nodes.iter().map(|n| acts.written(n.out, parity)).collect());
+        let Value::Temp(out_temp) = graph.output else { unreachable!("the output is a temporary") };
+        let output_view = acts.slots[acts.assign[out_temp]].1.clone();
+        let prep = kernels.prep_pipeline(device, &prep_layout(&arch, &graph));
+        let prep_params = PrepParams { width, height, pwidth, pheight };
         let transfer = match arch.transfer {
             Transfer::None => 0,
             Transfer::Log1p => 1,
         };
-        let prep_layout = PrepLayout {
-            offsets,
-            layers: blocks(graph.in_channels),
-            demodulate: arch.demodulate,
-            log1p: matches!(arch.transfer, Transfer::Log1p),
-            albedo_eps: arch.albedo_eps,
-        };
-        let prep_pipeline = kernels.prep_pipeline(device, &prep_layout);
-        let prep = PrepParams { width, height, pwidth, pheight };
-        let out = OutputParams { width, height, demodulate: arch.demodulate as u32, transfer, albedo_eps: arch.albedo_eps, _pad: [0; 3] };
-        let prep_params = create_init(device, "prep params", bytemuck::bytes_of(&prep), wgpu::BufferUsages::UNIFORM);
-        let output_params = create_init(device, "output params", bytemuck::bytes_of(&out), wgpu::BufferUsages::UNIFORM);
-        let dummy = create_init(device, "absent buffer", &[0u8; 16], wgpu::BufferUsages::STORAGE);
-        let stats = create_init(
-            device,
-            "frame stats",
-            &[0u8; 16],
-            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
-        );
-
+        let output_params =
+            OutputParams { width, height, demodulate: arch.demodulate as u32, transfer, albedo_eps: arch.albedo_eps, _pad: [0; 3] };
+        let stats_usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC;
         Ok(Self {
             id: NEXT_ID.fetch_add(1, Ordering::Relaxed),
             device: device.clone(),
             queue: queue.clone(),
+            conv_groups: conv_groups(device, &kernels, &graph, &acts, &convs),
+            pool_groups: pool_groups(device, &kernels, &graph, &acts),
+            conv_outputs,
+            prep,
+            prep_params: create_init(device, "prep params", bytemuck::bytes_of(&prep_params), wgpu::BufferUsages::UNIFORM),
+            output_params: create_init(device, "output params", bytemuck::bytes_of(&output_params), wgpu::BufferUsages::UNIFORM),
+            dummy: create_init(device, "absent buffer", &[0u8; 16], wgpu::BufferUsages::STORAGE),
+            stats: create_init(device, "frame stats", &[0u8; 16], stats_usage),
+            bytes: acts.bytes + convs.bytes(),
+            input_texture: acts.input_texture,
+            output_view,
+            textures: acts.textures,
+            hidden_textures: acts.hidden_textures,
             arch,
             graph,
             width,
@@ -287,24 +355,11 @@ impl Denoiser {
             pwidth,
             pheight,
             kernels,
-            prep: prep_pipeline,
             convs,
-            conv_groups,
-            pool_groups,
-            conv_outputs,
-            prep_params,
-            output_params,
-            input_texture,
-            output_view,
-            dummy,
-            stats,
-            textures,
-            hidden_textures,
             precision,
-            bytes,
             host: None,
             profiler: None,
-            tuning,
+            tuning: choices.tuning,
             parity: 0,
             reset_pending: true,
         })

@@ -251,7 +251,7 @@ impl TimestampWriter for wgpu::ComputePass<'_> {
 /// timestamp followed by dispatches that need no barrier between them (a frame's prep: its
 /// barriers are wgpu's, in the command buffer before the frame's) was read only at the first
 /// barrier, after them. A 256x256 frame lost prep's 3-4 ms from its span, and a stage table lost
-/// prep (docs/PERF.md, session 19). The spare's write flushes the scene holding `index` at
+/// prep (`docs/perf/lavapipe-2026-11-24-s19.log`). The spare's write flushes the scene holding `index` at
 /// once. The timestamps that close a span need no spare: the next dispatch's barrier or the end
 /// of the command buffer flushes them. Drivers that write timestamps as the GPU passes them lose
 /// one query.

@@ -30,8 +30,8 @@ pub enum TileChoice {
     /// storage buffer, those that keep the precision's accuracy: with f32 activations the split
     /// tiles [`MMA_SPLIT_TILES`] (f32-class results, [`Tile::mma_split`]), with f16 ones
     /// [`MMA_TILES`] (f16 products summed in f32, [`Tile::mma`]). What [`TileChoice::Auto`]
-    /// does on GPUs (session 15: on the H100 the split tiles pass the goldens, and f32 frames
-    /// take 0.89x the time of [`TileChoice::Tuned`]'s, docs/PERF.md). The TF32-like plain tiles
+    /// does on GPUs: on the H100 the split tiles pass the goldens, and f32 frames take 0.89x the
+    /// time of [`TileChoice::Tuned`]'s (`docs/perf/h100-2026-11-24-s15.log`). The TF32-like plain tiles
     /// with f32 activations are fixed tiles only (`Fixed(Tile::mma(32))`).
     TunedMma,
 }
@@ -194,7 +194,7 @@ pub(super) struct NodeViews {
 ///    each in both halves of the run, is what makes the picks steady: in round 1 each
 ///    candidate is timed right after its own pipelines were compiled, at whatever clock the
 ///    GPU had come back to, and picks of near-equal tiles varied from build to build (about
-///    0.3 ms of a 1080p frame on the H100, docs/PERF.md session 15).
+///    0.3 ms of a 1080p frame on the H100, `docs/perf/h100-2026-11-24-s15.log`).
 ///
 /// A timing runs the plan's convs once untimed (first dispatches) and then [`TUNE_ROUNDS`]
 /// times in one pass, with a timestamp after each conv; a conv's time is the median of its

@@ -103,13 +103,14 @@ impl WeightMemory {
     /// Lavapipe runs a conv's dispatches one after another, and a uniform-chunk conv takes one
     /// dispatch per 64 KiB of weights. A deep conv (202 -> 101 channels: 12 chunks) on an 8 x 8
     /// level is then 12 dispatches of a workgroup or two each, which leave a core idle and
-    /// pay each dispatch's start; one storage dispatch took about half the time. On large
-    /// levels every dispatch fills both cores, and the uniform loads win (docs/PERF.md,
-    /// session 20).
+    /// pay each dispatch's start; one storage dispatch takes about half the time. On large
+    /// levels every dispatch fills both cores, and the uniform loads win
+    /// (`docs/perf/lavapipe-2026-11-24-s20.log`).
     ///
     /// The tiles of the lanes module (two-column lanes, Winograd lanes) read the plan's weight
     /// texture whatever this says ([`TEXEL_WEIGHTS`]): on lavapipe the deep levels' two-column
-    /// convs took 0.75-0.85x the time of their storage loads (session 33). It still decides for
+    /// convs take 0.75-0.85x the time of their storage loads
+    /// (`docs/perf/lavapipe-2026-12-03-s33.log`). It still decides for
     /// the direct tiles and the one-column lanes ones (1-pixel-wide levels).
     pub fn for_conv(t: wgpu::DeviceType, width: u32, height: u32) -> Self {
         if t == wgpu::DeviceType::Cpu && width * height > CPU_STORAGE_WEIGHTS_MAX_PIXELS {
@@ -136,7 +137,7 @@ pub enum SourceAccess {
     Sampled,
     /// Read-only storage textures ([`STORAGE_SOURCES`]): CPU drivers. Lavapipe's sampler sets
     /// up every texel fetch with per-lane mip-level offsets; its storage-image load does not,
-    /// and the default tile's fastest 256x256 frames take 0.82x the time (docs/PERF.md, session 10).
+    /// and the default tile's fastest 256x256 frames take 0.82x the time (`docs/perf/lavapipe-2026-11-23-s10.log`).
     Storage,
 }
 
@@ -162,7 +163,7 @@ impl SourceAccess {
 /// Lavapipe stores a buffer word by word in a loop over the subgroup's lanes, one loop per
 /// store of up to four words; two floats to a word halve the loops for the same bytes. The
 /// staged F(4x4) convs took 0.89-0.95x the time with them, the staged stores being 25-60% of
-/// such a conv (docs/PERF.md, session 29). GPUs store vectors and keep the 32-bit words.
+/// such a conv (`docs/perf/lavapipe-2026-12-02-s29.log`). GPUs store vectors and keep the 32-bit words.
 pub fn wide_staged_stores(device: &wgpu::Device) -> bool {
     device.features().contains(wgpu::Features::SHADER_INT64) && device.adapter_info().device_type == wgpu::DeviceType::Cpu
 }

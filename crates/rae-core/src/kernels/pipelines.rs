@@ -237,7 +237,7 @@ pub struct ConvVariant {
     /// textures bound (format, array or not, power-of-two sizes; a conv that does not pool binds
     /// its output at the pooled binding for that, [`ConvPlan::bind_group`]): 6 to 7 s for an
     /// F(4x4) one on this project's machine. The sample's first frame into an empty shader cache
-    /// compiles 11 conv pipelines instead of 14 (docs/PERF.md, session 24); the pooled store
+    /// compiles 11 conv pipelines instead of 14 (`docs/perf/lavapipe-2026-11-25-s24.log`); the pooled store
     /// costs a uniform branch per store where it is not taken.
     pub pool: bool,
     /// Where it reads its weights (the module and bind-group layout it is made with; Mma tiles
@@ -457,9 +457,9 @@ impl Kernels {
         self.gathers8 = true;
     }
 
-    /// Store staged outputs in 32-bit words even where [`wide_staged_stores`] holds: for
-    /// comparing the two (`cargo run --release -p rae-core --example staged_cost`). Call it
-    /// before any conv pipeline is made.
+    /// Store staged outputs in 32-bit words even where [`wide_staged_stores`] holds: the path of
+    /// devices without 64-bit integers, for holding the two to each other on one device
+    /// (tests/engine/kernels.rs). Call it before any conv pipeline is made.
     pub fn stage_in_32_bit_words(&mut self) {
         assert!(self.conv.is_empty(), "stage_in_32_bit_words after conv pipelines were made");
         self.wide_stores = false;
@@ -469,7 +469,7 @@ impl Kernels {
     /// without testing each pixel, where the device reads zero there
     /// ([`out_of_bounds_reads_zero`], conv_common.wgsl's OOB_ZERO): one load per fetch instead
     /// of a branch around it (lavapipe: the L0 convs in 0.93-0.98x the time, about 3% of the
-    /// 256x256 frame, and the direct16x4 pipeline compiles in 0.4x; docs/PERF.md, session 28).
+    /// 256x256 frame, and the direct16x4 pipeline compiles in 0.4x; `docs/perf/lavapipe-2026-12-02-s28.log`).
     ///
     /// Only for plans whose sources have exactly the sizes their read modes imply: a pooled
     /// source twice the level's, an upsampled one half, a pooled-and-upsampled one the level's,
@@ -490,7 +490,7 @@ impl Kernels {
     /// Lavapipe stores an rgba32float texel with four loops over the subgroup's lanes, one per
     /// 32-bit word, each spilling the vectors it picks a lane from; a vec4 store into a buffer is
     /// one such loop, and `copy_buffer_to_texture` is a memcpy on the queue thread (0.04-0.10x
-    /// the texel stores it replaces; docs/PERF.md, sessions 25 and 28). Only a caller that
+    /// the texel stores it replaces; `docs/perf/lavapipe-2026-12-01-s25.log`, `docs/perf/lavapipe-2026-12-02-s28.log`). Only a caller that
     /// records the copies may ask for it ([`crate::Denoiser`]): [`ConvPlan::record`] alone leaves
     /// a staged conv's texture unwritten.
     pub fn stage_outputs(&mut self) {
@@ -571,7 +571,7 @@ impl Kernels {
     ///
     /// A pipeline's creation is mostly the driver's front end (lavapipe translates and
     /// optimises the SPIR-V before its shader cache is consulted; that is most of a denoiser's
-    /// build, docs/PERF.md session 10), and Vulkan lets pipelines of one device be created
+    /// build, `docs/perf/lavapipe-2026-11-23-s10.log`), and Vulkan lets pipelines of one device be created
     /// concurrently, so a plan's variants are made side by side rather than in turn.
     pub fn prepare(&mut self, device: &wgpu::Device, variants: &[ConvVariant]) {
         let mut missing: Vec<ConvVariant> = Vec::new();

@@ -79,17 +79,17 @@ pub const WIDE_STAGED_STORES: [(&str, &str); 1] = [("        stage_row(", "     
 /// Lavapipe runs both sides of an `if` under a mask, so the one loop fetched both windows for
 /// every block; two loops fetch one, and LLVM compiles the step's body twice (the 8x4 tile's
 /// two-source pipeline in 9.2 s instead of 7.1). The two-source L0 convs took 0.90-0.96x the
-/// time (docs/PERF.md, session 29). Convs of one source keep the kernel as written: their
+/// time (`docs/perf/lavapipe-2026-12-02-s29.log`). Convs of one source keep the kernel as written: their
 /// module is another ([`Kernels`] makes one of each).
 pub const TWO_SOURCE_LOOPS: [(&str, &str); 3] = [
     (
-        "m13: ptr<function, Wino6>, cb: u32, w: u32, x: i32, y0: i32) {",
-        "m13: ptr<function, Wino6>, cb: u32, w: u32, x: i32, y0: i32, from_b: bool) {",
+        "m03: ptr<function, Wino6>, cb: u32, w: u32, x: i32, y0: i32) {",
+        "m03: ptr<function, Wino6>, cb: u32, w: u32, x: i32, y0: i32, from_b: bool) {",
     ),
     ("    if !SOURCE_B || cb < params.cin4_a {\n        k = window6(src_a", "    if !from_b {\n        k = window6(src_a"),
     (
-        "    for (var c = 0u; c < blocks; c++) {\n        wino4_step(&m00, &m01, &m02, &m03, &m10, &m11, &m12, &m13, c, w, xi, yi);\n    }",
-        "    for (var c = 0u; c < params.cin4_a; c++) {\n        wino4_step(&m00, &m01, &m02, &m03, &m10, &m11, &m12, &m13, c, w, xi, yi, false);\n    }\n    for (var c = params.cin4_a; c < blocks; c++) {\n        wino4_step(&m00, &m01, &m02, &m03, &m10, &m11, &m12, &m13, c, w, xi, yi, true);\n    }",
+        "    for (var c = 0u; c < blocks; c++) {\n        wino4_step(&m00, &m01, &m02, &m03, c, w, xi, yi);\n    }",
+        "    for (var c = 0u; c < params.cin4_a; c++) {\n        wino4_step(&m00, &m01, &m02, &m03, c, w, xi, yi, false);\n    }\n    for (var c = params.cin4_a; c < blocks; c++) {\n        wino4_step(&m00, &m01, &m02, &m03, c, w, xi, yi, true);\n    }",
     ),
 ];
 

@@ -14,13 +14,13 @@ pub const WORKGROUP: u32 = 8;
 pub const CPU_SHORT_TILE_MAX_PIXELS: u32 = 8 * 8;
 
 /// The fewest input blocks (4 channels each) of a conv that runs [`Tile::CPU_WINOGRAD`] on CPU
-/// drivers ([`Tile::cpu_for`]): 8 (32 channels). The frame's 3-channel conv ran slower in it,
-/// its 8-channel one as fast (docs/PERF.md, session 22).
+/// drivers ([`Tile::cpu_for`]): 8 (32 channels). On lavapipe the 3-channel conv runs slower in
+/// it and the 8-channel one as fast (`docs/perf/lavapipe-2026-11-25-s22.log`).
 pub const CPU_WINOGRAD_MIN_BLOCKS: u32 = 8;
 
 /// The fewest pixels of a level whose convs run [`Tile::CPU_WINOGRAD4`] on CPU drivers that
 /// run it (32 x 32): every conv there, down to one input block (the 256x256 frame's first conv,
-/// 2 input blocks, took 0.82x the time of `lanes8x2w2`'s; docs/PERF.md, session 23).
+/// 2 input blocks, takes 0.82x the time of `lanes8x2w2`'s; `docs/perf/lavapipe-2026-11-25-s23.log`).
 pub const CPU_WINOGRAD4_MIN_PIXELS: u32 = 32 * 32;
 
 /// How a conv tile is computed: the entry point of conv3x3.wgsl.
@@ -146,45 +146,39 @@ impl Default for Tile {
 
 impl Tile {
     /// The tile of CPU drivers without subgroups: 16 rows x 4 blocks (2 or 1 where a conv's
-    /// weights or outputs are fewer), 0.83-0.93x the time of 16 x 2 on lavapipe (docs/PERF.md,
-    /// session 6); [`Tile::cpu`] picks [`Tile::CPU_LANES`] instead where the device has subgroups.
+    /// weights or outputs are fewer), 0.83-0.93x the time of 16 x 2 on lavapipe
+    /// (`docs/perf/lavapipe-2026-11-23-s6.log`); [`Tile::cpu`] picks [`Tile::CPU_LANES`] instead
+    /// where the device has subgroups.
     pub const CPU: Tile = Tile { rows: CONV_ROWS, blocks: 4, cols: 1, group_x: WORKGROUP, method: Method::Direct, split: 1 };
 
     /// The tile of CPU drivers with subgroups: 8 rows x 2 blocks x 2 columns, weights loaded
-    /// across the subgroup. On lavapipe at 512-bit vectors it took 0.78x the frame time of
-    /// `lanes16x4` (the default before it; 0.84-0.86x at 256 bits) and 0.93x that of `lanes4x2w2`,
-    /// with the same warm build time; compiling into an empty shader cache takes longer (the
-    /// first 64x64 frame in 38 s, against 27 for `lanes16x4` and 14 for `lanes4x2w2`), once
-    /// per machine and driver (docs/PERF.md, session 11).
+    /// across the subgroup: on lavapipe 0.78x the frame time of `lanes16x4` at 512-bit vectors
+    /// (0.84-0.86x at 256 bits) and 0.93x that of `lanes4x2w2`, for a longer compile into an
+    /// empty shader cache (`docs/perf/lavapipe-2026-11-24-s11.log`).
     pub const CPU_LANES: Tile = Tile { rows: 8, blocks: 2, cols: 2, group_x: WORKGROUP, method: Method::Lanes, split: 1 };
 
     /// The CPU drivers' Winograd tile: F(2x2, 3x3) in two stacked 2x2 output tiles (4 rows x
     /// 2 columns) x 4 blocks, weights loaded across the subgroup ([`Method::WinogradLanes`]).
     /// It takes 256 multiply-adds per 4 outputs and input block where [`Tile::CPU_LANES`] takes
-    /// 576. On lavapipe (Zen 5, 512-bit vectors) the 256x256 frame's big convs of 32 input
-    /// channels and more took about 0.8x the time of `lanes8x2w2` in four stacked tiles
-    /// (docs/PERF.md, session 22). Two stacked tiles were faster still on the 16 x 16 and 8 x 8
-    /// levels: on the Zen 3 of session 31 (8 lanes) its bottleneck took half the time of
-    /// `lanes4x2w2`'s and its 16 x 16 convs less than `winolanes8x4`'s; on the Zen 4 of session
-    /// 32 (16 lanes) tuning kept it or `lanes4x2w2` on every 16 x 16 conv, never `winolanes8x4`,
-    /// and it compiles in 0.4x the time. Its weights are texels of the plan's weight texture
-    /// (since session 23: a 64 KiB uniform chunk held four blocks of 16 weights per channel pair
-    /// only up to 15 input blocks). The rounding is Winograd's: within the golden tolerance.
+    /// 576: on lavapipe the 256x256 frame's convs of 32 input channels and more take about 0.8x
+    /// the time of `lanes8x2w2` (`docs/perf/lavapipe-2026-11-25-s22.log`); with 8 lanes its
+    /// bottleneck convs take half the time of `lanes4x2w2`'s (`lavapipe-2026-12-02-s31.log`).
+    /// Its weights are texels of the plan's weight texture (a 64 KiB uniform chunk would hold
+    /// four blocks of 16 weights per channel pair only up to 15 input blocks). The rounding is
+    /// Winograd's: within the golden tolerance.
     pub const CPU_WINOGRAD: Tile = Tile { rows: 4, blocks: 4, cols: 2, group_x: WORKGROUP, method: Method::WinogradLanes, split: 1 };
 
     /// The CPU drivers' F(4x4, 3x3) tile: one 4x4 output tile (4 rows x 4 columns) x 4 blocks,
     /// weights loaded across the subgroup from the plan's weight texture
     /// ([`Method::Winograd4Lanes`]). It takes 144 multiply-adds per 16 outputs and input block
-    /// where [`Tile::CPU_WINOGRAD`] takes 256. On lavapipe (Zen 5, 512-bit vectors) the 256x256
-    /// frame's convs on levels of 32 x 32 and more took 0.6-0.9x the time of the F(2x2) tile's
-    /// and `lanes8x2w2`'s; on 16 x 16 levels, where a subgroup covers half its pixels, 1.3-1.7x
-    /// (docs/PERF.md, session 23). Against two stacked 4x4 tiles ([`Tile::CPU_WINOGRAD4_TALL`],
-    /// the tile until session 31), one tile on every conv and frames alternating in one
-    /// process, it took 0.91x the 128x128 frame time, 0.965-0.999x the 256x256 one, 0.93x the
-    /// 512x512 one and 0.98-1.02x the 1280x720 one on the Zen 4 of session 32 at 16 lanes; at
-    /// 8 lanes (the Zen 3 of session 31) tuning never kept the tall one. It compiles in about
-    /// half the time: 5.7 s a pipeline into an empty shader cache against 11.8 at 16 lanes,
-    /// 13 s against 30 at 8 (`compile_cost`). Its rounding is within the golden tolerance.
+    /// where [`Tile::CPU_WINOGRAD`] takes 256: on lavapipe the 256x256 frame's convs on levels of
+    /// 32 x 32 and more take 0.6-0.9x the time of the F(2x2) tile's and `lanes8x2w2`'s; on 16 x
+    /// 16 levels, where a subgroup covers half its pixels, 1.3-1.7x
+    /// (`docs/perf/lavapipe-2026-11-25-s23.log`). One 4x4 tile a lane is as fast as two stacked
+    /// (0.91-1.02x the frame from 128x128 to 1280x720) and compiles in half the time, 5.7 s a
+    /// pipeline into an empty shader cache with 16 lanes (`lavapipe-2026-12-03-s32.log`,
+    /// `cargo run --release -p rae-core --example compile_cost`). Its rounding is within the
+    /// golden tolerance.
     pub const CPU_WINOGRAD4: Tile = Tile { rows: 4, blocks: 4, cols: 4, group_x: WORKGROUP, method: Method::Winograd4Lanes, split: 1 };
 
     /// The tile of CPU drivers on `device`: [`Tile::CPU_LANES`] where the device has subgroups
@@ -205,9 +199,9 @@ impl Tile {
     /// An 8 x 8 level is 4 invocations of 8 rows x 2 columns per output group, so 4 of a
     /// subgroup's 16 lanes have pixels, and the others still load weights for them. At 4 rows
     /// twice as many lanes work: the 256x256 frame's bottleneck convs (8 x 8, storage weights)
-    /// took 0.72x the time (docs/PERF.md, session 21). At 16 lanes tuning kept `lanes4x2w2`
-    /// there over [`Tile::CPU_WINOGRAD`] (by 4-18%, session 32); at 8 lanes the Winograd tile
-    /// took half its time (session 31).
+    /// take 0.72x the time (`docs/perf/lavapipe-2026-11-24-s21.log`). With 16 lanes
+    /// `lanes4x2w2` beats [`Tile::CPU_WINOGRAD`] there by 4-18% (`lavapipe-2026-12-03-s32.log`);
+    /// with 8 lanes the Winograd tile takes half its time (`lavapipe-2026-12-02-s31.log`).
     pub fn cpu_for(device: &wgpu::Device, width: u32, height: u32, in_blocks: u32) -> Tile {
         let tile = Tile::cpu(device);
         let (winograd, narrow) = (winograd_lanes_supported(device), narrow_gathers(device));
