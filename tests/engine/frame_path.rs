@@ -32,7 +32,7 @@ fn wild_frame(w: usize, h: usize) -> [Vec<f32>; 5] {
 }
 
 fn frame_of(b: &[Vec<f32>; 5]) -> FrameInputs<'_> {
-    FrameInputs { color: &b[0], albedo: Some(&b[1]), normal: Some(&b[2]), depth: Some(&b[3]), roughness: Some(&b[4]) }
+    FrameInputs { color: &b[0], albedo: Some(&b[1]), normal: Some(&b[2]), depth: Some(&b[3]), roughness: Some(&b[4]), motion: None }
 }
 
 #[test]

@@ -48,6 +48,17 @@ fn color_only_variant_matches_pytorch() {
 }
 
 #[test]
+fn reprojected_hidden_state_matches_pytorch() {
+    // Frames with motion (a pan and a zoom, a disk moving on its own, a band pointing off
+    // screen, NaN, infinite and absurd pixels): every block's previous state is warped as
+    // weights-tool's warp.py does before its recurrent conv, on the CPU drivers' tiles.
+    let motion = Options { motion: true, ..Default::default() };
+    check_with("golden_full_motion_64x64.safetensors", motion);
+    // Six levels of another network, a frame three times as wide as high.
+    check_with("golden_color_tiny_motion_96x32.safetensors", motion);
+}
+
+#[test]
 fn winograd_tiles_match_pytorch() {
     // Every conv by Winograd F(2x2, 3x3) (GPUs tune it in where it is faster): its rounding
     // differs from the direct sum's, and the frames still hold the golden tolerance.

@@ -2,7 +2,7 @@
 
 use rae_core::kernels::{
     LanesModule, MMA_ENABLE, MMA_WORKGROUP_BYTES, PREP_WITHOUT_SUBGROUPS, ROWS_STUB, SHADERS, STORAGE_SOURCES, STORAGE_WEIGHTS,
-    SourceAccess, UNIFORM_WEIGHTS, WITHOUT_SUBGROUPS, conv_module_source, lanes_module_source, mma_source, shader_source,
+    SourceAccess, UNIFORM_WEIGHTS, WARP_F16, WITHOUT_SUBGROUPS, conv_module_source, lanes_module_source, mma_source, shader_source,
 };
 
 /// `src` (from `file`) with each of `rewrites` made, each of which must find its text.
@@ -31,6 +31,7 @@ fn every_shader_validates_with_naga() {
     assert!(!prep_without_subgroups.contains("subgroupMax("), "no subgroup operation is left in prep");
     let rewritten = [
         ("prep (without subgroups)", prep_without_subgroups),
+        ("motion (f16 activations)", apply(shader_source("motion").to_string(), "motion.wgsl", &WARP_F16)),
         ("conv3x3 (lanes tiles)", lanes_module_source(conv, SourceAccess::Sampled, LanesModule::default())),
         (
             "conv3x3 (storage sources, lanes tiles, f16)",
@@ -109,7 +110,9 @@ fn every_shader_validates_with_naga() {
         naga::valid::Validator::new(naga::valid::ValidationFlags::all(), caps)
             .validate(&module)
             .unwrap_or_else(|e| panic!("{name}.wgsl: {}", e.emit_to_string(source)));
-        let entries: &[&str] = if name.starts_with("conv3x3_mma") {
+        let entries: &[&str] = if name.starts_with("motion") {
+            &["motion_in", "motion_down", "warp"]
+        } else if name.starts_with("conv3x3_mma") {
             &["mma_emulated", "mma_split_emulated"]
         } else if name.contains("lanes tiles") {
             &["main", "lanes", "winograd_lanes", "winograd4_lanes"]

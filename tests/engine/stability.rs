@@ -35,7 +35,7 @@ impl Frame {
 
     fn inputs(&self) -> FrameInputs<'_> {
         let b = &self.0;
-        FrameInputs { color: &b[0], albedo: Some(&b[1]), normal: Some(&b[2]), depth: Some(&b[3]), roughness: Some(&b[4]) }
+        FrameInputs { color: &b[0], albedo: Some(&b[1]), normal: Some(&b[2]), depth: Some(&b[3]), roughness: Some(&b[4]), motion: None }
     }
 }
 

@@ -188,7 +188,7 @@ fn size_not_multiple_of_32_runs_and_is_cropped() {
     let g = gpu();
     let mut d = Denoiser::new(&g.device, &g.queue, &weights, w as u32, h as u32).unwrap();
     assert_eq!(d.padded_size(), (64, 64));
-    let frame = FrameInputs { color: &c, albedo: Some(&a), normal: Some(&n), depth: Some(&dp), roughness: Some(&r) };
+    let frame = FrameInputs { color: &c, albedo: Some(&a), normal: Some(&n), depth: Some(&dp), roughness: Some(&r), motion: None };
     let out = d.denoise(&frame).unwrap();
     assert_eq!(out.len(), w * h * 3);
     assert!(out.iter().all(|v| v.is_finite() && *v >= 0.0));
@@ -231,7 +231,15 @@ fn caller_buffers_in_caller_encoder_match_host_path() {
         mapped_at_creation: false,
     });
     let io = embedded
-        .bind_io(&GpuFrameIo { color: &c, albedo: Some(&a), normal: Some(&n), depth: Some(&dp), roughness: Some(&r), output: &out })
+        .bind_io(&GpuFrameIo {
+            color: &c,
+            albedo: Some(&a),
+            normal: Some(&n),
+            depth: Some(&dp),
+            roughness: Some(&r),
+            motion: None,
+            output: &out,
+        })
         .unwrap();
     for i in 0..2 {
         // The renderer updates its buffers, then records the denoiser into its own encoder.
@@ -344,4 +352,72 @@ fn the_profiled_frame_times_its_first_stage() {
         .collect();
     let best = ratios.iter().copied().fold(0.0, f64::max);
     assert!(best > 0.05, "prep took {ratios:.3?} of the output kernel's time: the opening timestamp came after it");
+}
+
+#[test]
+fn motion_is_a_choice_of_the_denoiser_and_zero_motion_changes_nothing() {
+    // Zero motion fetches every state at its own pixel with weight 1: the frames of a denoiser
+    // built with motion are those of one without, bit for bit; a frame without motion runs as
+    // without it. A denoiser built without motion refuses frames and GPU buffers with it.
+    let (golden, weights) = setup();
+    let g = gpu();
+    let (w, h) = (golden.width, golden.height);
+    let zero = vec![0.0f32; (w * h * 2) as usize];
+    let mut plain = denoiser(&weights, &golden);
+    let mut moving = Denoiser::with_options(&g.device, &g.queue, &weights, w, h, Options { motion: true, ..Default::default() }).unwrap();
+    for i in 0..3 {
+        let frame = golden.inputs(i);
+        let with_zero = FrameInputs { motion: Some(&zero), ..frame };
+        let input = if i == 1 { frame } else { with_zero };
+        assert_eq!(bits(&moving.denoise(&input).unwrap()), bits(&plain.denoise(&frame).unwrap()), "frame {i}");
+    }
+    assert!(moving.gpu_bytes() > plain.gpu_bytes(), "the motion pyramid is counted");
+    let err = plain.denoise(&FrameInputs { motion: Some(&zero), ..golden.inputs(0) }).unwrap_err().to_string();
+    assert!(err.contains("built without"), "{err}");
+    let short = vec![0.0f32; 10];
+    let err = moving.denoise(&FrameInputs { motion: Some(&short), ..golden.inputs(0) }).unwrap_err().to_string();
+    assert!(err.contains("motion") && err.contains("10"), "{err}");
+    let buf = |n: u64| {
+        g.device.create_buffer(&wgpu::BufferDescriptor {
+            label: None,
+            size: n,
+            usage: wgpu::BufferUsages::STORAGE,
+            mapped_at_creation: false,
+        })
+    };
+    let (c, m, out) = (buf(w as u64 * h as u64 * 12), buf(w as u64 * h as u64 * 8), buf(w as u64 * h as u64 * 12));
+    let io = |d: &Denoiser| {
+        let need = |b| weights.arch.required_buffers().contains(&b).then_some(&c);
+        d.bind_io(&GpuFrameIo {
+            color: &c,
+            albedo: need(rae_core::InputBuffer::Albedo),
+            normal: need(rae_core::InputBuffer::Normal),
+            depth: need(rae_core::InputBuffer::Depth),
+            roughness: need(rae_core::InputBuffer::Roughness),
+            motion: Some(&m),
+            output: &out,
+        })
+    };
+    assert!(matches!(io(&plain), Err(Error::Motion(_))));
+    assert!(io(&moving).is_ok());
+}
+
+#[test]
+fn reprojection_runs_in_f16_storage_close_to_f32() {
+    // The warped state is written in the activations' format (kernels::WARP_F16): with f16
+    // storage the frames of the motion golden stay within f16's rounding of the f32 ones.
+    let golden = crate::golden("golden_color_tiny_motion_96x32.safetensors");
+    let weights = Weights::load(fixture(&golden.weights)).unwrap();
+    let g = gpu();
+    let build = |precision| {
+        let options = Options { motion: true, precision, ..Default::default() };
+        Denoiser::with_options(&g.device, &g.queue, &weights, golden.width, golden.height, options).unwrap()
+    };
+    let (mut f32s, mut f16s) = (build(rae_core::Precision::F32), build(rae_core::Precision::F16));
+    for i in 0..golden.frames.len() {
+        let (a, b) = (f32s.denoise(&golden.inputs(i)).unwrap(), f16s.denoise(&golden.inputs(i)).unwrap());
+        let max = a.iter().fold(0.0f32, |m, v| m.max(v.abs()));
+        let worst = a.iter().zip(&b).map(|(x, y)| (x - y).abs()).fold(0.0f32, f32::max);
+        assert!(b.iter().all(|v| v.is_finite()) && worst <= 1e-2 * max.max(1.0), "frame {i}: {worst} of {max}");
+    }
 }

@@ -51,6 +51,8 @@ class Case:
     height: int
     frames: int
     seed: int
+    #: Frames carry motion (``motion_field``), which reprojects the hidden state.
+    motion: bool = False
 
 
 WEIGHTS: list[WeightsSpec] = [
@@ -73,7 +75,31 @@ CASES: list[Case] = [
     Case("golden_full_96x64.safetensors", "weights_full.safetensors", 96, 64, 4, 12),
     Case("golden_paper_tiny_40x24.safetensors", "weights_paper_tiny.safetensors", 40, 24, 4, 13),
     Case("golden_color_tiny_64x32.safetensors", "weights_color_tiny.safetensors", 64, 32, 4, 14),
+    Case("golden_full_motion_64x64.safetensors", "weights_full.safetensors", 64, 64, 4, 15, motion=True),
+    Case("golden_color_tiny_motion_96x32.safetensors", "weights_color_tiny.safetensors", 96, 32, 4, 16, motion=True),
 ]
+
+
+def motion_field(width: int, height: int, t: int) -> np.ndarray:
+    """HW x 2 float32 motion of frame t in rae's convention (previous minus current position, in
+    pixels): a pan and a zoom about the centre; a disk that moves on its own (the background it
+    leaves is uncovered); a band at the left edge pointing off screen; and one NaN, one infinite
+    and one absurd pixel, whose history is dropped."""
+    yy, xx = np.meshgrid(np.arange(height, dtype=np.float64), np.arange(width, dtype=np.float64), indexing="ij")
+    cx, cy = width / 2, height / 2
+    zoom = 1.0 + 0.02 * (t + 1)
+    pan = (1.25 + 0.5 * t, -0.75)
+    px = cx + (xx - cx) / zoom + pan[0]
+    py = cy + (yy - cy) / zoom + pan[1]
+    m = np.stack([px - xx, py - yy], -1)
+    disk = (xx - (cx + 3 * t)) ** 2 + (yy - cy) ** 2 < (height / 4) ** 2
+    m[disk] = (-3.0, 0.4 * t)
+    m[:, :3, 0] = -(3.0 + xx[:, :3]) - 5.5
+    m[:, :3, 1] = 0.0
+    m[2, 5] = (np.nan, 0.0)
+    m[3, 7] = (0.0, np.inf)
+    m[4, 9] = (1e6, 0.0)
+    return m.astype(np.float32)
 
 
 def random_state(arch: Arch, seed: int) -> dict[str, torch.Tensor]:
@@ -123,14 +149,16 @@ def to_nchw(a: np.ndarray) -> torch.Tensor:
 
 
 def run_sequence(arch: Arch, state: dict[str, torch.Tensor], frames: list[dict[str, np.ndarray]]) -> list[np.ndarray]:
-    """PyTorch's output (HWC float32) for each frame, hidden state carried, computed in float64."""
+    """PyTorch's output (HWC float32) for each frame, hidden state carried (reprojected with a
+    frame's ``motion``, where it has one), computed in float64."""
     model = RecurrentAE(arch).double().eval()
     model.load_state_dict({k: v.double() for k, v in state.items()})
     outs = []
     with torch.no_grad():
         for frame in frames:
-            buffers = {k: to_nchw(v) for k, v in frame.items()}
-            y = model(prepare_input(arch, buffers))
+            buffers = {k: to_nchw(v) for k, v in frame.items() if k != "motion"}
+            motion = to_nchw(frame["motion"]) if "motion" in frame else None
+            y = model(prepare_input(arch, buffers), motion)
             r = finish_output(arch, y, buffers)
             outs.append(r[0].permute(1, 2, 0).numpy().astype(np.float32))
     return outs
@@ -159,6 +187,9 @@ def generate(out_dir: Path) -> list[Path]:
         spec = specs[case.weights]
         arch, state = read_weights(out_dir / case.weights)
         frames = random_frames(arch, case.width, case.height, case.frames, case.seed)
+        if case.motion:
+            for t, frame in enumerate(frames):
+                frame["motion"] = motion_field(case.width, case.height, t)
         outs = run_sequence(arch, state, frames)
         tensors: dict[str, np.ndarray] = {}
         for i, (frame, out) in enumerate(zip(frames, outs)):
@@ -168,7 +199,8 @@ def generate(out_dir: Path) -> list[Path]:
         meta = {
             "version": GENERATOR_VERSION, "weights": case.weights, "weights_seed": spec.seed,
             "width": case.width, "height": case.height, "frames": case.frames, "seed": case.seed,
-            "buffers": arch.required_buffers, "torch": torch.__version__, "command": COMMAND,
+            "buffers": arch.required_buffers + (["motion"] if case.motion else []), "torch": torch.__version__,
+            "command": COMMAND,
         }
         _atomic_save(tensors, out_dir / case.name, {GOLDEN_KEY: json.dumps(meta, sort_keys=True)})
         written.append(out_dir / case.name)
@@ -193,7 +225,12 @@ def compare(committed: Path, regenerated: Path, rtol: float = 1e-5) -> list[str]
             if a[k].shape != b[k].shape:
                 problems.append(f"{name}:{k}: shape {a[k].shape} != {b[k].shape}")
                 continue
-            err = np.abs(a[k].astype(np.float64) - b[k]) / np.maximum(1.0, np.abs(a[k].astype(np.float64)))
+            x, y = a[k].astype(np.float64), b[k].astype(np.float64)
+            if not np.array_equal(np.isnan(x), np.isnan(y)):
+                problems.append(f"{name}:{k}: NaNs differ")
+                continue
+            with np.errstate(invalid="ignore"):
+                err = np.where(np.isnan(x) | (x == y), 0.0, np.abs(x - y) / np.maximum(1.0, np.abs(x)))
             if err.size and err.max() > rtol:
                 problems.append(f"{name}:{k}: max relative difference {err.max():.3g} > {rtol}")
     return problems

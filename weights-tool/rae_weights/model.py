@@ -12,7 +12,7 @@ import torch
 import torch.nn as nn
 import torch.nn.functional as F
 
-from . import transfer
+from . import transfer, warp
 from .arch import INPUT_CHANNELS, Arch
 
 #: Bounds applied to input buffers before they reach the network (see docs in rae-core `frame`).
@@ -39,11 +39,15 @@ class EncoderBlock(nn.Module):
         self.l2 = nn.Sequential(_conv(2 * cout, cout), nn.LeakyReLU(slope), _conv(cout, cout), nn.LeakyReLU(slope))
         self.hidden: torch.Tensor | None = None
 
-    def forward(self, x: torch.Tensor) -> torch.Tensor:
+    def forward(self, x: torch.Tensor, motion: tuple[torch.Tensor, torch.Tensor] | None = None) -> torch.Tensor:
+        """One frame; ``motion`` (level motion and validity, ``warp.pyramid``) reprojects the
+        hidden state first."""
         op1 = self.l1(x)
         hidden = self.hidden
         if hidden is None or hidden.shape != op1.shape:
             hidden = torch.zeros_like(op1)
+        elif motion is not None:
+            hidden = warp.warp(hidden, *motion)
         op2 = self.l2(torch.cat((op1, hidden), dim=1))
         self.hidden = op2
         return op2
@@ -97,15 +101,19 @@ class RecurrentAE(nn.Module):
         for block in self.encoders():
             block.hidden = None
 
-    def forward(self, x: torch.Tensor) -> torch.Tensor:
+    def forward(self, x: torch.Tensor, motion: torch.Tensor | None = None) -> torch.Tensor:
+        """One frame of packed input (``prepare_input``); with ``motion`` (N x 2 x H x W, rae's
+        convention, at the input's size) each block's hidden state is reprojected first
+        (``warp``); without it the state is used as it is."""
         n = self.arch.levels
         prepool = self.arch.skip == "prepool"
+        levels = warp.pyramid(motion.to(x.dtype), n) if motion is not None else [None] * (n + 1)
         skips: list[torch.Tensor] = []
         for k in range(1, n + 1):
-            d = getattr(self, f"d{k}")(x)
+            d = getattr(self, f"d{k}")(x, levels[k - 1])
             x = F.max_pool2d(d, kernel_size=2)
             skips.append(d if prepool else x)
-        y = self.bottleneck(x)
+        y = self.bottleneck(x, levels[n])
         for k in range(n, 0, -1):
             y = getattr(self, f"u{k}")(y, skips[k - 1], prepool)
         return y

@@ -39,6 +39,18 @@ pub struct Options {
     pub tiles: TileChoice,
     /// No second device compiling kernels for a slow first frame ([`CompileHelper`]).
     pub no_helper: bool,
+    /// Reproject the hidden state with the sequence's motion, read in this convention (`None`:
+    /// `--no-motion`).
+    pub motion: Option<MotionConvention>,
+}
+
+/// What a sequence's motion files mean.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum MotionConvention {
+    /// rae's: previous position minus current, in pixels, x right, y down.
+    Rae,
+    /// OptiX's flow: current minus previous (the negative of rae's).
+    Optix,
 }
 
 /// Parse `A..B`, `A..`, `..B` or `A` (inclusive frame numbers).
@@ -187,7 +199,11 @@ pub fn run(o: &Options) -> Result<()> {
     prepare_output(&o.input, &out_dir)?;
 
     let gpu = Gpu::new()?;
-    let options = rae_core::Options { precision: o.precision, tiles: o.tiles, ..Default::default() };
+    let motion_source = seq.motion_source();
+    let motion = o.motion.filter(|_| motion_source.is_some());
+    // Blender's Vector pass is converted as it is read; other motion is negated for OptiX's.
+    let negate = motion == Some(MotionConvention::Optix) && motion_source != Some(io::MotionSource::BlenderVector);
+    let options = rae_core::Options { precision: o.precision, tiles: o.tiles, motion: motion.is_some(), ..Default::default() };
     let mut d = Denoiser::with_options(&gpu.device, &gpu.queue, &weights, seq.width, seq.height, options)?;
     let used: Vec<&str> = weights.arch.required_buffers().iter().map(|b| b.name()).collect();
     println!(
@@ -206,6 +222,13 @@ pub fn run(o: &Options) -> Result<()> {
         if seq.has_reference() { " (reference used for error only)" } else { "" }
     );
     println!("model:   {} (uses {used:?})", weights_path.display());
+    match (motion_source, o.motion) {
+        (None, _) => println!("motion:  none (the hidden state is not reprojected)"),
+        (Some(_), None) => println!("motion:  not used (--no-motion)"),
+        (Some(source @ io::MotionSource::BlenderVector), Some(_)) => println!("motion:  {source}"),
+        (Some(source), Some(MotionConvention::Rae)) => println!("motion:  {source}, rae convention"),
+        (Some(source), Some(MotionConvention::Optix)) => println!("motion:  {source}, OptiX convention (negated)"),
+    }
     println!("device:  {}", gpu.describe());
     println!(
         "tile:    {} at full resolution, {} sources ({})",
@@ -250,7 +273,14 @@ pub fn run(o: &Options) -> Result<()> {
             d.reset();
             prev = None;
         }
-        let t = d.denoise_into(&frame.inputs(), &mut out).with_context(|| format!("frame {}", frame.number))?;
+        if negate && let Some(m) = frame.buffers.get_mut(&Slot::Motion) {
+            m.iter_mut().for_each(|v| *v = -*v);
+        }
+        let mut inputs = frame.inputs();
+        if motion.is_none() {
+            inputs.motion = None;
+        }
+        let t = d.denoise_into(&inputs, &mut out).with_context(|| format!("frame {}", frame.number))?;
         if let Some(h) = &mut helper {
             h.first_frame_done();
         }

@@ -74,6 +74,15 @@ enum Command {
         /// cache).
         #[arg(long)]
         no_compile_helper: bool,
+        /// Do not reproject the hidden state with the sequence's motion (motion_NNNN.exr, or a
+        /// multi-layer EXR's motion layer or Blender Vector pass), for comparison.
+        #[arg(long)]
+        no_motion: bool,
+        /// What the motion files mean: `rae` (where the pixel's surface point was in the
+        /// previous frame minus where it is now, in pixels, x right, y down) or `optix` (current
+        /// minus previous, OptiX's flow). Blender's Vector pass is converted whatever this says.
+        #[arg(long, value_enum, default_value_t = denoise::MotionConvention::Rae)]
+        motion_convention: denoise::MotionConvention,
     },
     /// Print a weights file's architecture, inputs, parameter count and cost per pixel.
     Info {
@@ -263,8 +272,14 @@ fn bench(path: &Path, sizes: &[(u32, u32)], frames: usize, warmup: usize, layers
         let s = format!("{w}x{h}");
         let n = (w * h) as usize;
         let (wave, one) = bench_buffers(w, h);
-        let frame =
-            rae_core::FrameInputs { color: &wave, albedo: Some(&wave), normal: Some(&wave), depth: Some(&one), roughness: Some(&one) };
+        let frame = rae_core::FrameInputs {
+            color: &wave,
+            albedo: Some(&wave),
+            normal: Some(&wave),
+            depth: Some(&one),
+            roughness: Some(&one),
+            motion: None,
+        };
         // The frames every combination's error is taken against: as many, in f32, direct tiles.
         let reference = {
             let options = Options { tiles: TileChoice::Fixed(reference_tile(&gpu.device)), ..Default::default() };
@@ -370,7 +385,14 @@ impl Sweep {
         self.precisions.iter().flat_map(move |&p| {
             self.memories.iter().flat_map(move |&weights| {
                 self.sources.iter().flat_map(move |&sources| {
-                    self.tiles.iter().map(move |&tiles| Options { precision: p.into(), tiles, weights, sources, staging: None })
+                    self.tiles.iter().map(move |&tiles| Options {
+                        precision: p.into(),
+                        tiles,
+                        weights,
+                        sources,
+                        staging: None,
+                        motion: false,
+                    })
                 })
             })
         })
@@ -409,8 +431,14 @@ fn bench_interleaved(path: &Path, sizes: &[(u32, u32)], rounds: usize, warmup: u
     for &(w, h) in sizes {
         let s = format!("{w}x{h}");
         let (wave, one) = bench_buffers(w, h);
-        let frame =
-            rae_core::FrameInputs { color: &wave, albedo: Some(&wave), normal: Some(&wave), depth: Some(&one), roughness: Some(&one) };
+        let frame = rae_core::FrameInputs {
+            color: &wave,
+            albedo: Some(&wave),
+            normal: Some(&wave),
+            depth: Some(&one),
+            roughness: Some(&one),
+            motion: None,
+        };
         let mut out = vec![0.0; wave.len()];
         // Build (and warm up) every combination before timing any.
         let mut runs = Vec::new();
@@ -482,6 +510,7 @@ fn resident_frames(gpu: &Gpu, d: &mut Denoiser, frame: &rae_core::FrameInputs, f
         normal: normal.as_ref(),
         depth: depth.as_ref(),
         roughness: roughness.as_ref(),
+        motion: None,
         output: &output,
     })?;
     let total = frames + warmup;
@@ -659,6 +688,8 @@ fn main() -> Result<()> {
             csv,
             tile,
             no_compile_helper,
+            no_motion,
+            motion_convention,
         } => {
             let frames = frames.as_deref().map(denoise::parse_range).transpose()?;
             let tiles = parse_tile(&tile)?;
@@ -676,6 +707,7 @@ fn main() -> Result<()> {
                 csv,
                 tiles,
                 no_helper: no_compile_helper,
+                motion: (!no_motion).then_some(motion_convention),
             })
         }
         Command::Info { file, size } => info(&file, &size),

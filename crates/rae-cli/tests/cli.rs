@@ -131,6 +131,75 @@ fn seq_dir(tmp: &tempfile::TempDir) -> PathBuf {
     d
 }
 
+fn write_rg(path: &Path, w: usize, h: usize, data: &[f32]) {
+    let ch = SpecificChannels::build()
+        .with_channel("R")
+        .with_channel("G")
+        .with_pixel_fn(|p: Vec2<usize>| (data[2 * (p.y() * w + p.x())], data[2 * (p.y() * w + p.x()) + 1]));
+    Image::from_channels((w, h), ch).write().to_file(path).unwrap();
+}
+
+/// The denoised frames of `dir`'s sequence, frame by frame, after a run into `out`.
+fn denoised_frames(out: &Path) -> Vec<Vec<f32>> {
+    let mut names: Vec<_> = listing(out).into_iter().filter(|n| n.starts_with("denoised_") && n.ends_with(".exr")).collect();
+    names.sort();
+    names
+        .iter()
+        .map(|n| {
+            let img = read_first_rgba_layer_from_file(
+                out.join(n),
+                |r, _| vec![0f32; r.width() * r.height() * 3],
+                |v: &mut Vec<f32>, p: Vec2<usize>, (r, g, b, _): (f32, f32, f32, f32)| {
+                    let i = 3 * (p.y() * W + p.x());
+                    v[i..i + 3].copy_from_slice(&[r, g, b]);
+                },
+            )
+            .unwrap();
+            img.layer_data.channel_data.pixels
+        })
+        .collect()
+}
+
+#[test]
+fn motion_files_reproject_the_hidden_state_and_say_so() {
+    // motion_NNNN.exr (R, G) beside the buffers: `denoise` reprojects with it and says where it
+    // came from; --no-motion and the OptiX convention (the negated field) give other frames.
+    // A sequence whose motion is missing in one frame, or of another size, is refused, naming
+    // the file.
+    let tmp = tempfile::tempdir().unwrap();
+    let seq = seq_dir(&tmp);
+    per_buffer_sequence(&seq, 3);
+    let motion: Vec<f32> = (0..W * H).flat_map(|i| [1.5 + 0.1 * (i % 7) as f32, -0.75]).collect();
+    for f in 0..3 {
+        write_rg(&seq.join(format!("motion_{f:04}.exr")), W, H, &motion);
+    }
+    let run = |name: &str, extra: &[&str]| {
+        let out = tmp.path().join(name);
+        let mut args = vec!["-o", out.to_str().unwrap()];
+        args.extend(extra);
+        let (ok, text, err) = denoise(&seq, &args);
+        assert!(ok, "{text}{err}");
+        (text, denoised_frames(&out))
+    };
+    let (text, with) = run("with", &[]);
+    assert!(text.contains("motion:  motion_NNNN.exr, rae convention"), "{text}");
+    let (text, without) = run("without", &["--no-motion"]);
+    assert!(text.contains("motion:  not used (--no-motion)"), "{text}");
+    let (text, optix) = run("optix", &["--motion-convention", "optix"]);
+    assert!(text.contains("OptiX convention (negated)"), "{text}");
+    assert_eq!(with[0], without[0], "frame 0 has no history to reproject");
+    assert_ne!(with[2], without[2], "reprojected history changes later frames");
+    assert_ne!(with[2], optix[2], "the other convention is the other field");
+    // Motion in some frames only.
+    std::fs::remove_file(seq.join("motion_0001.exr")).unwrap();
+    let (ok, _, err) = denoise(&seq, &["-o", tmp.path().join("gap").to_str().unwrap()]);
+    assert!(!ok && err.contains("motion") && err.contains("frame 1"), "{err}");
+    // Motion of another size.
+    write_rg(&seq.join("motion_0001.exr"), W / 2, H, &motion[..W * H]);
+    let (ok, _, err) = denoise(&seq, &["-o", tmp.path().join("size").to_str().unwrap()]);
+    assert!(!ok && err.contains("motion_0001.exr"), "{err}");
+}
+
 #[test]
 fn per_buffer_sequence_is_denoised_with_error_report() {
     let tmp = tempfile::tempdir().unwrap();

@@ -151,6 +151,9 @@ pub enum Error {
         /// What is wrong.
         reason: String,
     },
+    /// Motion given to a denoiser built without it, or a motion buffer that does not fit.
+    #[error("motion: {0}")]
+    Motion(String),
     /// The GPU failed while running or reading back a frame.
     #[error("GPU: {0}")]
     Gpu(String),

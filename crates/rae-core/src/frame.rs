@@ -22,6 +22,10 @@
 use crate::error::{Error, Result};
 use crate::model::InputBuffer;
 
+/// Motion beyond this many times the frame's larger side is invalid: that pixel keeps no history
+/// (weights-tool's `warp.ABSURD`).
+pub const MOTION_ABSURD: f32 = 4.0;
+
 /// A frame size written `WxH` (`1920x1080`), as the command lines (rae-cli, rae-trace) take
 /// it: both whole numbers, both positive.
 pub fn parse_size(text: &str) -> Result<(u32, u32)> {
@@ -49,6 +53,12 @@ pub struct FrameInputs<'a> {
     pub depth: Option<&'a [f32]>,
     /// First-hit roughness, one value per pixel.
     pub roughness: Option<&'a [f32]>,
+    /// Motion, two values per pixel: where the pixel's surface point was in the previous frame
+    /// minus where it is now, in pixels, x right, y down. Used by a [`crate::Denoiser`] built
+    /// with [`crate::Options::motion`] to reproject its hidden state; `None` leaves the state as
+    /// it is. NaN, infinite or absurd motion (beyond 4 x the frame's larger side) drops the
+    /// pixel's history.
+    pub motion: Option<&'a [f32]>,
 }
 
 impl<'a> FrameInputs<'a> {
@@ -71,6 +81,12 @@ impl<'a> FrameInputs<'a> {
             let expected = width as usize * height as usize * b.channels();
             if data.len() != expected {
                 return Err(Error::InputSize { buffer: b.name(), found: data.len(), expected, width, height, channels: b.channels() });
+            }
+        }
+        if let Some(m) = self.motion {
+            let expected = width as usize * height as usize * 2;
+            if m.len() != expected {
+                return Err(Error::InputSize { buffer: "motion", found: m.len(), expected, width, height, channels: 2 });
             }
         }
         Ok(())

@@ -94,7 +94,14 @@ impl Golden {
     pub fn inputs(&self, i: usize) -> FrameInputs<'_> {
         let f = &self.frames[i];
         let get = |k: &str| f.get(k).map(|v| v.as_slice());
-        FrameInputs { color: &f["color"], albedo: get("albedo"), normal: get("normal"), depth: get("depth"), roughness: get("roughness") }
+        FrameInputs {
+            color: &f["color"],
+            albedo: get("albedo"),
+            normal: get("normal"),
+            depth: get("depth"),
+            roughness: get("roughness"),
+            motion: get("motion"),
+        }
     }
 
     /// PyTorch's output for frame `i`.

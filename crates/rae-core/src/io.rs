@@ -43,13 +43,18 @@ impl std::fmt::Display for Layout {
     }
 }
 
-/// A buffer a sequence may carry: a network input or the reference.
+/// A buffer a sequence may carry: a network input, motion, or the reference.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub enum Slot {
     /// A renderer buffer.
     Input(InputBuffer),
     /// The clean reference (never fed to the network).
     Reference,
+    /// Motion vectors, two values per pixel, in rae's convention once read
+    /// ([`FrameInputs::motion`]): `motion_NNNN.exr` (R, G: rae's convention) or a multi-layer
+    /// EXR's `motion` layer (likewise) or Blender's `Vector` pass (X, Y with y up: converted to
+    /// (X, -Y)).
+    Motion,
 }
 
 impl From<InputBuffer> for Slot {
@@ -63,18 +68,26 @@ impl Slot {
     pub fn input(self) -> Option<InputBuffer> {
         match self {
             Slot::Input(b) => Some(b),
-            Slot::Reference => None,
+            Slot::Reference | Slot::Motion => None,
         }
     }
 
     /// Values per pixel.
     pub fn channels(self) -> usize {
-        self.input().map_or(3, |b| b.channels())
+        match self {
+            Slot::Input(b) => b.channels(),
+            Slot::Reference => 3,
+            Slot::Motion => 2,
+        }
     }
 
     /// rae's name.
     pub fn name(self) -> &'static str {
-        self.input().map_or("reference", |b| b.name())
+        match self {
+            Slot::Input(b) => b.name(),
+            Slot::Reference => "reference",
+            Slot::Motion => "motion",
+        }
     }
 
     fn from_name(name: &str) -> Option<Slot> {
@@ -86,6 +99,7 @@ impl Slot {
             "depth" | "denoising depth" => Some(InputBuffer::Depth.into()),
             "roughness" => Some(InputBuffer::Roughness.into()),
             "reference" | "clean" => Some(Slot::Reference),
+            "motion" | "vector" => Some(Slot::Motion),
             _ => None,
         }
     }
@@ -97,6 +111,27 @@ enum FrameFiles {
     PerBuffer(BTreeMap<Slot, PathBuf>),
     MultiLayer(PathBuf),
     Mosaic(PathBuf),
+}
+
+/// Where a sequence's motion comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MotionSource {
+    /// `motion_NNNN.exr` (R, G), read as written.
+    Files,
+    /// A multi-layer EXR's `motion` layer, read as written.
+    Layer,
+    /// Blender's `Vector` pass, converted to rae's convention (X, -Y) whatever the caller says.
+    BlenderVector,
+}
+
+impl std::fmt::Display for MotionSource {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            MotionSource::Files => "motion_NNNN.exr",
+            MotionSource::Layer => "the motion layer",
+            MotionSource::BlenderVector => "the Vector pass, converted from Blender's convention (X, -Y)",
+        })
+    }
 }
 
 /// A validated sequence: every frame has the same buffers and size, numbers are contiguous.
@@ -138,6 +173,7 @@ impl LoadedFrame {
             normal: get(InputBuffer::Normal),
             depth: get(InputBuffer::Depth),
             roughness: get(InputBuffer::Roughness),
+            motion: self.buffers.get(&Slot::Motion).map(|v| v.as_slice()),
         }
     }
 
@@ -356,6 +392,28 @@ impl Sequence {
         self.slots.contains(&Slot::Reference)
     }
 
+    /// Whether the frames carry motion.
+    pub fn has_motion(&self) -> bool {
+        self.slots.contains(&Slot::Motion)
+    }
+
+    /// Where the frames' motion comes from, if they have any.
+    pub fn motion_source(&self) -> Option<MotionSource> {
+        if !self.has_motion() {
+            return None;
+        }
+        Some(match (&self.layout, self.files.first()) {
+            (Layout::MultiLayer, Some(FrameFiles::MultiLayer(p))) => {
+                if exr_size_and_groups(p).is_ok_and(|(_, g)| g.iter().any(|(name, _)| is_blender_vector(name))) {
+                    MotionSource::BlenderVector
+                } else {
+                    MotionSource::Layer
+                }
+            }
+            _ => MotionSource::Files,
+        })
+    }
+
     /// Input buffers present.
     pub fn inputs(&self) -> Vec<InputBuffer> {
         self.slots.iter().filter_map(|s| s.input()).collect()
@@ -388,6 +446,10 @@ impl Sequence {
         }
         let mut nonfinite = Vec::new();
         for (slot, data) in &buffers {
+            if *slot == Slot::Motion {
+                // NaN or infinite motion drops that pixel's history (FrameInputs::motion).
+                continue;
+            }
             let depth = *slot == Slot::from(InputBuffer::Depth);
             let bad = data.iter().filter(|v| !(v.is_finite() || (depth && **v == f32::INFINITY))).count();
             if bad > 0 {
@@ -419,6 +481,18 @@ fn pick_channels(path: &Path, slot: Slot, chans: &[(String, Vec<f32>)], n: usize
                         slot.name(),
                         chans.iter().map(|c| &c.0).collect::<Vec<_>>()
                     ),
+                )
+            })?
+    } else if slot.channels() == 2 {
+        ["R", "G"]
+            .iter()
+            .map(|c| find(c))
+            .collect::<Option<Vec<_>>>()
+            .or_else(|| ["X", "Y"].iter().map(|c| find(c)).collect::<Option<Vec<_>>>())
+            .ok_or_else(|| {
+                input_err(
+                    path,
+                    format!("`motion` needs R, G (or X, Y) channels; found {:?}", chans.iter().map(|c| &c.0).collect::<Vec<_>>()),
                 )
             })?
     } else {
@@ -471,13 +545,23 @@ fn read_buffer_file(path: &Path, slot: Slot, w: usize, h: usize) -> Result<Vec<f
     })
 }
 
+/// Whether a multi-layer EXR's motion group is Blender's `Vector` pass (`ViewLayer.Vector`).
+fn is_blender_vector(group: &str) -> bool {
+    group.rsplit('.').next().is_some_and(|last| last.eq_ignore_ascii_case("vector"))
+}
+
 fn read_multilayer(path: &Path, w: usize, h: usize) -> Result<Vec<(Slot, Vec<f32>)>> {
     let groups = read_exr_groups(path)?;
     groups
         .iter()
         .map(|(g, chans)| {
             let slot = slot_of_group(g).unwrap_or(InputBuffer::Color.into());
-            Ok((slot, pick_channels(path, slot, chans, w * h)?))
+            let mut data = pick_channels(path, slot, chans, w * h)?;
+            if slot == Slot::Motion && is_blender_vector(g) {
+                // Blender's raster y points up: rae's motion is (X, -Y).
+                data.iter_mut().skip(1).step_by(2).for_each(|y| *y = -*y);
+            }
+            Ok((slot, data))
         })
         .collect()
 }

@@ -85,6 +85,10 @@ enum Command {
         /// Image size, WxH.
         #[arg(long, default_value = "256x256", value_parser = parse_size)]
         size: (u32, u32),
+        /// Do not pass the tracer's motion to the denoiser (its hidden state is then not
+        /// reprojected).
+        #[arg(long)]
+        no_motion: bool,
         /// Output folder (created).
         out: PathBuf,
     },
@@ -126,14 +130,16 @@ fn render(choice: &SceneChoice, frames: u32, settings: Settings, precision: outp
     Ok(())
 }
 
-fn live(choice: &SceneChoice, weights: &Path, frames: u32, size: (u32, u32), out: &Path) -> Result<()> {
+fn live(choice: &SceneChoice, weights: &Path, frames: u32, size: (u32, u32), motion: bool, out: &Path) -> Result<()> {
     let (scene, name) = choice.build()?;
     create_dir(out)?;
     // Embedding rae-core: load the weights, open a GPU, build one Denoiser for the frame size.
     let weights = rae_core::Weights::load(weights)?;
     let gpu = rae_core::Gpu::new()?;
     let (w, h) = size;
-    let mut denoiser = rae_core::Denoiser::new(&gpu.device, &gpu.queue, &weights, w, h)?;
+    // With motion, the denoiser reprojects its hidden state with the tracer's motion vectors.
+    let options = rae_core::Options { motion, ..Default::default() };
+    let mut denoiser = rae_core::Denoiser::with_options(&gpu.device, &gpu.queue, &weights, w, h, options)?;
     println!("{name} at {w}x{h}, denoising on {}", gpu.describe());
     println!("{:>5} {:>10} {:>12}", "frame", "trace ms", "denoise ms");
     let settings = Settings { width: w, height: h, spp: 1, ref_spp: 0, seed: 0, max_depth: 8 };
@@ -150,6 +156,7 @@ fn live(choice: &SceneChoice, weights: &Path, frames: u32, size: (u32, u32), out
             normal: Some(&fb.normal),
             depth: Some(&fb.depth),
             roughness: Some(&fb.roughness),
+            motion: motion.then_some(fb.motion.as_slice()),
         };
         // On a CPU driver a first frame into an empty shader cache compiles on one core; a
         // second device compiles from the other end if it is slow to come.
@@ -159,7 +166,7 @@ fn live(choice: &SceneChoice, weights: &Path, frames: u32, size: (u32, u32), out
                     "the first frame is slow to come: compiling kernels on a second device too (lavapipe compiles at first use, into Mesa's shader cache)"
                 )
             };
-            helper = rae_core::gpu::CompileHelper::start(&gpu, &weights, w, h, rae_core::Options::default(), note);
+            helper = rae_core::gpu::CompileHelper::start(&gpu, &weights, w, h, options, note);
         }
         let denoised = denoiser.denoise(&frame)?;
         if let Some(h) = &mut helper {
@@ -185,6 +192,6 @@ fn main() -> Result<()> {
             let precision = if half { output::Precision::F16 } else { output::Precision::F32 };
             render(&scene, frames, Settings { width, height, spp, ref_spp, seed, max_depth }, precision, &out)
         }
-        Command::Live { scene, weights, frames, size, out } => live(&scene, &weights, frames, size, &out),
+        Command::Live { scene, weights, frames, size, no_motion, out } => live(&scene, &weights, frames, size, !no_motion, &out),
     }
 }

@@ -32,7 +32,7 @@ pub(super) fn texture(
 
 /// The activation textures of a [`Denoiser`]: the input, the hidden-state pairs, the
 /// temporaries shared by lifetime and the pooled copies, with the views a conv binds.
-struct Activations {
+pub(super) struct Activations {
     input_texture: wgpu::Texture,
     input_view: wgpu::TextureView,
     /// `[block][0|1]`: the ping-pong pair of each recurrent block.
@@ -78,7 +78,7 @@ impl Activations {
     }
 
     /// The view of `v` on a frame of parity `parity`.
-    fn view(&self, v: Value, parity: usize) -> &wgpu::TextureView {
+    pub(super) fn view(&self, v: Value, parity: usize) -> &wgpu::TextureView {
         match v {
             Value::Input => &self.input_view,
             Value::HiddenPrev(k) => &self.hidden[k][parity],
@@ -98,7 +98,7 @@ impl Activations {
     }
 
     /// The pooled value node `i`'s output is max-pooled into, if any.
-    fn pooled_by(&self, graph: &Graph, i: usize) -> Option<&wgpu::TextureView> {
+    pub(super) fn pooled_by(&self, graph: &Graph, i: usize) -> Option<&wgpu::TextureView> {
         graph.pools.iter().position(|p| p.after == i).map(|k| &self.pooled[k])
     }
 }
@@ -295,7 +295,7 @@ impl Denoiser {
         height: u32,
         options: Options,
     ) -> Result<Self> {
-        let Options { precision, tiles, weights: chosen_memory, sources, staging } = options;
+        let Options { precision, tiles, weights: chosen_memory, sources, staging, motion } = options;
         let device_type = device.adapter_info().device_type;
         let arch = weights.arch.clone();
         let (pwidth, pheight) = padded_size(device, &arch, width, height)?;
@@ -318,6 +318,7 @@ impl Denoiser {
         }
         let convs = ConvPlan::with_choices(device, queue, &mut kernels, &specs, &choices.tiles, &choices.sources, &choices.memories)?;
         debug_assert_eq!(acts.bytes, activation_bytes(&graph, pwidth, pheight, precision));
+        let motion = motion.then(|| Motion::new(device, &mut kernels, &graph, &acts, &convs, (width, height, pwidth, pheight)));
         let conv_outputs: [Vec<wgpu::Texture>; 2] =
             std::array::from_fn(|parity| graph.nodes.iter().map(|n| acts.written(n.out, parity)).collect());
         let Value::Temp(out_temp) = graph.output else { unreachable!("the output is a temporary") };
@@ -343,7 +344,8 @@ impl Denoiser {
             output_params: create_init(device, "output params", bytemuck::bytes_of(&output_params), wgpu::BufferUsages::UNIFORM),
             dummy: create_init(device, "absent buffer", &[0u8; 16], wgpu::BufferUsages::STORAGE),
             stats: create_init(device, "frame stats", &[0u8; 16], stats_usage),
-            bytes: acts.bytes + convs.bytes(),
+            bytes: acts.bytes + convs.bytes() + motion.as_ref().map_or(0, |m| m.bytes),
+            motion,
             input_texture: acts.input_texture,
             output_view,
             textures: acts.textures,

@@ -14,6 +14,8 @@ pub(super) struct HostIo {
     inputs: Vec<(InputBuffer, wgpu::Buffer)>,
     /// Offset of each input in `upload`, in the order of `inputs`.
     offsets: Vec<u64>,
+    /// The motion buffer and its offset in `upload`, for a denoiser built with motion.
+    motion: Option<(wgpu::Buffer, u64)>,
     upload: wgpu::Buffer,
     /// Whether `upload` is mapped now (wgpu has no query for it).
     upload_mapped: std::sync::atomic::AtomicBool,
@@ -24,7 +26,11 @@ pub(super) struct HostIo {
 
 impl HostIo {
     pub(super) fn bytes(&self) -> u64 {
-        self.inputs.iter().map(|(_, b)| b.size()).sum::<u64>() + self.upload.size() + self.output.size() + self.readback.size()
+        self.inputs.iter().map(|(_, b)| b.size()).sum::<u64>()
+            + self.motion.as_ref().map_or(0, |(b, _)| b.size())
+            + self.upload.size()
+            + self.output.size()
+            + self.readback.size()
     }
 }
 
@@ -46,8 +52,7 @@ impl Denoiser {
 
     /// Denoise one frame from host slices into `out` (`width * height * 3`), with timings.
     pub fn denoise_into(&mut self, frame: &FrameInputs, out: &mut [f32]) -> Result<FrameTimings> {
-        let needed = self.arch.required_buffers();
-        frame.validate(&needed, self.width, self.height)?;
+        self.validate(frame)?;
         let n = self.width as usize * self.height as usize * 3;
         if out.len() != n {
             return Err(Error::InputSize {
@@ -66,7 +71,7 @@ impl Denoiser {
         let host = self.host.take().expect("made above");
         let mut encoder = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("rae frame") });
         let uploaded = self.upload(&host, frame, &mut encoder);
-        let recorded = uploaded.and_then(|_| self.record(&mut encoder, &host.binding));
+        let recorded = uploaded.and_then(|_| self.record_with(&mut encoder, &host.binding, None, frame.motion.is_some()));
         encoder.copy_buffer_to_buffer(&host.output, 0, &host.readback, 0, host.output.size());
         let t1 = Instant::now();
         self.queue.submit(Some(encoder.finish()));
@@ -100,11 +105,29 @@ impl Denoiser {
                 view.slice(off as usize..off as usize + src.len()).copy_from_slice(src);
                 debug_assert_eq!(src.len() as u64, buf.size());
             }
+            if let (Some((buf, off)), Some(m)) = (&host.motion, frame.motion) {
+                let src: &[u8] = bytemuck::cast_slice(m);
+                view.slice(*off as usize..*off as usize + src.len()).copy_from_slice(src);
+                debug_assert_eq!(src.len() as u64, buf.size());
+            }
         }
         host.upload.unmap();
         host.upload_mapped.store(false, Ordering::Relaxed);
         for ((_, buf), &off) in host.inputs.iter().zip(&host.offsets) {
             encoder.copy_buffer_to_buffer(&host.upload, off, buf, 0, buf.size());
+        }
+        if let (Some((buf, off)), Some(_)) = (&host.motion, frame.motion) {
+            encoder.copy_buffer_to_buffer(&host.upload, *off, buf, 0, buf.size());
+        }
+        Ok(())
+    }
+
+    /// Check a host frame: the model's buffers present at the frame size, and motion only where
+    /// the denoiser was built for it.
+    fn validate(&self, frame: &FrameInputs) -> Result<()> {
+        frame.validate(&self.arch.required_buffers(), self.width, self.height)?;
+        if frame.motion.is_some() && self.motion.is_none() {
+            return Err(Error::Motion("the frame has motion, but the denoiser was built without it (Options::motion)".into()));
         }
         Ok(())
     }
@@ -116,8 +139,7 @@ impl Denoiser {
         if !self.device.features().contains(wgpu::Features::TIMESTAMP_QUERY_INSIDE_PASSES) {
             return Err(Error::Gpu("the device has no TIMESTAMP_QUERY_INSIDE_PASSES: no per-stage times".into()));
         }
-        let needed = self.arch.required_buffers();
-        frame.validate(&needed, self.width, self.height)?;
+        self.validate(frame)?;
         if self.host.is_none() {
             self.host = Some(self.make_host_io()?);
         }
@@ -143,7 +165,7 @@ impl Denoiser {
         let host = self.host.take().expect("made above");
         let mut encoder = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("rae frame (profiled)") });
         let uploaded = self.upload(&host, frame, &mut encoder);
-        let recorded = uploaded.and_then(|_| self.record_with(&mut encoder, &host.binding, Some(&prof.queries)));
+        let recorded = uploaded.and_then(|_| self.record_with(&mut encoder, &host.binding, Some(&prof.queries), frame.motion.is_some()));
         encoder.resolve_query_set(&prof.queries, 0..count, &prof.resolved, 0);
         encoder.copy_buffer_to_buffer(&prof.resolved, 0, &prof.readback, 0, count as u64 * 8);
         encoder.copy_buffer_to_buffer(&host.output, 0, &host.readback, 0, host.output.size());
@@ -181,6 +203,11 @@ impl Denoiser {
             offsets.push(staged);
             staged += b.size().next_multiple_of(wgpu::COPY_BUFFER_ALIGNMENT);
         }
+        let motion = self.motion.as_ref().map(|_| {
+            let at = staged;
+            staged += pixels * 8;
+            (buffer("motion", pixels * 8, wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST), at)
+        });
         let upload = self.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("upload staging"),
             size: staged,
@@ -196,9 +223,10 @@ impl Denoiser {
             normal: get(InputBuffer::Normal),
             depth: get(InputBuffer::Depth),
             roughness: get(InputBuffer::Roughness),
+            motion: motion.as_ref().map(|(b, _)| b),
             output: &output,
         })?;
-        Ok(HostIo { inputs, offsets, upload, upload_mapped: std::sync::atomic::AtomicBool::new(true), output, readback, binding })
+        Ok(HostIo { inputs, offsets, motion, upload, upload_mapped: std::sync::atomic::AtomicBool::new(true), output, readback, binding })
     }
 
     /// The packed network input of the last frame, channel-major (`channels x ph x pw`), for

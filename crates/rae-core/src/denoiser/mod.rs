@@ -41,6 +41,7 @@
 
 mod build;
 mod host;
+mod motion;
 mod record;
 mod tuning;
 
@@ -49,16 +50,17 @@ use std::time::Instant;
 
 use crate::error::{Error, Result};
 use crate::frame::{FrameInputs, FrameTimings};
-use crate::graph::{Graph, Read, Value};
+use crate::graph::{Graph, Read, Source, Value};
 use crate::kernels::{
-    ConvPlan, ConvSpec, Kernels, MMA_WORKGROUP_BYTES, Method, OutputParams, Precision, PrepLayout, PrepParams, SourceAccess, Tile,
-    TileList, WORKGROUP, WeightMemory, blocks, per_conv,
+    ConvPlan, ConvSpec, Kernels, MMA_WORKGROUP_BYTES, Method, MotionKernels, MotionParams, OutputParams, Precision, PrepLayout, PrepParams,
+    SourceAccess, Tile, TileList, WORKGROUP, WeightMemory, blocks, per_conv,
 };
 use crate::model::{Arch, InputBuffer, Transfer};
 use crate::weights::Weights;
 
 pub use build::*;
 pub use host::*;
+use motion::Motion;
 pub use record::*;
 pub use tuning::*;
 
@@ -85,6 +87,11 @@ pub struct Options {
     /// costs less than a texel store (lavapipe: the 256x256 frame in 0.92-0.95x the time,
     /// `docs/perf/lavapipe-2026-12-02-s28.log`).
     pub staging: Option<bool>,
+    /// Whether frames may carry motion ([`FrameInputs::motion`], [`GpuFrameIo::motion`]) to
+    /// reproject the hidden state with (a pyramid of motion textures, 16 bytes a pixel at full
+    /// resolution and a third more below; [`Denoiser::gpu_bytes`] counts it). A frame without
+    /// motion runs as without this.
+    pub motion: bool,
 }
 
 /// Runs one model at one frame size, frame after frame, keeping the hidden state on the GPU.
@@ -124,6 +131,8 @@ pub struct Denoiser {
     bytes: u64,
     host: Option<HostIo>,
     profiler: Option<Profiler>,
+    /// The reprojection's resources ([`Options::motion`]).
+    motion: Option<Motion>,
     /// Each conv's tuning finalists, fastest first (empty where not tuned).
     tuning: Vec<Vec<Finalist>>,
     parity: usize,

@@ -17,6 +17,10 @@ pub struct GpuFrameIo<'a> {
     pub depth: Option<&'a wgpu::Buffer>,
     /// Roughness.
     pub roughness: Option<&'a wgpu::Buffer>,
+    /// Motion, two f32 per pixel in rae's convention ([`FrameInputs::motion`]): only for a
+    /// denoiser built with [`Options::motion`]; frames recorded with this binding reproject the
+    /// hidden state with it.
+    pub motion: Option<&'a wgpu::Buffer>,
     /// Denoised radiance, RGB (written).
     pub output: &'a wgpu::Buffer,
 }
@@ -39,6 +43,8 @@ pub struct IoBinding {
     owner: u64,
     prep: wgpu::BindGroup,
     output: wgpu::BindGroup,
+    /// motion.wgsl's `motion_in` over the caller's motion buffer, if it has one.
+    motion: Option<wgpu::BindGroup>,
 }
 
 impl Denoiser {
@@ -62,6 +68,23 @@ impl Denoiser {
             check(b.name(), buf, b.channels() as u64)?;
         }
         check("output", io.output, 3)?;
+        let motion = match (io.motion, &self.motion) {
+            (None, _) => None,
+            (Some(_), None) => return Err(Error::Motion("the denoiser was built without motion (Options::motion)".into())),
+            (Some(buf), Some(m)) => {
+                check("motion", buf, 2)?;
+                let layout = &self.kernels.motion_kernels().expect("made with the denoiser's motion").in_layout;
+                Some(self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("motion in"),
+                    layout,
+                    entries: &[
+                        wgpu::BindGroupEntry { binding: 0, resource: m.params.as_entire_binding() },
+                        wgpu::BindGroupEntry { binding: 1, resource: buf.as_entire_binding() },
+                        wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::TextureView(&m.level0) },
+                    ],
+                }))
+            }
+        };
         let pick = |b: InputBuffer| if needed.contains(&b) { io.get(b).expect("checked") } else { &self.dummy };
         let prep = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("prep"),
@@ -94,28 +117,37 @@ impl Denoiser {
                 wgpu::BindGroupEntry { binding: 4, resource: self.stats.as_entire_binding() },
             ],
         });
-        Ok(IoBinding { owner: self.id, prep, output })
+        Ok(IoBinding { owner: self.id, prep, output, motion })
     }
 
     /// Record one frame into the caller's encoder: read the buffers bound in `io`, write its
-    /// output buffer. Frames must be submitted in the order they are recorded (the hidden state
-    /// advances at record time).
+    /// output buffer; with a motion buffer in `io`, reproject the hidden state with it first.
+    /// Frames must be submitted in the order they are recorded (the hidden state advances at
+    /// record time).
     pub fn record(&mut self, encoder: &mut wgpu::CommandEncoder, io: &IoBinding) -> Result<()> {
-        self.record_with(encoder, io, None)
+        let warp = io.motion.is_some();
+        self.record_with(encoder, io, None, warp)
     }
 
     /// [`Self::record`], writing a timestamp before the frame and after each stage into `queries`
-    /// (prep, every conv, output: [`Graph::nodes`]` + 3` queries).
+    /// (prep, every conv, output: [`Graph::nodes`]` + 3` queries), reprojecting the hidden state
+    /// with `io`'s motion where `warp` (the motion passes count with prep).
     pub(super) fn record_with(
         &mut self,
         encoder: &mut wgpu::CommandEncoder,
         io: &IoBinding,
         queries: Option<&wgpu::QuerySet>,
+        warp: bool,
     ) -> Result<()> {
         if io.owner != self.id {
             return Err(Error::GpuBuffer { buffer: "io", reason: "binding was made by another Denoiser".into() });
         }
         let (reset, parity) = (self.reset_pending, self.parity);
+        // A frame with history reprojects it where it has motion; a reset frame reads none.
+        let motion = match (&self.motion, &io.motion) {
+            (Some(m), Some(g)) if warp && !reset => Some((m, g)),
+            _ => None,
+        };
         encoder.clear_buffer(&self.stats, 0, None);
         let stamp = |pass: &mut wgpu::ComputePass, i: u32| {
             if let Some(q) = queries {
@@ -141,13 +173,17 @@ impl Denoiser {
                 pass.set_pipeline(&self.prep);
                 pass.set_bind_group(0, &io.prep, &[]);
                 pass.dispatch_workgroups(self.pwidth.div_ceil(WORKGROUP), self.pheight.div_ceil(WORKGROUP), 1);
+                if let Some((m, g)) = motion {
+                    m.record(&mut pass, self.kernels.motion_kernels().expect("made with the denoiser's motion"), g, parity);
+                }
                 stamp(&mut pass, 1);
             }
             let mut staged = None;
             while next < n {
                 let i = next;
                 next += 1;
-                self.convs.record(&mut pass, i, reset, &self.conv_groups[parity][i]);
+                let warped = motion.and_then(|(m, _)| m.conv_groups[parity][i].as_ref());
+                self.convs.record(&mut pass, i, reset, warped.unwrap_or(&self.conv_groups[parity][i]));
                 if self.convs.staged(i) {
                     staged = Some(i);
                     break;
@@ -211,6 +247,9 @@ impl Denoiser {
                     pass.dispatch_workgroups(1, 1, 1);
                 }
                 self.convs.record_compile(&mut pass, i, group);
+            }
+            if let (Some(m), Some(g)) = (&self.motion, &host.binding.motion) {
+                m.record(&mut pass, self.kernels.motion_kernels().expect("made with the denoiser's motion"), g, parity);
             }
             pass.set_pipeline(&self.prep);
             pass.set_bind_group(0, &host.binding.prep, &[]);

@@ -111,6 +111,86 @@ pub struct OutputParams {
     pub _pad: [u32; 3],
 }
 
+/// Uniform block of motion.wgsl.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+pub struct MotionParams {
+    /// Frame width.
+    pub width: u32,
+    /// Frame height.
+    pub height: u32,
+    /// The largest valid |motion| component, in pixels.
+    pub limit: f32,
+    /// Padding to 16 bytes.
+    pub _pad: u32,
+}
+
+/// The layouts and pipelines of motion.wgsl, the reprojection of the hidden state
+/// ([`Kernels::motion`]): made only for denoisers that take motion.
+pub struct MotionKernels {
+    /// Layout of `motion_in`: parameters, the frame's motion buffer, level 0.
+    pub in_layout: wgpu::BindGroupLayout,
+    /// Layout of `motion_down`: a level, the next.
+    pub down_layout: wgpu::BindGroupLayout,
+    /// Layout of `warp`: a level's motion, the previous state, the warped state.
+    pub warp_layout: wgpu::BindGroupLayout,
+    /// The frame's motion into level 0.
+    pub motion_in: wgpu::ComputePipeline,
+    /// Level k + 1 from level k.
+    pub motion_down: wgpu::ComputePipeline,
+    /// A block's previous state, reprojected.
+    pub warp: wgpu::ComputePipeline,
+}
+
+impl MotionKernels {
+    fn new(device: &wgpu::Device, precision: Precision) -> Self {
+        let compute = wgpu::ShaderStages::COMPUTE;
+        let entry = |binding, ty| wgpu::BindGroupLayoutEntry { binding, visibility: compute, ty, count: None };
+        let sampled = |dim| wgpu::BindingType::Texture {
+            sample_type: wgpu::TextureSampleType::Float { filterable: false },
+            view_dimension: dim,
+            multisampled: false,
+        };
+        let written =
+            |format, dim| wgpu::BindingType::StorageTexture { access: wgpu::StorageTextureAccess::WriteOnly, format, view_dimension: dim };
+        let layout = |label, entries: &[wgpu::BindGroupLayoutEntry]| {
+            device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some(label), entries })
+        };
+        let d2 = wgpu::TextureViewDimension::D2;
+        let f32x4 = wgpu::TextureFormat::Rgba32Float;
+        let in_layout = layout("motion in", &[uniform_entry(0), storage_entry(1, true), entry(2, written(f32x4, d2))]);
+        let down_layout = layout("motion down", &[entry(3, sampled(d2)), entry(4, written(f32x4, d2))]);
+        let array = wgpu::TextureViewDimension::D2Array;
+        let warp_layout = layout("warp", &[entry(5, sampled(d2)), entry(6, sampled(array)), entry(7, written(precision.format(), array))]);
+        let source = shader_source("motion").to_string();
+        let source = if precision == Precision::F16 { rewrite(source, "motion.wgsl", &WARP_F16) } else { source };
+        let module = shader_module(device, "motion", source);
+        let pipeline = |layout: &wgpu::BindGroupLayout, entry: &str| {
+            let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: None,
+                bind_group_layouts: &[Some(layout)],
+                immediate_size: 0,
+            });
+            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(entry),
+                layout: Some(&pipeline_layout),
+                module: &module,
+                entry_point: Some(entry),
+                compilation_options: Default::default(),
+                cache: None,
+            })
+        };
+        MotionKernels {
+            motion_in: pipeline(&in_layout, "motion_in"),
+            motion_down: pipeline(&down_layout, "motion_down"),
+            warp: pipeline(&warp_layout, "warp"),
+            in_layout,
+            down_layout,
+            warp_layout,
+        }
+    }
+}
+
 fn uniform_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
@@ -319,6 +399,8 @@ pub struct Kernels {
     /// The device has subgroup operations (else [`WITHOUT_SUBGROUPS`] rewrites conv3x3.wgsl).
     subgroups: bool,
     conv: HashMap<ConvVariant, wgpu::ComputePipeline>,
+    /// motion.wgsl's pipelines, made on first use ([`Kernels::motion`]).
+    motion: Option<MotionKernels>,
     precision: Precision,
     pub(super) memory: WeightMemory,
     /// The access of plans that do not choose per conv ([`ConvPlan::new`]).
@@ -438,6 +520,7 @@ impl Kernels {
             pool,
             output,
             conv: HashMap::new(),
+            motion: None,
             precision,
             memory,
             sources,
@@ -520,6 +603,17 @@ impl Kernels {
     /// conv3x3_mma.wgsl as this device, precision and source access run it.
     fn mma_text(&self, access: SourceAccess) -> String {
         self.conv_kernel_text("conv3x3_mma.wgsl", mma_source(self.matrix_units), access)
+    }
+
+    /// motion.wgsl's layouts and pipelines, if [`Kernels::motion`] has made them.
+    pub fn motion_kernels(&self) -> Option<&MotionKernels> {
+        self.motion.as_ref()
+    }
+
+    /// motion.wgsl's layouts and pipelines, made on the first call.
+    pub fn motion(&mut self, device: &wgpu::Device) -> &MotionKernels {
+        let precision = self.precision;
+        self.motion.get_or_insert_with(|| MotionKernels::new(device, precision))
     }
 
     /// The input-preparation pipeline for a model whose input is packed as `layout` says

@@ -19,6 +19,7 @@ pub const SHADERS: &[(&str, &str)] = &[
     ("prep", include_str!("../../../../shaders/prep.wgsl")),
     ("output", include_str!("../../../../shaders/output.wgsl")),
     ("pool", include_str!("../../../../shaders/pool.wgsl")),
+    ("motion", include_str!("../../../../shaders/motion.wgsl")),
 ];
 
 /// The weight declaration of conv3x3.wgsl (uniform chunks).
@@ -197,3 +198,8 @@ pub fn conv_module_source(name: &str) -> String {
     let src = shader_source(name);
     if ["conv3x3", "conv3x3_mma"].contains(&name) { format!("{src}\n{}", shader_source("conv_common")) } else { src.to_string() }
 }
+
+/// motion.wgsl's warped-state declaration as f16 activations need it (its motion textures stay
+/// rgba32float: a pixel's motion needs f32's precision).
+pub const WARP_F16: [(&str, &str); 1] =
+    [("var warped: texture_storage_2d_array<rgba32float, write>;", "var warped: texture_storage_2d_array<rgba16float, write>;")];
