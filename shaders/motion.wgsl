@@ -64,15 +64,9 @@ fn motion_down(@builtin(global_invocation_id) gid: vec3<u32>) {
 // The activations' format (kernels::WARP_F16 rewrites it for f16 storage).
 @group(0) @binding(7) var warped: texture_storage_2d_array<rgba32float, write>;
 
-// Texel p of the previous state, zero outside the level.
-fn tap(p: vec2<i32>, layer: u32, size: vec2<i32>) -> vec4<f32> {
-    if any(p < vec2<i32>(0)) || any(p >= size) {
-        return vec4<f32>(0.0);
-    }
-    return textureLoad(previous, p, layer, 0);
-}
-
-// One texel per invocation, workgroup z = the state's channel block.
+// One texel per invocation, workgroup z = the state's channel block. A tap outside the level has
+// weight zero and loads the nearest texel inside: no test in front of a load, which a CPU
+// driver would run masked.
 @compute @workgroup_size(8, 8, 1)
 fn warp(@builtin(global_invocation_id) gid: vec3<u32>) {
     let size = vec2<i32>(textureDimensions(warped));
@@ -85,10 +79,18 @@ fn warp(@builtin(global_invocation_id) gid: vec3<u32>) {
     let s0 = floor(s);
     let f = s - s0;
     let p = vec2<i32>(s0);
-    let a = tap(p, gid.z, size);
-    let b = tap(p + vec2<i32>(1, 0), gid.z, size);
-    let c = tap(p + vec2<i32>(0, 1), gid.z, size);
-    let d = tap(p + vec2<i32>(1, 1), gid.z, size);
-    let v = a * ((1.0 - f.x) * (1.0 - f.y)) + b * (f.x * (1.0 - f.y)) + c * ((1.0 - f.x) * f.y) + d * (f.x * f.y);
-    textureStore(warped, here, gid.z, v * m.z);
+    let q = p + vec2<i32>(1);
+    let last = size - vec2<i32>(1);
+    // Per axis: the lower and upper tap's weight (zero outside the level) and where they load.
+    let lo_in = select(vec2<f32>(0.0), vec2<f32>(1.0), p >= vec2<i32>(0) & p <= last);
+    let hi_in = select(vec2<f32>(0.0), vec2<f32>(1.0), q >= vec2<i32>(0) & q <= last);
+    let lo = clamp(p, vec2<i32>(0), last);
+    let hi = clamp(q, vec2<i32>(0), last);
+    let wx = vec2<f32>((1.0 - f.x) * lo_in.x, f.x * hi_in.x);
+    let wy = vec2<f32>((1.0 - f.y) * lo_in.y, f.y * hi_in.y) * m.z;
+    let a = textureLoad(previous, lo, gid.z, 0);
+    let b = textureLoad(previous, vec2<i32>(hi.x, lo.y), gid.z, 0);
+    let c = textureLoad(previous, vec2<i32>(lo.x, hi.y), gid.z, 0);
+    let d = textureLoad(previous, hi, gid.z, 0);
+    textureStore(warped, here, gid.z, a * (wx.x * wy.x) + b * (wx.y * wy.x) + c * (wx.x * wy.y) + d * (wx.y * wy.y));
 }

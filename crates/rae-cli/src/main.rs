@@ -174,6 +174,10 @@ enum Command {
         /// drifts over seconds (a shared host) cannot tilt towards one combination.
         #[arg(long)]
         interleave: bool,
+        /// Frames with or without motion: `off`, `on` (a smooth pan, so every recurrent block's
+        /// state is reprojected: the cost of the warp), or both.
+        #[arg(long, value_delimiter = ',', default_value = "off")]
+        motion: Vec<String>,
     },
 }
 
@@ -249,12 +253,13 @@ fn bench(path: &Path, sizes: &[(u32, u32)], frames: usize, warmup: usize, layers
         if rae_core::kernels::matrix_units_supported(&gpu.device) { "yes" } else { "no (mma tiles emulated)" }
     );
     println!(
-        "{:>10} {:>9} {:>9} {:>7} {:>7} {:>6} {:>10} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>7} {:>9} {:>9} {:>8}",
+        "{:>10} {:>9} {:>12} {:>7} {:>7} {:>6} {:>6} {:>10} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>7} {:>9} {:>9} {:>8}",
         "size",
         "precision",
         "tile",
         "weights",
         "sources",
+        "motion",
         "build",
         "total ms",
         "upload",
@@ -271,27 +276,23 @@ fn bench(path: &Path, sizes: &[(u32, u32)], frames: usize, warmup: usize, layers
     for &(w, h) in sizes {
         let s = format!("{w}x{h}");
         let n = (w * h) as usize;
-        let (wave, one) = bench_buffers(w, h);
-        let frame = rae_core::FrameInputs {
-            color: &wave,
-            albedo: Some(&wave),
-            normal: Some(&wave),
-            depth: Some(&one),
-            roughness: Some(&one),
-            motion: None,
-        };
-        // The frames every combination's error is taken against: as many, in f32, direct tiles.
-        let reference = {
-            let options = Options { tiles: TileChoice::Fixed(reference_tile(&gpu.device)), ..Default::default() };
+        let (wave, one, pan) = bench_buffers(w, h);
+        // The frames every combination's error is taken against: as many, in f32, with the
+        // reference tile, with motion where the combination has it.
+        let mut references: Vec<(bool, Vec<f32>)> = Vec::new();
+        for &motion in &sweep.motions {
+            let options = Options { tiles: TileChoice::Fixed(reference_tile(&gpu.device)), motion, ..Default::default() };
             let mut d = Denoiser::with_options(&gpu.device, &gpu.queue, &weights, w, h, options)
                 .with_context(|| format!("building the reference denoiser at {s}"))?;
             let mut out = vec![0.0; 3 * n];
             for _ in 0..warmup + frames.max(1) {
-                d.denoise_into(&frame, &mut out)?;
+                d.denoise_into(&bench_frame(&wave, &one, &pan, motion), &mut out)?;
             }
-            out
-        };
+            references.push((motion, out));
+        }
         for options in sweep.combinations() {
+            let frame = bench_frame(&wave, &one, &pan, options.motion);
+            let reference = &references.iter().find(|(m, _)| *m == options.motion).expect("one per motion").1;
             let (precision, tiles) = (options.precision, options.tiles);
             let built = Instant::now();
             let mut d = match Denoiser::with_options(&gpu.device, &gpu.queue, &weights, w, h, options) {
@@ -299,11 +300,12 @@ fn bench(path: &Path, sizes: &[(u32, u32)], frames: usize, warmup: usize, layers
                 // A tile this combination cannot run (e.g. mma with uniform weights): say so and go on.
                 Err(e @ rae_core::Error::UnsupportedTile { .. }) => {
                     println!(
-                        "{s:>10} {:>9} {:>9} {:>7} {:>7} unsupported: {e}",
+                        "{s:>10} {:>9} {:>12} {:>7} {:>7} {:>6} unsupported: {e}",
                         precision.name(),
                         tiles.to_string(),
                         options.weights.map_or("auto", |m| m.name()),
-                        options.sources.map_or("auto", |m| m.name())
+                        options.sources.map_or("auto", |m| m.name()),
+                        if options.motion { "on" } else { "off" }
                     );
                     continue;
                 }
@@ -325,7 +327,7 @@ fn bench(path: &Path, sizes: &[(u32, u32)], frames: usize, warmup: usize, layers
             }
             let (pw, ph) = d.padded_size();
             let g = median(&mut gpu_t);
-            let err = relative_difference(&out, &reference);
+            let err = relative_difference(&out, reference);
             let timed = if resident { Some(resident_frames(&gpu, &mut d, &frame, frames.max(1), warmup)?) } else { None };
             let rate_ms = timed.map_or(g, |(r, _)| r);
             let gflops = flop_px * (pw * ph) as f64 / (rate_ms * 1e-3) / 1e9;
@@ -340,11 +342,12 @@ fn bench(path: &Path, sizes: &[(u32, u32)], frames: usize, warmup: usize, layers
             let share = peak.map_or("-".to_string(), |p| format!("{:.1}%", 100.0 * gflops / p));
             let (res, pipe) = timed.map_or(("-".to_string(), "-".to_string()), |(r, p)| (format!("{r:.2}"), format!("{p:.2}")));
             println!(
-                "{s:>10} {:>9} {:>9} {:>7} {:>7} {build_s:>6.1} {:>10.2} {:>9.2} {g:>9.2} {:>9.2} {res:>9} {pipe:>9} {gflops:>9.1} {share:>7} {mib:>9.1} {alloc:>9} {err:>8.1e}",
+                "{s:>10} {:>9} {:>12} {:>7} {:>7} {:>6} {build_s:>6.1} {:>10.2} {:>9.2} {g:>9.2} {:>9.2} {res:>9} {pipe:>9} {gflops:>9.1} {share:>7} {mib:>9.1} {alloc:>9} {err:>8.1e}",
                 precision.name(),
                 tiles.to_string(),
                 d.weights_name(),
                 d.sources_name(),
+                if options.motion { "on" } else { "off" },
                 median(&mut total),
                 median(&mut up),
                 median(&mut down)
@@ -377,21 +380,17 @@ struct Sweep {
     memories: Vec<Option<WeightMemory>>,
     sources: Vec<Option<SourceAccess>>,
     tiles: Vec<TileChoice>,
+    motions: Vec<bool>,
 }
 
 impl Sweep {
     /// The denoiser options of every combination, in the table's order.
     fn combinations(&self) -> impl Iterator<Item = Options> + '_ {
-        self.precisions.iter().flat_map(move |&p| {
-            self.memories.iter().flat_map(move |&weights| {
-                self.sources.iter().flat_map(move |&sources| {
-                    self.tiles.iter().map(move |&tiles| Options {
-                        precision: p.into(),
-                        tiles,
-                        weights,
-                        sources,
-                        staging: None,
-                        motion: false,
+        self.motions.iter().flat_map(move |&motion| {
+            self.precisions.iter().flat_map(move |&p| {
+                self.memories.iter().flat_map(move |&weights| {
+                    self.sources.iter().flat_map(move |&sources| {
+                        self.tiles.iter().map(move |&tiles| Options { precision: p.into(), tiles, weights, sources, staging: None, motion })
                     })
                 })
             })
@@ -400,12 +399,26 @@ impl Sweep {
 }
 
 /// Deterministic, smooth-but-noisy host buffers of a `w` x `h` frame (color, then the one-channel
-/// depth and roughness): timing does not depend on values.
-fn bench_buffers(w: u32, h: u32) -> (Vec<f32>, Vec<f32>) {
+/// depth and roughness, then motion: a pan of (1.5, -0.75) pixels): timing does not depend on
+/// values.
+fn bench_buffers(w: u32, h: u32) -> (Vec<f32>, Vec<f32>, Vec<f32>) {
     let n = (w * h) as usize;
     let wave: Vec<f32> = (0..3 * n).map(|i| 0.5 + 0.5 * ((i as f32) * 0.37).sin()).collect();
     let one = wave[..n].to_vec();
-    (wave, one)
+    let pan = [1.5f32, -0.75].repeat(n);
+    (wave, one, pan)
+}
+
+/// The frame `bench` times, with the pan as its motion where `motion`.
+fn bench_frame<'a>(wave: &'a [f32], one: &'a [f32], pan: &'a [f32], motion: bool) -> rae_core::FrameInputs<'a> {
+    rae_core::FrameInputs {
+        color: wave,
+        albedo: Some(wave),
+        normal: Some(wave),
+        depth: Some(one),
+        roughness: Some(one),
+        motion: motion.then_some(pan),
+    }
 }
 
 /// `bench --interleave`: every combination of precision, weight memory and tile built at once
@@ -425,20 +438,12 @@ fn bench_interleaved(path: &Path, sizes: &[(u32, u32)], rounds: usize, warmup: u
         "ms: a frame from host slices to host slices (the `total` of bench); vs first: median over rounds of the ratio to the first combination in the same round"
     );
     println!(
-        "{:>10} {:>9} {:>12} {:>7} {:>7} {:>10} {:>10} {:>9}",
-        "size", "precision", "tile", "weights", "sources", "median ms", "fastest", "vs first"
+        "{:>10} {:>9} {:>12} {:>7} {:>7} {:>6} {:>10} {:>10} {:>9}",
+        "size", "precision", "tile", "weights", "sources", "motion", "median ms", "fastest", "vs first"
     );
     for &(w, h) in sizes {
         let s = format!("{w}x{h}");
-        let (wave, one) = bench_buffers(w, h);
-        let frame = rae_core::FrameInputs {
-            color: &wave,
-            albedo: Some(&wave),
-            normal: Some(&wave),
-            depth: Some(&one),
-            roughness: Some(&one),
-            motion: None,
-        };
+        let (wave, one, pan) = bench_buffers(w, h);
         let mut out = vec![0.0; wave.len()];
         // Build (and warm up) every combination before timing any.
         let mut runs = Vec::new();
@@ -447,27 +452,28 @@ fn bench_interleaved(path: &Path, sizes: &[(u32, u32)], rounds: usize, warmup: u
             let mut d = Denoiser::with_options(&gpu.device, &gpu.queue, &weights, w, h, options)
                 .with_context(|| format!("building the {} denoiser at {s}", precision.name()))?;
             for _ in 0..warmup {
-                d.denoise_into(&frame, &mut out)?;
+                d.denoise_into(&bench_frame(&wave, &one, &pan, options.motion), &mut out)?;
             }
-            runs.push((precision, tiles, d, Vec::with_capacity(rounds)));
+            runs.push((precision, tiles, options.motion, d, Vec::with_capacity(rounds)));
         }
         for _ in 0..rounds {
-            for (_, _, d, ms) in runs.iter_mut() {
+            for (_, _, motion, d, ms) in runs.iter_mut() {
                 let t = Instant::now();
-                d.denoise_into(&frame, &mut out)?;
+                d.denoise_into(&bench_frame(&wave, &one, &pan, *motion), &mut out)?;
                 ms.push(t.elapsed().as_secs_f64() * 1e3);
             }
         }
-        let first = runs[0].3.clone();
-        for (precision, tiles, d, ms) in runs.iter_mut() {
+        let first = runs[0].4.clone();
+        for (precision, tiles, motion, d, ms) in runs.iter_mut() {
             let mut ratio: Vec<f64> = ms.iter().zip(&first).map(|(a, b)| a / b).collect();
             let fastest = ms.iter().copied().fold(f64::INFINITY, f64::min);
             println!(
-                "{s:>10} {:>9} {:>12} {:>7} {:>7} {:>10.2} {fastest:>10.2} {:>9.3}",
+                "{s:>10} {:>9} {:>12} {:>7} {:>7} {:>6} {:>10.2} {fastest:>10.2} {:>9.3}",
                 precision.name(),
                 tiles.to_string(),
                 d.weights_name(),
                 d.sources_name(),
+                if *motion { "on" } else { "off" },
                 median(ms),
                 median(&mut ratio)
             );
@@ -491,12 +497,13 @@ fn resident_frames(gpu: &Gpu, d: &mut Denoiser, frame: &rae_core::FrameInputs, f
         })
     };
     let buf = |data: Option<&[f32]>, label| data.map(|v| storage(label, v));
-    let (color, albedo, normal, depth, roughness) = (
+    let (color, albedo, normal, depth, roughness, motion) = (
         storage("color", frame.color),
         buf(frame.albedo, "albedo"),
         buf(frame.normal, "normal"),
         buf(frame.depth, "depth"),
         buf(frame.roughness, "roughness"),
+        buf(frame.motion, "motion"),
     );
     let output = dev.create_buffer(&wgpu::BufferDescriptor {
         label: Some("output"),
@@ -510,7 +517,7 @@ fn resident_frames(gpu: &Gpu, d: &mut Denoiser, frame: &rae_core::FrameInputs, f
         normal: normal.as_ref(),
         depth: depth.as_ref(),
         roughness: roughness.as_ref(),
-        motion: None,
+        motion: motion.as_ref(),
         output: &output,
     })?;
     let total = frames + warmup;
@@ -610,6 +617,10 @@ fn info(path: &Path, sizes: &[(u32, u32)]) -> Result<()> {
             mib(Precision::F32),
             mib(Precision::F16),
             (a.parameter_count() * 4) as f64 / (1u64 << 20) as f64,
+        );
+        println!(
+            "motion {s}:  the reprojection's motion pyramid {:.1} MiB more (frames with motion, Options::motion)",
+            rae_core::denoiser::motion_bytes(pw, ph, a.levels()) as f64 / (1u64 << 20) as f64
         );
     }
     Ok(())
@@ -713,12 +724,33 @@ fn main() -> Result<()> {
         Command::Info { file, size } => info(&file, &size),
         Command::Devices => devices(),
         Command::Verify { golden, tile } => verify(&golden, parse_tile(&tile)?),
-        Command::Bench { weights, sizes, frames, warmup, layers, precision, peak_gflops, tile, weights_memory, sources, interleave } => {
+        Command::Bench {
+            weights,
+            sizes,
+            frames,
+            warmup,
+            layers,
+            precision,
+            peak_gflops,
+            tile,
+            weights_memory,
+            sources,
+            interleave,
+            motion,
+        } => {
             let sweep = Sweep {
                 precisions: precision,
                 memories: weights_memory.iter().map(|m| parse_memory(m)).collect::<Result<_>>()?,
                 sources: sources.iter().map(|s| parse_sources(s)).collect::<Result<_>>()?,
                 tiles: tile.iter().map(|t| parse_tile(t)).collect::<Result<_>>()?,
+                motions: motion
+                    .iter()
+                    .map(|m| match m.as_str() {
+                        "off" => Ok(false),
+                        "on" => Ok(true),
+                        _ => bail!("motion `{m}`: off or on"),
+                    })
+                    .collect::<Result<_>>()?,
             };
             if interleave {
                 bench_interleaved(&weights, &sizes, frames, warmup, &sweep)

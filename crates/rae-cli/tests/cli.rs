@@ -590,12 +590,13 @@ fn bench_32x32(frames: &str, extra: &[&str]) -> String {
 }
 
 /// Every column name of bench's tables (the timing table and `--interleave`'s).
-const BENCH_COLUMNS: [&str; 20] = [
+const BENCH_COLUMNS: [&str; 21] = [
     "size",
     "precision",
     "tile",
     "weights",
     "sources",
+    "motion",
     "build",
     "total ms",
     "upload",
@@ -695,6 +696,18 @@ fn bench_reports_each_combinations_error_and_skips_what_it_cannot_run() {
     for (row, line) in rows.iter().zip(&lines) {
         assert!(row["tile"].starts_with("mma16") && row["weights"] == "uniform", "{text}");
         assert!(line.contains("unsupported:") && line.contains("storage buffer"), "{text}");
+    }
+}
+
+#[test]
+fn bench_times_frames_with_and_without_motion() {
+    // `--motion off,on`: the second row's frames carry a pan, so every block's state is
+    // reprojected; its error is against reference frames with the same motion.
+    let text = bench_32x32("1", &["--tile", REFERENCE_TILE, "--motion", "off,on"]);
+    let rows = bench_rows(&text, "32x32");
+    assert_eq!(rows.iter().map(|r| r["motion"].as_str()).collect::<Vec<_>>(), ["off", "on"], "{text}");
+    for r in &rows {
+        assert!(r["err"].parse::<f64>().unwrap() < 1e-6, "the reference tile against its own frames: {text}");
     }
 }
 

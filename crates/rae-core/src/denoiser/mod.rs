@@ -61,6 +61,7 @@ use crate::weights::Weights;
 pub use build::*;
 pub use host::*;
 use motion::Motion;
+pub use motion::motion_bytes;
 pub use record::*;
 pub use tuning::*;
 

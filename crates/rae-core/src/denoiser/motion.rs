@@ -35,6 +35,12 @@ pub(super) struct Motion {
     pub(super) bytes: u64,
 }
 
+/// Bytes of the motion pyramid and its parameters for `levels` levels below a padded frame of
+/// `pwidth` x `pheight`: what [`Options::motion`] adds to a [`Denoiser`] (needs no device).
+pub fn motion_bytes(pwidth: u32, pheight: u32, levels: usize) -> u64 {
+    (0..=levels).map(|k| (pwidth >> k) as u64 * (pheight >> k) as u64 * 16).sum::<u64>() + 16
+}
+
 impl Motion {
     /// The motion resources for `graph` at the padded size, bound to its activations.
     pub(super) fn new(
@@ -96,7 +102,7 @@ impl Motion {
                 })
                 .collect()
         });
-        let bytes = sizes.iter().map(|&(w, h)| w as u64 * h as u64 * 16).sum::<u64>() + 16;
+        let bytes = motion_bytes(pwidth, pheight, levels);
         Motion { params, level0: views[0].clone(), sizes, down, warp, blocks, conv_groups, bytes }
     }
 
