@@ -30,10 +30,11 @@ def hwc(t: torch.Tensor) -> np.ndarray:
     return t.reshape(t.shape[-3:]).permute(1, 2, 0).contiguous().numpy().astype(np.float32)
 
 
-def run_rae(path: Path, seq: Sequence, times: list[float] | None = None) -> list[np.ndarray]:
-    """Denoised frames of a sequence by a rae weights file (hidden state carried; CPU, float32,
-    channels_last). With `times`, appends the ms of every frame after the first (input stage,
-    network, output stage)."""
+def run_rae(path: Path, seq: Sequence, times: list[float] | None = None, motion: bool = True) -> list[np.ndarray]:
+    """Denoised frames of a sequence by a rae weights file (hidden state carried, and reprojected
+    with the sequence's motion where it has one and `motion`, as `rae-cli denoise` does; CPU,
+    float32, channels_last). With `times`, appends the ms of every frame after the first (input
+    stage, network, output stage)."""
     arch, state = read_weights(path)
     model = RecurrentAE(arch).eval()
     model.load_state_dict(state)
@@ -45,7 +46,8 @@ def run_rae(path: Path, seq: Sequence, times: list[float] | None = None) -> list
             t = time.perf_counter()
             frame = {k: v[i : i + 1] for k, v in seq.buffers.items()}
             x = prepare_input(arch, frame).contiguous(memory_format=torch.channels_last)
-            outs.append(hwc(finish_output(arch, model(x), frame)))
+            m = frame.get("motion") if motion else None
+            outs.append(hwc(finish_output(arch, model(x, m), frame)))
             if times is not None and i > 0:
                 times.append((time.perf_counter() - t) * 1e3)
     return outs

@@ -22,7 +22,7 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 
-from . import transfer
+from . import transfer, warp
 from .arch import INPUT_CHANNELS, Arch
 from .data import Sequence, load_sequences, sample
 from .export import load_checkpoint, write_weights
@@ -60,8 +60,11 @@ def loss_fn(
     weights: tuple[float, ...],
     log: torch.Tensor,
     terms: tuple[float, float, float] = PAPER_LOSS_WEIGHTS,
+    motions: list[torch.Tensor] | None = None,
 ) -> torch.Tensor:
-    """ws spatial L1 + wg HFEN L1 + wt temporal L1 (the paper's 0.8/0.1/0.1), each frame weighted."""
+    """ws spatial L1 + wg HFEN L1 + wt temporal L1 (the paper's 0.8/0.1/0.1), each frame weighted.
+    With each frame's ``motions``, the temporal term compares ``y_t - warp(y_t-1)`` with
+    ``t_t - warp(t_t-1)``: change along the motion, not at a fixed pixel."""
     ws, wg, wt = terms
     total = torch.zeros(())
     c = ys[0].shape[1]
@@ -69,19 +72,27 @@ def loss_fn(
     for i, (y, t) in enumerate(zip(ys, ts)):
         ls = F.l1_loss(y, t)
         lg = F.l1_loss(F.conv2d(y, k, padding=2, groups=c), F.conv2d(t, k, padding=2, groups=c))
-        lt = F.l1_loss(y - ys[i - 1], t - ts[i - 1]) if i > 0 else torch.zeros(())
+        if i == 0:
+            lt = torch.zeros(())
+        elif motions is None:
+            lt = F.l1_loss(y - ys[i - 1], t - ts[i - 1])
+        else:
+            m, v = warp.pyramid(motions[i], 0)[0]
+            lt = F.l1_loss(y - warp.warp(ys[i - 1], m, v), t - warp.warp(ts[i - 1], m, v))
         total = total + weights[i] * (ws * ls + wg * lg + wt * lt)
     return total / sum(weights)
 
 
 def run_clip(model: RecurrentAE, arch: Arch, clip: dict[str, torch.Tensor]) -> list[torch.Tensor]:
-    """Network outputs for each frame of a clip ([T, C, H, W] buffers), hidden state carried."""
+    """Network outputs for each frame of a clip ([T, C, H, W] buffers), hidden state carried and
+    reprojected with the clip's motion where it has one."""
     model.reset()
     outs = []
     for i in range(clip["color"].shape[0]):
-        frame = {k: v[i : i + 1] for k, v in clip.items() if k != "reference"}
+        frame = {k: v[i : i + 1] for k, v in clip.items() if k not in ("reference", "motion")}
         x = prepare_input(arch, frame).contiguous(memory_format=torch.channels_last)
-        outs.append(model(x))
+        motion = clip["motion"][i : i + 1] if "motion" in clip else None
+        outs.append(model(x, motion))
     return outs
 
 
@@ -215,7 +226,8 @@ def main(argv: list[str] | None = None) -> int:
         clip = sample(train, a.frames, a.crop, rng)
         ys = run_clip(model, arch, clip)
         ts = [target_space(arch, {k: v[i : i + 1] for k, v in clip.items()}) for i in range(a.frames)]
-        loss = loss_fn(ys, ts, weights, log, terms)  # type: ignore[arg-type]
+        motions = [clip["motion"][i : i + 1] for i in range(a.frames)] if "motion" in clip else None
+        loss = loss_fn(ys, ts, weights, log, terms, motions)  # type: ignore[arg-type]
         opt.zero_grad(set_to_none=True)
         loss.backward()
         torch.nn.utils.clip_grad_norm_(model.parameters(), 1.0)

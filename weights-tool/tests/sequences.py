@@ -8,8 +8,9 @@ import pytest
 BUFFERS = [("color", 3), ("reference", 3), ("albedo", 3), ("normal", 3), ("depth", 1), ("roughness", 1)]
 
 
-def write_sequence(folder: Path, frames: int, size: int, seed: int = 1) -> None:
-    """Every buffer of `frames` frames at `size` x `size`, random values, ZIP EXR."""
+def write_sequence(folder: Path, frames: int, size: int, seed: int = 1, motion: bool = False) -> None:
+    """Every buffer of `frames` frames at `size` x `size`, random values, ZIP EXR; with `motion`,
+    motion_NNNN.exr (R, G) of a few pixels too."""
     OpenEXR = pytest.importorskip("OpenEXR")
     folder.mkdir(parents=True)
     rng = np.random.default_rng(seed)
@@ -19,3 +20,7 @@ def write_sequence(folder: Path, frames: int, size: int, seed: int = 1) -> None:
             channels = {"RGB": a} if c == 3 else {"Y": a[..., 0]}
             header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
             OpenEXR.File(header, channels).write(str(folder / f"{name}_{f:04}.exr"))
+        if motion:
+            m = (rng.random((size, size, 2), dtype=np.float32) - 0.5) * 6
+            header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
+            OpenEXR.File(header, {"R": m[..., 0], "G": m[..., 1]}).write(str(folder / f"motion_{f:04}.exr"))

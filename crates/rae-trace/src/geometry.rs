@@ -30,10 +30,13 @@ pub enum Shape {
 /// A shape with its material index.
 #[derive(Debug, Clone)]
 pub struct Prim {
-    /// Geometry.
+    /// Geometry, as at frame 0.
     pub shape: Shape,
     /// Index into the scene's materials.
     pub material: u32,
+    /// World-space translation per frame (zero for static geometry): at frame f the shape is
+    /// where it was at frame 0 moved by `f * velocity` ([`crate::scene::Scene::at_frame`]).
+    pub velocity: Vec3A,
 }
 
 /// What the integrator needs at a hit.
@@ -59,6 +62,15 @@ impl obvhs::Boundable for Prim {
 }
 
 impl Prim {
+    /// This primitive moved by `by`.
+    pub fn translated(&self, by: Vec3A) -> Prim {
+        let shape = match &self.shape {
+            Shape::Triangle { p, uv, n } => Shape::Triangle { p: p.map(|q| q + by), uv: *uv, n: *n },
+            Shape::Sphere { center, radius } => Shape::Sphere { center: *center + by, radius: *radius },
+        };
+        Prim { shape, ..self.clone() }
+    }
+
     /// Distance along `ray` to the nearest hit in (tmin, tmax), or infinity.
     pub fn intersect(&self, ray: &Ray) -> f32 {
         match &self.shape {
@@ -150,8 +162,8 @@ pub fn quad(corner: Vec3A, u: Vec3A, v: Vec3A, uv_scale: f32, material: u32) -> 
     let (a, b, c, d) = (corner, corner + u, corner + u + v, corner + v);
     let (ta, tb, tc, td) = (Vec2::ZERO, Vec2::new(uv_scale, 0.0), Vec2::splat(uv_scale), Vec2::new(0.0, uv_scale));
     [
-        Prim { shape: Shape::Triangle { p: [a, b, c], uv: [ta, tb, tc], n: None }, material },
-        Prim { shape: Shape::Triangle { p: [a, c, d], uv: [ta, tc, td], n: None }, material },
+        Prim { shape: Shape::Triangle { p: [a, b, c], uv: [ta, tb, tc], n: None }, material, velocity: Vec3A::ZERO },
+        Prim { shape: Shape::Triangle { p: [a, c, d], uv: [ta, tc, td], n: None }, material, velocity: Vec3A::ZERO },
     ]
 }
 

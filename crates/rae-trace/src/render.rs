@@ -123,6 +123,9 @@ pub fn radiance(scene: &Scene, origin: Vec3A, dir: Vec3A, max_depth: u32, s: &mu
 /// Render frame `frame` of `frames`: noisy radiance, reference and auxiliary buffers.
 pub fn render_frame(scene: &Scene, frame: u32, frames: u32, st: &Settings) -> FrameBuffers {
     let (w, h) = (st.width, st.height);
+    // Moving primitives where they are at this frame.
+    let moved = scene.at_frame(frame);
+    let scene = moved.as_ref().unwrap_or(scene);
     let cam = scene.camera.frame(frame as i64, frames);
     let prev = scene.camera.frame(frame as i64 - 1, frames);
     let pixels: Vec<_> = (0..w * h)
@@ -143,7 +146,9 @@ pub fn render_frame(scene: &Scene, frame: u32, frames: u32, st: &Settings) -> Fr
                 aux.1 = n.to_array();
                 aux.2 = t;
                 aux.3 = mat.roughness();
-                seen = surf.p;
+                // Where this surface point was on the previous frame: a moving primitive was one
+                // step of its velocity back.
+                seen = surf.p - scene.prims[prim].velocity;
             }
             if let Some(q) = prev.project(seen, w, h) {
                 aux.4 = [q.x - px, q.y - py];

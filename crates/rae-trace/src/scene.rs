@@ -179,6 +179,16 @@ impl Scene {
         Scene { prims, materials, environment, camera, bvh, lights, light_cdf, light_pmf }
     }
 
+    /// The scene at frame `frame`, its moving primitives moved there (`None` if none moves: the
+    /// scene is the same at every frame).
+    pub fn at_frame(&self, frame: u32) -> Option<Scene> {
+        if self.prims.iter().all(|p| p.velocity == Vec3A::ZERO) {
+            return None;
+        }
+        let prims = self.prims.iter().map(|p| p.translated(p.velocity * frame as f32)).collect();
+        Some(Scene::new(prims, self.materials.clone(), self.environment, self.camera.clone()))
+    }
+
     /// Closest hit along the ray within (tmin, tmax): (primitive index, distance).
     pub fn intersect(&self, ray: Ray) -> Option<(usize, f32)> {
         let mut hit = RayHit::none();

@@ -10,7 +10,7 @@ use crate::scene::{Camera, CameraPath, Environment, Scene, v};
 use crate::texture::Texture;
 
 /// Names accepted by [`by_name`].
-pub const NAMES: &[&str] = &["cornell", "glossy", "firefly"];
+pub const NAMES: &[&str] = &["cornell", "glossy", "firefly", "cornell-moving", "glossy-moving"];
 
 /// A fixed scene by name.
 pub fn by_name(name: &str) -> Option<Scene> {
@@ -18,6 +18,8 @@ pub fn by_name(name: &str) -> Option<Scene> {
         "cornell" => Some(cornell()),
         "glossy" => Some(glossy()),
         "firefly" => Some(firefly()),
+        "cornell-moving" => Some(cornell_moving()),
+        "glossy-moving" => Some(glossy_moving()),
         _ => None,
     }
 }
@@ -38,7 +40,12 @@ impl Builder {
     }
 
     fn sphere(&mut self, center: Vec3A, radius: f32, m: u32) {
-        self.prims.push(Prim { shape: Shape::Sphere { center, radius }, material: m });
+        self.moving_sphere(center, radius, m, Vec3A::ZERO);
+    }
+
+    /// A sphere at `center` on frame 0 that moves by `velocity` each frame.
+    fn moving_sphere(&mut self, center: Vec3A, radius: f32, m: u32, velocity: Vec3A) {
+        self.prims.push(Prim { shape: Shape::Sphere { center, radius }, material: m, velocity });
     }
 
     fn finish(self, env: Environment, keys: Vec<Camera>) -> Scene {
@@ -103,6 +110,44 @@ pub fn glossy() -> Scene {
         })
         .collect();
     b.finish(sky, keys)
+}
+
+/// The Cornell box with a textured ball rolling across the floor in front of the tall box and
+/// a small glossy sphere dropping past the back wall: moving objects over a moving camera, and
+/// the background each uncovers.
+pub fn cornell_moving() -> Scene {
+    let mut b = Builder::new();
+    let white = b.material(diffuse(v(0.73, 0.73, 0.73)));
+    let red = b.material(diffuse(v(0.65, 0.05, 0.05)));
+    let green = b.material(diffuse(v(0.12, 0.45, 0.15)));
+    let light = b.material(Material::Emitter { radiance: v(17.0, 12.0, 4.0) });
+    let ball = b.material(Material::Diffuse { albedo: Texture::Checker { a: v(0.8, 0.5, 0.1), b: v(0.1, 0.2, 0.6), scale: 6.0 } });
+    let gold = b.material(Material::Conductor { f0: v(0.95, 0.64, 0.54), roughness: 0.2 });
+    b.prims.extend(quad(v(-1.0, 0.0, 1.0), v(2.0, 0.0, 0.0), v(0.0, 0.0, -2.0), 1.0, white));
+    b.prims.extend(quad(v(-1.0, 2.0, -1.0), v(2.0, 0.0, 0.0), v(0.0, 0.0, 2.0), 1.0, white));
+    b.prims.extend(quad(v(-1.0, 0.0, -1.0), v(2.0, 0.0, 0.0), v(0.0, 2.0, 0.0), 1.0, white));
+    b.prims.extend(quad(v(-1.0, 0.0, 1.0), v(0.0, 0.0, -2.0), v(0.0, 2.0, 0.0), 1.0, red));
+    b.prims.extend(quad(v(1.0, 0.0, -1.0), v(0.0, 0.0, 2.0), v(0.0, 2.0, 0.0), 1.0, green));
+    b.prims.extend(quad(v(-0.25, 1.999, -0.25), v(0.5, 0.0, 0.0), v(0.0, 0.0, 0.5), 1.0, light));
+    b.prims.extend(cuboid(v(-0.35, 0.6, -0.35), v(0.28, 0.6, 0.28), 0.3, white));
+    b.moving_sphere(v(-0.7, 0.25, 0.3), 0.25, ball, v(0.09, 0.0, 0.0));
+    b.moving_sphere(v(0.5, 1.6, -0.6), 0.15, gold, v(0.0, -0.08, 0.0));
+    let cam = |z: f32, x: f32| Camera { position: v(x, 1.0, z), target: v(0.0, 0.9, 0.0), vfov: 40.0 };
+    b.finish(Environment::Black, vec![cam(3.9, -0.15), cam(3.6, 0.0), cam(3.4, 0.15)])
+}
+
+/// The glossy scene with a mirror-like sphere crossing in front of the row of spheres and a
+/// plastic one crossing back behind it, under the orbiting camera.
+pub fn glossy_moving() -> Scene {
+    let mut scene = glossy();
+    let mut prims = std::mem::take(&mut scene.prims);
+    let mut materials = std::mem::take(&mut scene.materials);
+    materials.push(Material::Conductor { f0: v(0.9, 0.9, 0.9), roughness: 0.05 });
+    materials.push(Material::Plastic { albedo: Texture::Constant(v(0.8, 0.15, 0.1)), roughness: 0.3 });
+    let (mirror, red) = (materials.len() as u32 - 2, materials.len() as u32 - 1);
+    prims.push(Prim { shape: Shape::Sphere { center: v(-2.6, 0.35, 2.2), radius: 0.35 }, material: mirror, velocity: v(0.3, 0.0, 0.0) });
+    prims.push(Prim { shape: Shape::Sphere { center: v(2.4, 0.45, -0.9), radius: 0.45 }, material: red, velocity: v(-0.25, 0.0, 0.05) });
+    Scene::new(prims, materials, scene.environment, scene.camera)
 }
 
 /// A closed room lit by a tiny, very bright light behind a glass sphere: caustics, a dark

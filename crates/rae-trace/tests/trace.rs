@@ -1,7 +1,7 @@
 //! rae-trace: determinism, convergence, auxiliary buffers on known geometry, motion vectors.
 
 use glam::Vec3A;
-use rae_trace::geometry::quad;
+use rae_trace::geometry::{Prim, Shape, quad};
 use rae_trace::material::Material;
 use rae_trace::scene::{Camera, CameraPath, Environment, v};
 use rae_trace::texture::Texture;
@@ -116,5 +116,57 @@ fn motion_vectors_point_to_where_a_static_point_was() {
         } else {
             assert!(shift > 0.5, "the test moves the camera by a visible amount");
         }
+    }
+}
+
+#[test]
+fn motion_vectors_follow_a_moving_object_and_not_the_wall_behind_it() {
+    // A still camera over a wall at z = 0 and a sphere in front of it moving right by 0.2 each
+    // frame: on the sphere a point was 0.2 further left (its motion is that step projected at
+    // its depth), on the wall motion is zero, and the sphere covers other pixels frame to frame.
+    let cam = Camera { position: v(0.0, 1.0, 4.0), target: v(0.0, 1.0, 0.0), vfov: 45.0 };
+    let materials = vec![Material::Diffuse { albedo: Texture::Constant(v(0.5, 0.5, 0.5)) }];
+    let mut prims = quad(v(-50.0, -50.0, 0.0), v(100.0, 0.0, 0.0), v(0.0, 100.0, 0.0), 1.0, 0).to_vec();
+    let step = v(0.2, 0.0, 0.0);
+    prims.push(Prim { shape: Shape::Sphere { center: v(-0.6, 1.0, 1.5), radius: 0.5 }, material: 0, velocity: step });
+    let scene = Scene::new(prims, materials, Environment::Black, CameraPath { keys: vec![cam] });
+    let (w, h) = (48u32, 36u32);
+    let focal = cam.focal_pixels(h);
+    let mut covered = Vec::new();
+    for f in [1u32, 3] {
+        let fb = render_frame(&scene, f, 5, &settings(w, h, 1, 0, 0));
+        let (mut on_sphere, mut on_wall) = (0, 0);
+        let mut here = Vec::new();
+        for y in 0..h {
+            for x in 0..w {
+                let i = (y * w + x) as usize;
+                let (mx, my) = (fb.motion[2 * i], fb.motion[2 * i + 1]);
+                let p = cam.position + cam.direction(x as f32 + 0.5, y as f32 + 0.5, w, h) * fb.depth[i];
+                if p.z > 0.01 {
+                    // The sphere: the step back, projected at this point's distance from the camera.
+                    let want = -step.x * focal / (cam.position.z - p.z);
+                    assert!(
+                        (mx - want).abs() < 0.05 * want.abs() && my.abs() < 0.05,
+                        "frame {f} ({x},{y}): motion ({mx}, {my}), expected ({want}, 0)"
+                    );
+                    on_sphere += 1;
+                    here.push(i);
+                } else if fb.depth[i].is_finite() {
+                    assert!(mx.abs() < 1e-3 && my.abs() < 1e-3, "frame {f} ({x},{y}) on the wall: motion ({mx}, {my})");
+                    on_wall += 1;
+                }
+            }
+        }
+        assert!(on_sphere > 40 && on_wall > 500, "frame {f}: {on_sphere} sphere and {on_wall} wall pixels");
+        covered.push(here);
+    }
+    assert!(covered[1].iter().filter(|i| !covered[0].contains(i)).count() > 20, "the sphere moves over the wall");
+}
+
+#[test]
+fn the_moving_scenes_move_and_the_fixed_ones_do_not() {
+    for name in scenes::NAMES {
+        let scene = scenes::by_name(name).unwrap();
+        assert_eq!(scene.at_frame(3).is_some(), name.ends_with("-moving"), "{name}");
     }
 }
