@@ -7,6 +7,7 @@
 mod frame_path;
 mod generated;
 mod golden;
+mod io;
 mod kernels;
 mod metrics;
 mod mma;

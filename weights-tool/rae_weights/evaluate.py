@@ -71,8 +71,10 @@ def run_oidn(seq: Sequence, quality: str, times: list[float] | None = None) -> l
     return outs
 
 
-def evaluate(models: list[Path], sets: dict[str, Path], oidn: bool = True) -> list[dict[str, object]]:
-    """Rows of (set, method, metrics...) averaged over each set's sequences."""
+def evaluate(models: list[Path], sets: dict[str, Path], oidn: bool = True, motion: str = "both") -> list[dict[str, object]]:
+    """Rows of (set, method, metrics...) averaged over each set's sequences. Where a sequence has
+    motion, each model runs with it (its hidden state reprojected), without it, or both
+    (`motion`: on, off, both), as separate rows."""
     rows: list[dict[str, object]] = []
     for label, folder in sets.items():
         seqs = load_sequences(folder)
@@ -82,7 +84,12 @@ def evaluate(models: list[Path], sets: dict[str, Path], oidn: bool = True) -> li
             noisy = [hwc(s.buffers["color"][i]) for i in range(s.frames)]
             methods.setdefault("noisy input", []).append(sequence_metrics(noisy, refs))
             for m in models:
-                methods.setdefault(f"rae {m.stem}", []).append(sequence_metrics(run_rae(m, s), refs))
+                if "motion" not in s.buffers:
+                    methods.setdefault(f"rae {m.stem}", []).append(sequence_metrics(run_rae(m, s), refs))
+                    continue
+                for on in {"on": [True], "off": [False], "both": [True, False]}[motion]:
+                    name = f"rae {m.stem} ({'motion' if on else 'no motion'})"
+                    methods.setdefault(name, []).append(sequence_metrics(run_rae(m, s, motion=on), refs))
             if oidn:
                 methods.setdefault("OIDN 2.5 high (c+a+n)", []).append(sequence_metrics(run_oidn(s, "high"), refs))
         for name, ms in methods.items():
@@ -105,6 +112,7 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("models", nargs="+", type=Path, help="rae weights files")
     p.add_argument("--data", nargs="+", required=True, metavar="LABEL=FOLDER", help="held-out sets, e.g. 1spp=data/val")
     p.add_argument("--no-oidn", action="store_true")
+    p.add_argument("--motion", choices=["on", "off", "both"], default="both", help="run the models with the sequences' motion, without, or both")
     p.add_argument("--threads", type=int, default=2)
     a = p.parse_args(argv)
     torch.set_num_threads(a.threads)
@@ -114,5 +122,5 @@ def main(argv: list[str] | None = None) -> int:
         if not folder:
             p.error(f"--data {d}: expected LABEL=FOLDER")
         sets[label] = Path(folder)
-    print(markdown(evaluate(a.models, sets, oidn=not a.no_oidn)))
+    print(markdown(evaluate(a.models, sets, oidn=not a.no_oidn, motion=a.motion)))
     return 0

@@ -314,6 +314,10 @@ fn blender_multilayer_exr_is_read_and_a_missing_buffer_is_named() {
             ch.push(plane(&format!("ViewLayer.Denoising Normal.{c}"), vec![v; n]));
         }
         ch.push(plane("ViewLayer.Denoising Depth.Z", vec![2.0; n]));
+        // The Vector pass: to the previous frame in X, Y (y up), to the next in Z, W.
+        for (c, v) in ["X", "Y", "Z", "W"].iter().zip([1.5, 0.75, -1.5, -0.75]) {
+            ch.push(plane(&format!("ViewLayer.Vector.{c}"), vec![v; n]));
+        }
         let layer = Layer::new((W, H), LayerAttributes::default(), Encoding::FAST_LOSSLESS, AnyChannels::sort(ch.into_iter().collect()));
         Image::from_layer(layer).write().to_file(seq.join(format!("shot_{f:04}.exr"))).unwrap();
     }
@@ -330,6 +334,7 @@ fn blender_multilayer_exr_is_read_and_a_missing_buffer_is_named() {
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(out.status.success(), "{text}{}", String::from_utf8_lossy(&out.stderr));
     assert!(text.contains("multi-layer EXR"), "{text}");
+    assert!(text.contains("motion:  the Vector pass, converted from Blender's convention (X, -Y)"), "{text}");
     assert_eq!(listing(&tmp.path().join("seq-denoised")).len(), 2);
 }
 
