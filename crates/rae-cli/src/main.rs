@@ -660,7 +660,9 @@ fn verify(files: &[PathBuf], tiles: TileChoice) -> Result<()> {
         let golden = Golden::load(path)?;
         let wpath = path.with_file_name(&golden.weights);
         let weights = Weights::load(&wpath).with_context(|| format!("weights of {}", path.display()))?;
-        let options = Options { tiles, ..Default::default() };
+        // A golden sequence with motion is verified with its hidden state reprojected.
+        let motion = golden.frames.first().is_some_and(|f| f.contains_key("motion"));
+        let options = Options { tiles, motion, ..Default::default() };
         let mut d = Denoiser::with_options(&gpu.device, &gpu.queue, &weights, golden.width, golden.height, options)
             .with_context(|| format!("denoiser for {}", path.display()))?;
         let name = path.file_name().unwrap_or_default().to_string_lossy();

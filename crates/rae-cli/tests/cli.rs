@@ -59,6 +59,9 @@ fn verify_holds_the_chosen_tile_to_pytorch() {
     let plain = rae().args(["verify", &golden, "--tile", "mma16"]).output().unwrap();
     assert!(!plain.status.success(), "{}", String::from_utf8_lossy(&plain.stdout));
     assert!(String::from_utf8_lossy(&plain.stderr).contains("outside the tolerance"), "{}", String::from_utf8_lossy(&plain.stderr));
+    // A golden sequence with motion is verified with the hidden state reprojected.
+    let motion = rae().args(["verify", &fixture("golden_color_tiny_motion_96x32.safetensors"), "--tile", REFERENCE_TILE]).output().unwrap();
+    assert!(motion.status.success(), "{}{}", String::from_utf8_lossy(&motion.stdout), String::from_utf8_lossy(&motion.stderr));
 }
 
 // ---- denoise: layouts, options, and every kind of bad input ------------------------------
