@@ -111,7 +111,7 @@ fn every_shader_validates_with_naga() {
             .validate(&module)
             .unwrap_or_else(|e| panic!("{name}.wgsl: {}", e.emit_to_string(source)));
         let entries: &[&str] = if name.starts_with("motion") {
-            &["motion_in", "motion_down", "warp"]
+            &["motion_in", "motion_down", "warp", "guide_store"]
         } else if name.starts_with("conv3x3_mma") {
             &["mma_emulated", "mma_split_emulated"]
         } else if name.contains("lanes tiles") {

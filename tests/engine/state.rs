@@ -356,17 +356,20 @@ fn the_profiled_frame_times_its_first_stage() {
 
 #[test]
 fn motion_is_a_choice_of_the_denoiser_and_zero_motion_changes_nothing() {
-    // Zero motion fetches every state at its own pixel with weight 1: the frames of a denoiser
-    // built with motion are those of one without, bit for bit; a frame without motion runs as
-    // without it. A denoiser built without motion refuses frames and GPU buffers with it.
+    // Zero motion over a still scene (normal and depth those of frame 0 throughout) fetches
+    // every state at its own pixel with weight 1 and passes every history test: the frames of
+    // a denoiser built with motion are those of one without, bit for bit; a frame without
+    // motion runs as without it. A denoiser built without motion refuses frames and GPU
+    // buffers with it.
     let (golden, weights) = setup();
     let g = gpu();
     let (w, h) = (golden.width, golden.height);
     let zero = vec![0.0f32; (w * h * 2) as usize];
     let mut plain = denoiser(&weights, &golden);
     let mut moving = Denoiser::with_options(&g.device, &g.queue, &weights, w, h, Options { motion: true, ..Default::default() }).unwrap();
+    let still = golden.inputs(0);
     for i in 0..3 {
-        let frame = golden.inputs(i);
+        let frame = FrameInputs { normal: still.normal, depth: still.depth, ..golden.inputs(i) };
         let with_zero = FrameInputs { motion: Some(&zero), ..frame };
         let input = if i == 1 { frame } else { with_zero };
         assert_eq!(bits(&moving.denoise(&input).unwrap()), bits(&plain.denoise(&frame).unwrap()), "frame {i}");
@@ -400,6 +403,37 @@ fn motion_is_a_choice_of_the_denoiser_and_zero_motion_changes_nothing() {
     };
     assert!(matches!(io(&plain), Err(Error::Motion(_))));
     assert!(io(&moving).is_ok());
+}
+
+#[test]
+fn history_that_fails_the_test_is_dropped_as_on_a_first_frame() {
+    // A frame whose depth differs from the previous frame's everywhere by more than twice the
+    // tolerance fails every pixel's history test: its hidden state starts from zero, and its
+    // output is that of the same frame denoised first. Depth off by half the tolerance passes:
+    // history is kept and the output differs.
+    let (golden, weights) = setup();
+    let g = gpu();
+    let (w, h) = (golden.width, golden.height);
+    let zero = vec![0.0f32; (w * h * 2) as usize];
+    let build = || Denoiser::with_options(&g.device, &g.queue, &weights, w, h, Options { motion: true, ..Default::default() }).unwrap();
+    // Prepared depth is log1p(depth): scaling 1 + depth by e^d moves it by d.
+    let moved = |d: f32| -> Vec<f32> { golden.inputs(1).depth.unwrap().iter().map(|z| (1.0 + z) * d.exp() - 1.0).collect() };
+    let run = |depth: &[f32], history: bool| {
+        let mut den = build();
+        if history {
+            den.denoise(&golden.inputs(1)).unwrap();
+        }
+        den.denoise(&FrameInputs { depth: Some(depth), motion: Some(&zero), ..golden.inputs(1) }).unwrap()
+    };
+    let (far, near) = (moved(0.25), moved(0.025));
+    let first = run(&far, false);
+    let dropped = run(&far, true);
+    let worst = first.iter().zip(&dropped).map(|(a, b)| (a - b).abs() / a.abs().max(1.0)).fold(0.0f32, f32::max);
+    assert!(worst <= 1e-5, "history that fails the test: {worst} from a first frame");
+    let kept = run(&near, true);
+    let first_near = run(&near, false);
+    let moved_by = first_near.iter().zip(&kept).map(|(a, b)| (a - b).abs() / a.abs().max(1.0)).fold(0.0f32, f32::max);
+    assert!(moved_by > 1e-3, "history that passes the test changes the frame: {moved_by}");
 }
 
 #[test]

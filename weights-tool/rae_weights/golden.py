@@ -27,7 +27,7 @@ from .export import _publish, read_weights, write_weights
 from .model import RecurrentAE, finish_output, prepare_input
 
 #: Bump when the generator changes what it writes; stored in every golden file.
-GENERATOR_VERSION = 1
+GENERATOR_VERSION = 2
 COMMAND = "python -m rae_weights golden --out tests/fixtures"
 GOLDEN_KEY = "rae.golden"
 
@@ -83,7 +83,7 @@ CASES: list[Case] = [
 def motion_field(width: int, height: int, t: int) -> np.ndarray:
     """HW x 2 float32 motion of frame t in rae's convention (previous minus current position, in
     pixels): a pan and a zoom about the centre; a disk that moves on its own (the background it
-    leaves is uncovered); a band at the left edge pointing off screen; and one NaN, one infinite
+    leaves is uncovered, ``scene_depth``); a band at the left edge pointing off screen; and one NaN, one infinite
     and one absurd pixel, whose history is dropped."""
     yy, xx = np.meshgrid(np.arange(height, dtype=np.float64), np.arange(width, dtype=np.float64), indexing="ij")
     cx, cy = width / 2, height / 2
@@ -100,6 +100,16 @@ def motion_field(width: int, height: int, t: int) -> np.ndarray:
     m[3, 7] = (0.0, np.inf)
     m[4, 9] = (1e6, 0.0)
     return m.astype(np.float32)
+
+
+def scene_depth(width: int, height: int, t: int) -> np.ndarray:
+    """HW float32 depth of frame t of a motion case: a slanted background at depth 4 and up, and
+    ``motion_field``'s disk in front of it at depth 2, so the history test drops the background
+    the disk uncovers."""
+    yy, xx = np.meshgrid(np.arange(height, dtype=np.float64), np.arange(width, dtype=np.float64), indexing="ij")
+    depth = 4.0 + 0.02 * xx + 0.01 * yy
+    depth[(xx - (width / 2 + 3 * t)) ** 2 + (yy - height / 2) ** 2 < (height / 4) ** 2] = 2.0
+    return depth.astype(np.float32)
 
 
 def random_state(arch: Arch, seed: int) -> dict[str, torch.Tensor]:
@@ -190,6 +200,8 @@ def generate(out_dir: Path) -> list[Path]:
         if case.motion:
             for t, frame in enumerate(frames):
                 frame["motion"] = motion_field(case.width, case.height, t)
+                if "depth" in frame:
+                    frame["depth"] = scene_depth(case.width, case.height, t)
         outs = run_sequence(arch, state, frames)
         tensors: dict[str, np.ndarray] = {}
         for i, (frame, out) in enumerate(zip(frames, outs)):

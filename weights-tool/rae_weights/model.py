@@ -93,6 +93,14 @@ class RecurrentAE(nn.Module):
             setattr(self, f"u{k}", DecoderBlock(prev + arch.encoder[k - 1], dec[k - 1], s, last))
             prev = dec[k - 1]
 
+        # The history test's guide (warp.guide): channels of normal and depth in the input.
+        offsets, ch = {}, 0
+        for name in arch.inputs:
+            offsets[name] = ch
+            ch += INPUT_CHANNELS[name]
+        self.guide_channels = (offsets.get("normal"), offsets.get("depth"))
+        self.guide: torch.Tensor | None = None
+
     def encoders(self) -> list[EncoderBlock]:
         return [getattr(self, f"d{k}") for k in range(1, self.arch.levels + 1)] + [self.bottleneck]
 
@@ -100,14 +108,19 @@ class RecurrentAE(nn.Module):
         """Zero the hidden state (first frame of a sequence, scene cut)."""
         for block in self.encoders():
             block.hidden = None
+        self.guide = None
 
     def forward(self, x: torch.Tensor, motion: torch.Tensor | None = None) -> torch.Tensor:
         """One frame of packed input (``prepare_input``); with ``motion`` (N x 2 x H x W, rae's
         convention, at the input's size) each block's hidden state is reprojected first
-        (``warp``); without it the state is used as it is."""
+        (``warp``), where the history test against the previous frame's guide passes; without
+        it the state is used as it is."""
         n = self.arch.levels
         prepool = self.arch.skip == "prepool"
-        levels = warp.pyramid(motion.to(x.dtype), n) if motion is not None else [None] * (n + 1)
+        now = warp.guide(x, *self.guide_channels)
+        previous = self.guide if self.guide is not None and now is not None and self.guide.shape == now.shape else None
+        self.guide = now
+        levels = warp.pyramid(motion.to(x.dtype), n, now, previous) if motion is not None else [None] * (n + 1)
         skips: list[torch.Tensor] = []
         for k in range(1, n + 1):
             d = getattr(self, f"d{k}")(x, levels[k - 1])

@@ -618,9 +618,11 @@ fn info(path: &Path, sizes: &[(u32, u32)]) -> Result<()> {
             mib(Precision::F16),
             (a.parameter_count() * 4) as f64 / (1u64 << 20) as f64,
         );
+        let guided = a.inputs.iter().any(|b| matches!(b, rae_core::InputBuffer::Normal | rae_core::InputBuffer::Depth));
         println!(
-            "motion {s}:  the reprojection's motion pyramid {:.1} MiB more (frames with motion, Options::motion)",
-            rae_core::denoiser::motion_bytes(pw, ph, a.levels()) as f64 / (1u64 << 20) as f64
+            "motion {s}:  the reprojection's motion pyramid{} {:.1} MiB more (frames with motion, Options::motion)",
+            if guided { " and previous normal and depth" } else { "" },
+            rae_core::denoiser::motion_bytes(pw, ph, a.levels(), guided) as f64 / (1u64 << 20) as f64
         );
     }
     Ok(())

@@ -318,12 +318,14 @@ impl Denoiser {
         }
         let convs = ConvPlan::with_choices(device, queue, &mut kernels, &specs, &choices.tiles, &choices.sources, &choices.memories)?;
         debug_assert_eq!(acts.bytes, activation_bytes(&graph, pwidth, pheight, precision));
-        let motion = motion.then(|| Motion::new(device, &mut kernels, &graph, &acts, &convs, (width, height, pwidth, pheight)));
+        let layout = prep_layout(&arch, &graph);
+        let guide = Guide::of(&layout);
+        let motion = motion.then(|| Motion::new(device, &mut kernels, &graph, &acts, &convs, guide, (width, height, pwidth, pheight)));
         let conv_outputs: [Vec<wgpu::Texture>; 2] =
             std::array::from_fn(|parity| graph.nodes.iter().map(|n| acts.written(n.out, parity)).collect());
         let Value::Temp(out_temp) = graph.output else { unreachable!("the output is a temporary") };
         let output_view = acts.slots[acts.assign[out_temp]].1.clone();
-        let prep = kernels.prep_pipeline(device, &prep_layout(&arch, &graph));
+        let prep = kernels.prep_pipeline(device, &layout);
         let prep_params = PrepParams { width, height, pwidth, pheight };
         let transfer = match arch.transfer {
             Transfer::None => 0,

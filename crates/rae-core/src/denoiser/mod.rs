@@ -52,8 +52,8 @@ use crate::error::{Error, Result};
 use crate::frame::{FrameInputs, FrameTimings};
 use crate::graph::{Graph, Read, Source, Value};
 use crate::kernels::{
-    ConvPlan, ConvSpec, Kernels, MMA_WORKGROUP_BYTES, Method, MotionKernels, MotionParams, OutputParams, Precision, PrepLayout, PrepParams,
-    SourceAccess, Tile, TileList, WORKGROUP, WeightMemory, blocks, per_conv,
+    ConvPlan, ConvSpec, Guide, Kernels, MMA_WORKGROUP_BYTES, Method, MotionKernels, MotionParams, OutputParams, Precision, PrepLayout,
+    PrepParams, SourceAccess, Tile, TileList, WORKGROUP, WeightMemory, blocks, per_conv,
 };
 use crate::model::{Arch, InputBuffer, Transfer};
 use crate::weights::Weights;

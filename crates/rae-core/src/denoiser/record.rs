@@ -68,6 +68,9 @@ impl Denoiser {
             check(b.name(), buf, b.channels() as u64)?;
         }
         check("output", io.output, 3)?;
+        let input = self
+            .input_texture
+            .create_view(&wgpu::TextureViewDescriptor { dimension: Some(wgpu::TextureViewDimension::D2Array), ..Default::default() });
         let motion = match (io.motion, &self.motion) {
             (None, _) => None,
             (Some(_), None) => return Err(Error::Motion("the denoiser was built without motion (Options::motion)".into())),
@@ -81,6 +84,8 @@ impl Denoiser {
                         wgpu::BindGroupEntry { binding: 0, resource: m.params.as_entire_binding() },
                         wgpu::BindGroupEntry { binding: 1, resource: buf.as_entire_binding() },
                         wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::TextureView(&m.level0) },
+                        wgpu::BindGroupEntry { binding: 8, resource: wgpu::BindingResource::TextureView(&input) },
+                        wgpu::BindGroupEntry { binding: 9, resource: wgpu::BindingResource::TextureView(&m.guide) },
                     ],
                 }))
             }
@@ -96,13 +101,7 @@ impl Denoiser {
                 wgpu::BindGroupEntry { binding: 3, resource: pick(InputBuffer::Normal).as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 4, resource: pick(InputBuffer::Depth).as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 5, resource: pick(InputBuffer::Roughness).as_entire_binding() },
-                wgpu::BindGroupEntry {
-                    binding: 6,
-                    resource: wgpu::BindingResource::TextureView(&self.input_texture.create_view(&wgpu::TextureViewDescriptor {
-                        dimension: Some(wgpu::TextureViewDimension::D2Array),
-                        ..Default::default()
-                    })),
-                },
+                wgpu::BindGroupEntry { binding: 6, resource: wgpu::BindingResource::TextureView(&input) },
                 wgpu::BindGroupEntry { binding: 7, resource: self.stats.as_entire_binding() },
             ],
         });
@@ -175,6 +174,11 @@ impl Denoiser {
                 pass.dispatch_workgroups(self.pwidth.div_ceil(WORKGROUP), self.pheight.div_ceil(WORKGROUP), 1);
                 if let Some((m, g)) = motion {
                     m.record(&mut pass, self.kernels.motion_kernels().expect("made with the denoiser's motion"), g, parity);
+                }
+                // The guide of every frame, for the next frame's history test (after this
+                // frame's test has read the previous one).
+                if let Some(m) = &self.motion {
+                    m.record_guide(&mut pass, self.kernels.motion_kernels().expect("made with the denoiser's motion"));
                 }
                 stamp(&mut pass, 1);
             }
@@ -249,7 +253,9 @@ impl Denoiser {
                 self.convs.record_compile(&mut pass, i, group);
             }
             if let (Some(m), Some(g)) = (&self.motion, &host.binding.motion) {
-                m.record(&mut pass, self.kernels.motion_kernels().expect("made with the denoiser's motion"), g, parity);
+                let kernels = self.kernels.motion_kernels().expect("made with the denoiser's motion");
+                m.record(&mut pass, kernels, g, parity);
+                m.record_guide(&mut pass, kernels);
             }
             pass.set_pipeline(&self.prep);
             pass.set_bind_group(0, &host.binding.prep, &[]);

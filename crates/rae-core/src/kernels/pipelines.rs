@@ -128,8 +128,11 @@ pub struct MotionParams {
 /// The layouts and pipelines of motion.wgsl, the reprojection of the hidden state
 /// ([`Kernels::motion`]): made only for denoisers that take motion.
 pub struct MotionKernels {
-    /// Layout of `motion_in`: parameters, the frame's motion buffer, level 0.
+    /// Layout of `motion_in`: parameters, the frame's motion buffer, level 0, the packed input,
+    /// the previous frame's guide.
     pub in_layout: wgpu::BindGroupLayout,
+    /// Layout of `guide_store`: the packed input, the guide written.
+    pub guide_layout: wgpu::BindGroupLayout,
     /// Layout of `motion_down`: a level, the next.
     pub down_layout: wgpu::BindGroupLayout,
     /// Layout of `warp`: a level's motion, the previous state, the warped state.
@@ -140,10 +143,34 @@ pub struct MotionKernels {
     pub motion_down: wgpu::ComputePipeline,
     /// A block's previous state, reprojected.
     pub warp: wgpu::ComputePipeline,
+    /// This frame's guide, kept for the next frame's history test.
+    pub guide_store: wgpu::ComputePipeline,
+}
+
+/// Where a model's guide of the history test is in its packed input (motion.wgsl's overrides):
+/// the first channel of normal and of depth, `None` where it reads none.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Guide {
+    /// First channel of the normal.
+    pub normal: Option<u32>,
+    /// The depth channel.
+    pub depth: Option<u32>,
+}
+
+impl Guide {
+    /// The guide of a model whose input is packed as `layout` says.
+    pub fn of(layout: &PrepLayout) -> Guide {
+        Guide { normal: layout.offsets[2], depth: layout.offsets[3] }
+    }
+
+    /// Whether the model reads any guide buffer (else every history passes the test).
+    pub fn any(&self) -> bool {
+        self.normal.is_some() || self.depth.is_some()
+    }
 }
 
 impl MotionKernels {
-    fn new(device: &wgpu::Device, precision: Precision) -> Self {
+    fn new(device: &wgpu::Device, precision: Precision, guide: Guide) -> Self {
         let compute = wgpu::ShaderStages::COMPUTE;
         let entry = |binding, ty| wgpu::BindGroupLayoutEntry { binding, visibility: compute, ty, count: None };
         let sampled = |dim| wgpu::BindingType::Texture {
@@ -158,13 +185,19 @@ impl MotionKernels {
         };
         let d2 = wgpu::TextureViewDimension::D2;
         let f32x4 = wgpu::TextureFormat::Rgba32Float;
-        let in_layout = layout("motion in", &[uniform_entry(0), storage_entry(1, true), entry(2, written(f32x4, d2))]);
-        let down_layout = layout("motion down", &[entry(3, sampled(d2)), entry(4, written(f32x4, d2))]);
         let array = wgpu::TextureViewDimension::D2Array;
+        let in_layout = layout(
+            "motion in",
+            &[uniform_entry(0), storage_entry(1, true), entry(2, written(f32x4, d2)), entry(8, sampled(array)), entry(9, sampled(d2))],
+        );
+        let guide_layout = layout("guide store", &[entry(8, sampled(array)), entry(10, written(f32x4, d2))]);
+        let down_layout = layout("motion down", &[entry(3, sampled(d2)), entry(4, written(f32x4, d2))]);
         let warp_layout = layout("warp", &[entry(5, sampled(d2)), entry(6, sampled(array)), entry(7, written(precision.format(), array))]);
         let source = shader_source("motion").to_string();
         let source = if precision == Precision::F16 { rewrite(source, "motion.wgsl", &WARP_F16) } else { source };
         let module = shader_module(device, "motion", source);
+        let off = |o: Option<u32>| o.unwrap_or(u32::MAX) as f64;
+        let constants = [("OFF_NORMAL", off(guide.normal)), ("OFF_DEPTH", off(guide.depth))];
         let pipeline = |layout: &wgpu::BindGroupLayout, entry: &str| {
             let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
                 label: None,
@@ -176,7 +209,7 @@ impl MotionKernels {
                 layout: Some(&pipeline_layout),
                 module: &module,
                 entry_point: Some(entry),
-                compilation_options: Default::default(),
+                compilation_options: wgpu::PipelineCompilationOptions { constants: &constants, zero_initialize_workgroup_memory: false },
                 cache: None,
             })
         };
@@ -184,7 +217,9 @@ impl MotionKernels {
             motion_in: pipeline(&in_layout, "motion_in"),
             motion_down: pipeline(&down_layout, "motion_down"),
             warp: pipeline(&warp_layout, "warp"),
+            guide_store: pipeline(&guide_layout, "guide_store"),
             in_layout,
+            guide_layout,
             down_layout,
             warp_layout,
         }
@@ -610,10 +645,10 @@ impl Kernels {
         self.motion.as_ref()
     }
 
-    /// motion.wgsl's layouts and pipelines, made on the first call.
-    pub fn motion(&mut self, device: &wgpu::Device) -> &MotionKernels {
+    /// motion.wgsl's layouts and pipelines for a model with `guide`, made on the first call.
+    pub fn motion(&mut self, device: &wgpu::Device, guide: Guide) -> &MotionKernels {
         let precision = self.precision;
-        self.motion.get_or_insert_with(|| MotionKernels::new(device, precision))
+        self.motion.get_or_insert_with(|| MotionKernels::new(device, precision, guide))
     }
 
     /// The input-preparation pipeline for a model whose input is packed as `layout` says
