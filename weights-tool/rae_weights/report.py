@@ -32,7 +32,8 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from .data import load_sequences, read_exr
+from . import warp
+from .data import Sequence, load_sequences, read_exr
 from .evaluate import hwc, run_oidn, run_rae
 from .export import read_weights
 from .metrics import sequence_metrics, tonemap
@@ -50,6 +51,7 @@ class Method:
     outputs: dict[str, dict[str, list[np.ndarray]]] = field(default_factory=dict)  # set -> seq -> frames
     times_ms: list[float] = field(default_factory=list)
     metrics: dict[str, dict[str, float]] = field(default_factory=dict)  # set -> metric -> mean
+    per_seq: dict[str, dict[str, dict[str, float]]] = field(default_factory=dict)  # set -> seq -> metric
 
     def add(self, label: str, seq: str, frames: list[np.ndarray]) -> None:
         self.outputs.setdefault(label, {})[seq] = frames
@@ -80,12 +82,16 @@ def machine() -> str:
     return f"{cpu}, {os.cpu_count()} logical cores{memory}, {platform.system()} {platform.release()}"
 
 
-def run_rae_cli(cli: Path, weights: Path, precision: str, folder: Path, frames: int, times: list[float], log: list[str]) -> list[np.ndarray]:
-    """rae-cli denoise of one sequence folder; the denoised frames and per-frame times (all but
-    the first, which compiles the shaders)."""
+def run_rae_cli(
+    cli: Path, weights: Path, precision: str, folder: Path, frames: int, times: list[float], log: list[str], motion: bool = True
+) -> list[np.ndarray]:
+    """rae-cli denoise of one sequence folder (``--no-motion`` unless `motion`); the denoised
+    frames and per-frame times (all but the first, which compiles the shaders)."""
     with tempfile.TemporaryDirectory() as tmp:
         out, table = Path(tmp) / "out", Path(tmp) / "times.csv"
         cmd = [str(cli), "denoise", str(folder), "-o", str(out), "--weights", str(weights), "--precision", precision, "--csv", str(table)]
+        if not motion:
+            cmd.append("--no-motion")
         r = subprocess.run(cmd, capture_output=True, text=True)
         if r.returncode != 0:
             raise RuntimeError(f"{shlex.join(cmd)} failed ({r.returncode}):\n{r.stdout}\n{r.stderr}")
@@ -121,6 +127,7 @@ def score(methods: list[Method], refs: dict[str, dict[str, list[np.ndarray]]]) -
                 s = sequence_metrics(outs, refs[label][name])
                 s["flip"] = flip_mean(outs, refs[label][name])
                 per_seq.append(s)
+                m.per_seq.setdefault(label, {})[name] = s
             m.metrics[label] = {k: float(np.mean([s[k] for s in per_seq])) for k in per_seq[0]}
 
 
@@ -178,9 +185,40 @@ def plot(methods: list[Method], labels: list[str], path: Path, caption: str) -> 
     plt.close(fig)
 
 
-def crop_sheet(columns: list[tuple[str, np.ndarray]], ref: np.ndarray, path: Path, caption: str, size: int = 48) -> None:
-    """Crops of one frame: where the first method's error is largest and where the reference has
-    most detail; columns are the given methods and the reference, tonemapped as the metrics are."""
+def disocclusion(seq: Sequence, frame: int) -> np.ndarray:
+    """HW: 1 - the history test of `frame` of a sequence with motion (``warp.history`` on its
+    normal and log1p depth, as a model that reads both prepares them): 1 where the previous frame
+    did not see the surface."""
+    guide = lambda i: torch.cat([seq.buffers["normal"][i : i + 1], torch.log1p(seq.buffers["depth"][i : i + 1].clamp(min=0))], 1)  # noqa: E731
+    m, ok = warp.sanitize_motion(seq.buffers["motion"][frame : frame + 1])
+    return (1.0 - ok * warp.history(guide(frame), guide(frame - 1), m))[0, 0].numpy()
+
+
+def window(v: np.ndarray, c: int, avoid: list[tuple[int, int]] = []) -> tuple[int, int]:  # noqa: B006
+    """(y, x) of the c x c window of `v` with the largest sum, not overlapping the windows at
+    `avoid` where the frame leaves room (window sums from an integral image)."""
+    s = np.pad(v.cumsum(0).cumsum(1), ((1, 0), (1, 0)))
+    win = s[c:, c:] - s[:-c, c:] - s[c:, :-c] + s[:-c, :-c]
+    for ay, ax in avoid:
+        masked = win.copy()
+        masked[max(0, ay - c + 1) : ay + c, max(0, ax - c + 1) : ax + c] = -np.inf
+        if np.isfinite(masked).any():
+            win = masked
+    y, x = np.unravel_index(int(np.argmax(win)), win.shape)
+    return int(y), int(x)
+
+
+def crop_sheet(
+    columns: list[tuple[str, np.ndarray]],
+    ref: np.ndarray,
+    path: Path,
+    caption: str,
+    size: int = 48,
+    spots: list[tuple[str, np.ndarray]] | None = None,
+) -> None:
+    """Crops of one frame: where the first method after the input (column 1) errs most and where
+    the reference has most detail, or at the maxima of the given `spots` maps (name, HW map);
+    columns are the given methods and the reference, tonemapped as the metrics are."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -190,27 +228,16 @@ def crop_sheet(columns: list[tuple[str, np.ndarray]], ref: np.ndarray, path: Pat
     c = min(size, h, w)
     t_ref = tonemap(ref)
 
-    def best(v: np.ndarray, avoid: tuple[int, int] | None = None) -> tuple[int, int]:
-        # Window sums from an integral image; the window with the largest sum (not overlapping
-        # `avoid`'s window where the frame leaves room).
-        s = np.pad(v.cumsum(0).cumsum(1), ((1, 0), (1, 0)))
-        win = s[c:, c:] - s[:-c, c:] - s[c:, :-c] + s[:-c, :-c]
-        if avoid is not None:
-            masked = win.copy()
-            ay, ax = avoid
-            masked[max(0, ay - c + 1) : ay + c, max(0, ax - c + 1) : ax + c] = -np.inf
-            if np.isfinite(masked).any():
-                win = masked
-        y, x = np.unravel_index(int(np.argmax(win)), win.shape)
-        return int(y), int(x)
-
-    err = np.abs(tonemap(columns[1][1]) - t_ref).mean(-1)
-    detail = np.abs(np.diff(t_ref, axis=0, prepend=t_ref[:1])).mean(-1) + np.abs(np.diff(t_ref, axis=1, prepend=t_ref[:, :1])).mean(-1)
-    worst = best(err)
-    spots = [("largest rae error", worst), ("most detail elsewhere", best(detail, worst))]
+    if spots is None:
+        err = np.abs(tonemap(columns[1][1]) - t_ref).mean(-1)
+        detail = np.abs(np.diff(t_ref, axis=0, prepend=t_ref[:1])).mean(-1) + np.abs(np.diff(t_ref, axis=1, prepend=t_ref[:, :1])).mean(-1)
+        spots = [("largest rae error", err), ("most detail elsewhere", detail)]
+    at: list[tuple[str, tuple[int, int]]] = []
+    for why, v in spots:
+        at.append((why, window(v, c, [p for _, p in at])))
     cols = columns + [("reference", ref)]
-    fig, axes = plt.subplots(len(spots), len(cols), figsize=(2.2 * len(cols), 2.4 * len(spots) + 0.5), squeeze=False)
-    for r, (why, (y, x)) in enumerate(spots):
+    fig, axes = plt.subplots(len(at), len(cols), figsize=(2.2 * len(cols), 2.4 * len(at) + 0.5), squeeze=False)
+    for r, (why, (y, x)) in enumerate(at):
         for k, (name, img) in enumerate(cols):
             ax = axes[r][k]
             ax.imshow(tonemap(img[y : y + c, x : x + c]), interpolation="nearest")
@@ -305,28 +332,34 @@ def main(argv: list[str] | None = None) -> int:
     torch.set_num_threads(a.threads)
     precisions = [x for x in a.precisions.split(",") if x]
 
-    # Every method on every sequence of every set.
+    # Every method on every sequence of every set; where sequences carry motion, rae also
+    # without it (`--no-motion`, first precision) for comparison.
+    loaded = {label: load_sequences(folder) for label, folder in sets.items()}
+    moving = any("motion" in seq.buffers for seqs in loaded.values() for seq in seqs)
     noisy = Method("noisy input", "input")
     raes = {(m, pr): Method(f"rae {m.stem} {pr}", "rae") for m in a.models for pr in precisions}
+    stills = {m: Method(f"rae {m.stem} {precisions[0]} no motion", "rae") for m in a.models} if moving else {}
     torches = {m: Method(f"PyTorch CPU {m.stem}", "pytorch") for m in a.models}
     oidns = {q: Method(f"OIDN {q}", "oidn") for q in ("high", "fast")}
     refs: dict[str, dict[str, list[np.ndarray]]] = {}
     devices: list[str] = []
     first: tuple[str, str, int] | None = None
     for label, folder in sets.items():
-        for seq in load_sequences(folder):
+        for seq in loaded[label]:
             seq_folder = next(f for f in sorted({q.parent for q in folder.rglob("color_0000.exr")}) if f.name == seq.name)
             print(f"[{label}] {seq.name}: {seq.frames} frames", flush=True)
             refs.setdefault(label, {})[seq.name] = [hwc(seq.buffers["reference"][i]) for i in range(seq.frames)]
             noisy.add(label, seq.name, [hwc(seq.buffers["color"][i]) for i in range(seq.frames)])
             for (m, pr), meth in raes.items():
                 meth.add(label, seq.name, run_rae_cli(cli, m, pr, seq_folder, seq.frames, meth.times_ms, devices))
+            for m, meth in stills.items():
+                meth.add(label, seq.name, run_rae_cli(cli, m, precisions[0], seq_folder, seq.frames, meth.times_ms, devices, motion=False))
             for m, meth in torches.items():
                 meth.add(label, seq.name, run_rae(m, seq, meth.times_ms))
             for q, meth in oidns.items():
                 meth.add(label, seq.name, run_oidn(seq, q, meth.times_ms))
             first = first or (label, seq.name, seq.frames - 1)
-    methods = [noisy, *raes.values(), *torches.values(), *oidns.values()]
+    methods = [noisy, *raes.values(), *stills.values(), *torches.values(), *oidns.values()]
     score(methods, refs)
     assert first is not None
 
@@ -343,6 +376,21 @@ def main(argv: list[str] | None = None) -> int:
     shown = raes[(a.models[0], precisions[0])]
     crop_cols = [("noisy input", noisy.outputs[crop_set][crop_seq][k]), (shown.name, shown.outputs[crop_set][crop_seq][k]), ("OIDN high", oidns["high"].outputs[crop_set][crop_seq][k])]
     crop_sheet(crop_cols, refs[crop_set][crop_seq][k], figures / "crops.png", f"{crop_set}/{crop_seq} frame {k}: {command}\n{host}")
+    # At a disocclusion: the frame of a sequence with motion where the most pixels fail the
+    # history test, rae with and without motion beside OIDN.
+    uncovered = None
+    if moving:
+        uncovered = max(
+            ((float(disocclusion(seq, i).sum()), label, seq, i) for label, seqs in loaded.items() for seq in seqs if "motion" in seq.buffers for i in range(1, seq.frames)),
+            key=lambda t: t[0],
+        )
+        _, d_set, d_seq, d_k = uncovered
+        still = stills[a.models[0]]
+        d_ref = refs[d_set][d_seq.name][d_k]
+        d_cols = [(n, meth.outputs[d_set][d_seq.name][d_k]) for n, meth in (("noisy input", noisy), (shown.name, shown), (still.name, still), ("OIDN high", oidns["high"]))]
+        d_err = np.abs(tonemap(shown.outputs[d_set][d_seq.name][d_k]) - tonemap(d_ref)).mean(-1)
+        spots = [("most disoccluded", disocclusion(d_seq, d_k)), ("largest rae error", d_err)]
+        crop_sheet(d_cols, d_ref, figures / "crops-disocclusion.png", f"{d_set}/{d_seq.name} frame {d_k}: {command}\n{host}", spots=spots)
 
     bench = None
     if a.bench_sizes:
@@ -366,6 +414,17 @@ def main(argv: list[str] | None = None) -> int:
             t = "-" if m.kind == "input" else f"{m.ms:.1f}"
             L.append(f"| {m.name} | {t} | {r['relmse']:.4f} | {r['psnr']:.2f} | {r['ssim']:.4f} | {r['flip']:.4f} | {r['temporal']:.4f} |")
         L.append("")
+        if stills:
+            shown_still = stills[a.models[0]]
+            L += [f"Per sequence, `{shown.name}` with the sequence's motion and without it, beside OIDN high (temporal: lower is better; the last column is rae's with motion over OIDN's):", ""]
+            L += ["| sequence | motion | PSNR with | PSNR without | PSNR OIDN | temporal with | temporal without | temporal OIDN | with / OIDN |", "|---|---|---:|---:|---:|---:|---:|---:|---:|"]
+            for name in seqs:
+                w, wo, o = (x.per_seq[label][name] for x in (shown, shown_still, oidns["high"]))
+                has = "yes" if any(q.name == name and "motion" in q.buffers for q in loaded[label]) else "no"
+                L.append(
+                    f"| {name} | {has} | {w['psnr']:.2f} | {wo['psnr']:.2f} | {o['psnr']:.2f} | {w['temporal']:.4f} | {wo['temporal']:.4f} | {o['temporal']:.4f} | {w['temporal'] / o['temporal']:.2f} |"
+                )
+            L.append("")
     L += ["## rae (wgpu) against PyTorch, same weights and frames", "", "Absolute difference of the output radiance over all frames of all sets; the last column divides each frame's largest difference by the frame's largest PyTorch value.", ""]
     L += ["| model | precision | max abs | mean abs | max / frame max |", "|---|---|---:|---:|---:|"]
     for (m, pr), meth in raes.items():
@@ -374,6 +433,9 @@ def main(argv: list[str] | None = None) -> int:
     L.append("")
     L += ["## Error against time", "", f"![error against time]({rel(figures / 'error-vs-time.png', a.out.parent)})", "", f"Made by {stamp}.", ""]
     L += ["## Crops", "", f"Set `{crop_set}`, sequence `{crop_seq}`, frame {k}: where rae's error is largest and where the reference has the most detail.", "", f"![crops]({rel(figures / 'crops.png', a.out.parent)})", "", f"Made by {stamp}.", ""]
+    if uncovered is not None:
+        _, d_set, d_seq, d_k = uncovered
+        L += ["## Crops at a disocclusion", "", f"Set `{d_set}`, sequence `{d_seq.name}`, frame {d_k}, the frame of the sequences with motion where the most pixels fail the history test (normal and depth against the previous frame's at x + motion, `rae_weights.warp.history`): where the most do, and where rae's error is largest. rae with the sequence's motion (reprojected, history dropped where the test fails) and without it, beside OIDN high.", "", f"![crops at a disocclusion]({rel(figures / 'crops-disocclusion.png', a.out.parent)})", "", f"Made by {stamp}.", ""]
     if bench:
         bcmd, btext = bench
         rows = bench_rows(btext)
@@ -386,5 +448,5 @@ def main(argv: list[str] | None = None) -> int:
             L.append(f"| {size} | {f32[0]:.1f} | {f32[1]:.2f} | {f16[0]:.1f} | {torch_ms:.1f} | {f32[0] / torch_ms:.2f} |")
         L += ["", "The full `rae-cli bench` output (per-stage GPU times from timestamp queries, GFLOP/s, share of the stated peak, GPU memory):", "", "```", btext.rstrip(), "```", ""]
     atomic_save(a.out, lambda path: path.write_text("\n".join(L)))
-    print(f"wrote {a.out}, {figures / 'error-vs-time.png'}, {figures / 'crops.png'}")
+    print(f"wrote {a.out} and the figures in {figures}")
     return 0

@@ -18,7 +18,7 @@ def test_report_puts_every_method_side_by_side(tmp_path: Path) -> None:
     cli = find_rae_cli()
     if cli is None:
         pytest.fail("build rae-cli first (cargo build -p rae-cli); scripts/test.sh runs cargo test before pytest")
-    write_sequence(tmp_path / "data" / "s", 3, 32, seed=3)
+    write_sequence(tmp_path / "data" / "s", 3, 32, seed=3, motion=True)
     arch = Arch(encoder=[8, 8, 8, 8, 8], bottleneck=8)
     torch_model = RecurrentAE(arch)
     weights = tmp_path / "tiny.safetensors"
@@ -28,8 +28,12 @@ def test_report_puts_every_method_side_by_side(tmp_path: Path) -> None:
     assert main(args) == 0
     text = out.read_text()
     assert "python -m rae_weights report" in text and "logical cores" in text, "names the command and the machine"
-    for row in ["| noisy input |", "| rae tiny f32 |", "| rae tiny f16 |", "| PyTorch CPU tiny |", "| OIDN high |", "| OIDN fast |"]:
+    for row in ["| noisy input |", "| rae tiny f32 |", "| rae tiny f16 |", "| rae tiny f32 no motion |", "| PyTorch CPU tiny |", "| OIDN high |", "| OIDN fast |"]:
         assert row in text, row
+    # The sequence has motion: rae with and without it, per sequence, beside OIDN.
+    per_seq = [l.split("|") for l in text.splitlines() if l.startswith("| s | yes |")]
+    assert len(per_seq) == 1 and all(np.isfinite(float(v)) for v in per_seq[0][3:10]), per_seq
+    assert "Crops at a disocclusion" in text
     # rae against PyTorch: same weights, so the f32 difference is float noise and f16 stays small.
     rows = {l.split("|")[2].strip(): l for l in text.splitlines() if l.startswith("| tiny |")}
     rel = {p: float(r.split("|")[5]) for p, r in rows.items()}
@@ -37,7 +41,7 @@ def test_report_puts_every_method_side_by_side(tmp_path: Path) -> None:
     # Each method row has finite errors; rae's time is a positive number.
     table = [l for l in text.splitlines() if l.startswith("| rae tiny f32 |")][0].split("|")
     assert float(table[2]) > 0 and all(np.isfinite(float(v)) for v in table[3:8])
-    for png in ("error-vs-time.png", "crops.png"):
+    for png in ("error-vs-time.png", "crops.png", "crops-disocclusion.png"):
         data = (out.parent / "report" / png).read_bytes()
         assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 5000
     assert "rae-cli bench" in text
