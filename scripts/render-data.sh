@@ -4,7 +4,9 @@
 #   DIR/train: --random 1..12 and the cornell, glossy, firefly and glossy-moving scenes, 8 frames
 #              of 128x128 at 1 spp, references at 256 spp;
 #   DIR/val:   --random 1001..1003 and cornell-moving (held out: never trained on), references
-#              at 512 spp.
+#              at 512 spp;
+#   DIR/val4:  the same held-out sequences at 4 spp (another noise seed), DIR/val's references
+#              copied in.
 # A folder already there is kept, so an interrupted run continues. About 15 minutes on 2 cores.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -24,4 +26,16 @@ for s in $(seq 1 12); do render "$out/train/r$s" --random "$s" --ref-spp 256; do
 for n in cornell glossy firefly glossy-moving; do render "$out/train/$n" --scene "$n" --ref-spp 256; done
 for s in 1001 1002 1003; do render "$out/val/r$s" --random "$s" --ref-spp 512; done
 render "$out/val/cornell-moving" --scene cornell-moving --ref-spp 512 --seed 7
+render4() { # NAME ARGS...: a held-out sequence again at 4 spp, with DIR/val's references
+    local name=$1 dir=$out/val4/$1
+    shift
+    if [ ! -d "$dir" ]; then
+        echo "== $dir"
+        "$trace" render "$@" --frames 8 --spp 4 --ref-spp 0 --seed 4 --size 128x128 "$dir.partial" > /dev/null
+        cp "$out/val/$name"/reference_*.exr "$dir.partial/"
+        mv "$dir.partial" "$dir"
+    fi
+}
+for s in 1001 1002 1003; do render4 "r$s" --random "$s"; done
+render4 cornell-moving --scene cornell-moving
 echo "training and held-out sequences in $out"
