@@ -6,7 +6,10 @@
 #   DIR/val:   --random 1001..1003 and cornell-moving (held out: never trained on), references
 #              at 512 spp;
 #   DIR/val4:  the same held-out sequences at 4 spp (another noise seed), DIR/val's references
-#              copied in.
+#              copied in;
+#   DIR/blender-val, DIR/blender-val4: four held-out Blender Cycles scenes (seeds 2001-2004, 8
+#              frames of 128x128 as multi-layer EXRs, 1 and 4 spp, references at 256 spp;
+#              scripts/render-blender.py), where bpy is installed (pip install bpy==4.5.15).
 # A folder already there is kept, so an interrupted run continues. About 15 minutes on 2 cores.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -38,4 +41,11 @@ render4() { # NAME ARGS...: a held-out sequence again at 4 spp, with DIR/val's r
 }
 for s in 1001 1002 1003; do render4 "r$s" --random "$s"; done
 render4 cornell-moving --scene cornell-moving
+if python3 -c "import bpy" 2>/dev/null; then
+    # Blender prints a line per tile; only the script's progress lines are shown.
+    python3 scripts/render-blender.py "$out/blender-val" --seeds 2001-2004 | { grep '^b2' || true; }
+    python3 scripts/render-blender.py "$out/blender-val4" --seeds 2001-2004 --spp 4 --reference-from "$out/blender-val" | { grep '^b2' || true; }
+else
+    echo "no bpy: the Blender held-out sets are skipped (pip install bpy==4.5.15)"
+fi
 echo "training and held-out sequences in $out"

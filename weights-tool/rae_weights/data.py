@@ -1,5 +1,6 @@
-"""Sequences rendered by rae-trace (per-buffer EXR: color_0000.exr, reference_0000.exr, ...),
-loaded into memory as NCHW float32 tensors, and random training samples drawn from them."""
+"""Sequences rendered by rae-trace (per-buffer EXR: color_0000.exr, reference_0000.exr, ...) or
+Blender (one multi-layer EXR per frame, ``scripts/render-blender.py``), loaded into memory as
+NCHW float32 tensors, and random training samples drawn from them."""
 
 from __future__ import annotations
 
@@ -42,22 +43,104 @@ def read_motion(path: Path) -> np.ndarray:
         return np.stack([np.asarray(ch[c].pixels, dtype=np.float32) for c in ("R", "G")], -1)
 
 
+#: Layer names of multi-layer EXRs (rae's and Blender Cycles'), as rae-core's ``io`` reads them.
+LAYERS = {
+    "color": "color", "combined": "color", "image": "color", "noisy image": "color", "noisy": "color",
+    "albedo": "albedo", "denoising albedo": "albedo",
+    "normal": "normal", "denoising normal": "normal",
+    "depth": "depth", "denoising depth": "depth",
+    "roughness": "roughness",
+    "reference": "reference", "clean": "reference",
+    "motion": "motion", "vector": "motion",
+}  # fmt: skip
+
+
+def _layer(group: str) -> str | None:
+    """The buffer a layer (group) name stands for: the name or its last dotted part
+    ("ViewLayer.Denoising Albedo" -> albedo), as rae-core's ``slot_of_group``."""
+    return LAYERS.get(group.lower()) or LAYERS.get(group.rsplit(".", 1)[-1].lower())
+
+
+def read_multilayer(path: Path) -> dict[str, np.ndarray]:
+    """Buffer name -> HWC float32 of one multi-layer EXR frame, as rae-core reads it: RGB (or
+    XYZ) for three-channel buffers, R, G (or X, Y) for motion (Blender's Vector pass converted to
+    rae's convention, (X, -Y)), one channel (Y, Z, R, V or the first) for depth and roughness.
+    Layers of other names are left out."""
+    import OpenEXR
+
+    groups: dict[str, dict[str, np.ndarray]] = {}
+    with OpenEXR.File(str(path)) as f:
+        for key, ch in f.channels().items():
+            a = np.asarray(ch.pixels, dtype=np.float32)
+            if a.ndim == 3:  # channels grouped by the library: RGB or RGBA
+                groups.setdefault(key, {}).update({c: a[..., i] for i, c in enumerate("RGBA"[: a.shape[-1]])})
+            else:
+                group, _, name = key.rpartition(".")
+                groups.setdefault(group, {})[name.upper()] = a
+    out: dict[str, np.ndarray] = {}
+    for group, chans in groups.items():
+        buf = _layer(group) if group else "color"
+        if buf is None:
+            continue
+        if buf == "motion":
+            xy = [chans.get("R", chans.get("X")), chans.get("G", chans.get("Y"))]
+            if any(c is None for c in xy):
+                raise ValueError(f"{path}: `{group}` needs R, G (or X, Y) channels")
+            m = np.stack(xy, -1)  # type: ignore[arg-type]
+            if group.rsplit(".", 1)[-1].lower() == "vector":
+                m[..., 1] = -m[..., 1]
+            out[buf] = m
+        elif buf in ("color", "albedo", "normal", "reference"):
+            for names in ("RGB", "XYZ"):
+                if all(c in chans for c in names):
+                    out[buf] = np.stack([chans[c] for c in names], -1)
+                    break
+            else:
+                raise ValueError(f"{path}: `{group}` needs R, G, B (or X, Y, Z) channels")
+        else:
+            c = next((chans[n] for n in ("Y", "Z", "R", "V") if n in chans), next(iter(chans.values())))
+            out[buf] = c[..., None]
+    return out
+
+
 @dataclass
 class Sequence:
     """One sequence: buffer name -> [frames, C, H, W] float32."""
 
     name: str
     buffers: dict[str, torch.Tensor]
+    #: Where it was read from.
+    folder: Path = Path()
 
     @property
     def frames(self) -> int:
         return self.buffers["color"].shape[0]
 
 
+def load_multilayer_sequence(folder: Path, files: list[Path]) -> Sequence:
+    """A sequence of one multi-layer EXR per frame (Blender's layout, ``read_multilayer``);
+    every frame must hold every buffer and the reference."""
+    frames = [read_multilayer(p) for p in files]
+    buffers: dict[str, torch.Tensor] = {}
+    for name in BUFFERS + OPTIONAL:
+        if name in OPTIONAL and not all(name in f for f in frames):
+            continue
+        for p, f in zip(files, frames):
+            if name not in f:
+                raise ValueError(f"{p}: no `{name}` layer (training needs every buffer and the reference)")
+        buffers[name] = torch.stack([torch.from_numpy(f[name]).permute(2, 0, 1) for f in frames])
+    return Sequence(folder.name, buffers, folder)
+
+
 def load_sequence(folder: Path) -> Sequence:
+    """The sequence in `folder`: per-buffer files (color_NNNN.exr, albedo_NNNN.exr, ...) or one
+    multi-layer EXR per frame."""
     frames = sorted(folder.glob("color_*.exr"))
     if not frames:
-        raise ValueError(f"{folder}: no color_NNNN.exr frames")
+        layered = sorted(p for p in folder.glob("*.exr") if not p.name.startswith("."))
+        if layered:
+            return load_multilayer_sequence(folder, layered)
+        raise ValueError(f"{folder}: no color_NNNN.exr frames and no multi-layer EXRs")
     buffers: dict[str, torch.Tensor] = {}
     for name in BUFFERS:
         stack = []
@@ -70,14 +153,15 @@ def load_sequence(folder: Path) -> Sequence:
     motion = [c.with_name(c.name.replace("color_", "motion_")) for c in frames]
     if all(p.exists() for p in motion):
         buffers["motion"] = torch.stack([torch.from_numpy(read_motion(p)).permute(2, 0, 1) for p in motion])
-    return Sequence(folder.name, buffers)
+    return Sequence(folder.name, buffers, folder)
 
 
 def load_sequences(root: Path) -> list[Sequence]:
-    """Every sequence folder under root (folders holding color_NNNN.exr)."""
-    folders = sorted({p.parent for p in root.rglob("color_0000.exr")})
+    """Every sequence folder under root: folders holding color_NNNN.exr, or multi-layer EXRs
+    (and no sequence folder of their own)."""
+    folders = sorted({p.parent for p in root.rglob("*.exr") if not p.name.startswith(".") and not any(q.name.startswith(".") for q in p.relative_to(root).parents if q.name)})
     if not folders:
-        raise ValueError(f"{root}: no sequences (folders with color_0000.exr); render some with rae-trace")
+        raise ValueError(f"{root}: no sequences (folders with color_0000.exr or multi-layer EXRs); render some with rae-trace")
     return [load_sequence(f) for f in folders]
 
 

@@ -346,7 +346,7 @@ def main(argv: list[str] | None = None) -> int:
     first: tuple[str, str, int] | None = None
     for label, folder in sets.items():
         for seq in loaded[label]:
-            seq_folder = next(f for f in sorted({q.parent for q in folder.rglob("color_0000.exr")}) if f.name == seq.name)
+            seq_folder = seq.folder
             print(f"[{label}] {seq.name}: {seq.frames} frames", flush=True)
             refs.setdefault(label, {})[seq.name] = [hwc(seq.buffers["reference"][i]) for i in range(seq.frames)]
             noisy.add(label, seq.name, [hwc(seq.buffers["color"][i]) for i in range(seq.frames)])

@@ -221,6 +221,9 @@ pub fn run(o: &Options) -> Result<()> {
         seq.slots.iter().map(|s| s.name()).collect::<Vec<_>>(),
         if seq.has_reference() { " (reference used for error only)" } else { "" }
     );
+    if !seq.ignored.is_empty() {
+        println!("ignored: {:?} (layers rae does not read)", seq.ignored);
+    }
     println!("model:   {} (uses {used:?})", weights_path.display());
     match (motion_source, o.motion) {
         (None, _) => println!("motion:  none (the hidden state is not reprojected)"),

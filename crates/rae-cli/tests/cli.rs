@@ -413,7 +413,7 @@ fn truncated_exr_fails_that_frame_and_leaves_no_partial_output() {
 }
 
 #[test]
-fn unknown_layer_names_are_an_error() {
+fn layers_rae_does_not_read_are_listed_and_ignored() {
     let tmp = tempfile::tempdir().unwrap();
     let seq = seq_dir(&tmp);
     let n = W * H;
@@ -428,7 +428,31 @@ fn unknown_layer_names_are_an_error() {
         .collect();
     let layer = Layer::new((W, H), LayerAttributes::default(), Encoding::FAST_LOSSLESS, AnyChannels::sort(ch.into_iter().collect()));
     Image::from_layer(layer).write().to_file(seq.join("frame_0000.exr")).unwrap();
-    expect_error(&seq, &[], &["frame_0000.exr", "unknown layer names", "Sparkle"]);
+    let out = tmp.path().join("o");
+    let run = rae()
+        .arg("denoise")
+        .arg(&seq)
+        .args([
+            "-o",
+            out.to_str().unwrap(),
+            "--weights",
+            &fixture("weights_color_tiny.safetensors"),
+            "--no-compile-helper",
+            "--tile",
+            REFERENCE_TILE,
+        ])
+        .output()
+        .unwrap();
+    let so = String::from_utf8_lossy(&run.stdout);
+    assert!(run.status.success(), "{so}\n{}", String::from_utf8_lossy(&run.stderr));
+    assert!(so.lines().any(|l| l.starts_with("ignored:") && l.contains("Sparkle")), "the header lists the layer: {so}");
+    assert_eq!(listing(&out), ["denoised_0000.exr"]);
+    // A file with no color layer among its layers is still an error that names them.
+    let only: Vec<_> =
+        ["R", "G", "B"].iter().map(|c| AnyChannel::new(format!("Sparkle.{c}").as_str(), FlatSamples::F32(vec![0.5; n]))).collect();
+    let layer = Layer::new((W, H), LayerAttributes::default(), Encoding::FAST_LOSSLESS, AnyChannels::sort(only.into_iter().collect()));
+    Image::from_layer(layer).write().to_file(seq.join("frame_0000.exr")).unwrap();
+    expect_error(&seq, &[], &["frame_0000.exr", "no color layer", "Sparkle"]);
 }
 
 #[test]

@@ -149,6 +149,9 @@ pub struct Sequence {
     pub numbers: Vec<u32>,
     /// Buffers every frame carries (the reference included if present).
     pub slots: BTreeSet<Slot>,
+    /// Layers of multi-layer EXRs that stand for no buffer rae reads (a renderer's other passes:
+    /// Mist, Diffuse Direct, Cryptomatte, ...): skipped when frames are read.
+    pub ignored: BTreeSet<String>,
     files: Vec<FrameFiles>,
 }
 
@@ -242,6 +245,11 @@ fn slot_of_group(group: &str) -> Option<Slot> {
     Slot::from_name(group).or_else(|| group.rsplit_once('.').and_then(|(_, last)| Slot::from_name(last)))
 }
 
+/// [`slot_of_group`], where channels with no layer name (R, G, B) are color.
+fn group_slot(group: &str) -> Option<Slot> {
+    if group.is_empty() { Some(InputBuffer::Color.into()) } else { slot_of_group(group) }
+}
+
 impl Sequence {
     /// Find and validate the sequence in `dir`.
     pub fn scan(dir: &Path) -> Result<Sequence> {
@@ -307,6 +315,7 @@ impl Sequence {
         let first = &numbered[0];
         let (mut width, mut height) = (0, 0);
         let mut slots: Option<BTreeSet<Slot>> = None;
+        let mut ignored = BTreeSet::new();
         for (n, ff) in &numbered {
             let (here, size, at) = match ff {
                 FrameFiles::PerBuffer(m) => {
@@ -326,28 +335,24 @@ impl Sequence {
                 FrameFiles::MultiLayer(p) => {
                     let (size, groups) = exr_size_and_groups(p)?;
                     let mut here = BTreeSet::new();
-                    let mut unknown = Vec::new();
                     for (g, _) in &groups {
-                        match slot_of_group(g) {
+                        match group_slot(g) {
                             Some(s) => {
                                 here.insert(s);
                             }
-                            None if g.is_empty() => {
-                                here.insert(InputBuffer::Color.into());
+                            None => {
+                                ignored.insert(g.clone());
                             }
-                            None => unknown.push(g.clone()),
                         }
                     }
-                    if !unknown.is_empty() {
+                    if !here.contains(&InputBuffer::Color.into()) {
                         return Err(input_err(
                             p,
                             format!(
-                                "unknown layer names {unknown:?}; known: color (or Combined, Image, Noisy Image), albedo (Denoising Albedo), normal (Denoising Normal), depth (Denoising Depth), roughness, reference"
+                                "no color layer (color, Combined, Image or Noisy Image) among the layers {:?}; known: color, albedo (Denoising Albedo), normal (Denoising Normal), depth (Denoising Depth), roughness, reference, motion (Vector)",
+                                groups.iter().map(|(g, _)| g).collect::<Vec<_>>()
                             ),
                         ));
-                    }
-                    if !here.contains(&InputBuffer::Color.into()) {
-                        return Err(input_err(p, "no color layer (color, Combined or Image)"));
                     }
                     (here, size, p.clone())
                 }
@@ -383,6 +388,7 @@ impl Sequence {
             height,
             numbers: numbered.iter().map(|(n, _)| *n).collect(),
             slots: slots.unwrap_or_default(),
+            ignored,
             files: numbered.into_iter().map(|(_, f)| f).collect(),
         })
     }
@@ -554,8 +560,8 @@ fn read_multilayer(path: &Path, w: usize, h: usize) -> Result<Vec<(Slot, Vec<f32
     let groups = read_exr_groups(path)?;
     groups
         .iter()
-        .map(|(g, chans)| {
-            let slot = slot_of_group(g).unwrap_or(InputBuffer::Color.into());
+        .filter_map(|(g, chans)| group_slot(g).map(|slot| (g, chans, slot)))
+        .map(|(g, chans, slot)| {
             let mut data = pick_channels(path, slot, chans, w * h)?;
             if slot == Slot::Motion && is_blender_vector(g) {
                 // Blender's raster y points up: rae's motion is (X, -Y).
