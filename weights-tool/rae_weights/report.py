@@ -37,7 +37,7 @@ from .data import Sequence, load_sequences, read_exr
 from .evaluate import hwc, run_oidn, run_rae
 from .export import read_weights
 from .metrics import sequence_metrics, tonemap
-from .model import RecurrentAE
+from .model import RecurrentAE, sanitize_buffers
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -188,10 +188,18 @@ def plot(methods: list[Method], labels: list[str], path: Path, caption: str) -> 
 def disocclusion(seq: Sequence, frame: int) -> np.ndarray:
     """HW: 1 - the history test of `frame` of a sequence with motion (``warp.history`` on its
     normal and log1p depth, as a model that reads both prepares them): 1 where the previous frame
-    did not see the surface."""
-    guide = lambda i: torch.cat([seq.buffers["normal"][i : i + 1], torch.log1p(seq.buffers["depth"][i : i + 1].clamp(min=0))], 1)  # noqa: E731
+    did not see the surface. Pixels whose history lies off screen count 0 (the warp zeroes them
+    whatever the test says; they are not a disocclusion)."""
+    def guide(i: int) -> torch.Tensor:
+        b = sanitize_buffers({k: seq.buffers[k][i : i + 1] for k in ("normal", "depth")})
+        return torch.cat([b["normal"], torch.log1p(b["depth"])], 1)
+
     m, ok = warp.sanitize_motion(seq.buffers["motion"][frame : frame + 1])
-    return (1.0 - ok * warp.history(guide(frame), guide(frame - 1), m))[0, 0].numpy()
+    h, w = m.shape[-2:]
+    sx = torch.arange(w, dtype=m.dtype).view(1, 1, w) + m[:, 0]
+    sy = torch.arange(h, dtype=m.dtype).view(1, h, 1) + m[:, 1]
+    on_screen = ((sx >= 0) & (sx <= w - 1) & (sy >= 0) & (sy <= h - 1)).to(m.dtype).unsqueeze(1)
+    return (on_screen * (1.0 - ok * warp.history(guide(frame), guide(frame - 1), m)))[0, 0].numpy()
 
 
 def window(v: np.ndarray, c: int, avoid: list[tuple[int, int]] = []) -> tuple[int, int]:  # noqa: B006
