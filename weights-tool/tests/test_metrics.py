@@ -24,5 +24,7 @@ def test_metrics_give_the_shared_vectors_values() -> None:
 def test_the_shared_vectors_are_what_the_generator_writes() -> None:
     v, fresh = load_file(str(VECTORS)), metrics.shared_vectors()
     assert sorted(v) == sorted(fresh)
+    # Inputs are seeded and equal bit for bit; the expected metrics are float64 reductions whose
+    # last bit may differ between machines and thread counts.
     for k in v:
-        np.testing.assert_array_equal(v[k], fresh[k], err_msg=k)
+        np.testing.assert_allclose(v[k], fresh[k], rtol=1e-12, atol=0, err_msg=k)
