@@ -26,5 +26,8 @@ cargo fmt --manifest-path scripts/spirv-val/Cargo.toml --check
 echo "== Rust tests (workspace)"
 cargo test --workspace --locked
 
+echo "== fuzzing the readers, weights loader and command line (60 s; scripts/fuzz.sh)"
+bash scripts/fuzz.sh 60
+
 echo "== weights-tool tests (PyTorch)"
 (cd weights-tool && python3 -m pytest -q)

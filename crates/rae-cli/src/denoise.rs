@@ -283,7 +283,10 @@ pub fn run(o: &Options) -> Result<()> {
         if motion.is_none() {
             inputs.motion = None;
         }
-        let t = d.denoise_into(&inputs, &mut out).with_context(|| format!("frame {}", frame.number))?;
+        let t = d.denoise_into(&inputs, &mut out).with_context(|| match gpu.lost() {
+            Some(reason) => format!("frame {}: the GPU device was lost ({reason})", frame.number),
+            None => format!("frame {}", frame.number),
+        })?;
         if let Some(h) = &mut helper {
             h.first_frame_done();
         }

@@ -780,3 +780,47 @@ fn lavapipe_gets_wide_vectors_unless_the_user_chose_a_width() {
     let chosen = lavapipe(Some("256")).expect("lavapipe");
     assert!(chosen.contains("256 bits"), "{chosen}");
 }
+
+#[test]
+fn an_output_disk_that_fills_up_fails_naming_the_file_and_leaves_no_partial_file() {
+    // The output goes to a 16 KiB tmpfs, mounted in a private mount namespace (`unshare`: as
+    // root or where user namespaces are allowed) that ends with the command; inside it, what
+    // the folder holds when rae-cli stops is listed and copied out.
+    if !Command::new("unshare").args(["-rm", "true"]).status().is_ok_and(|s| s.success()) {
+        eprintln!("skipped: no mount namespace here (unshare -rm)");
+        return;
+    }
+    let tmp = tempfile::tempdir().unwrap();
+    let seq = seq_dir(&tmp);
+    per_buffer_sequence(&seq, 6);
+    let (small, copy) = (tmp.path().join("small"), tmp.path().join("copy"));
+    std::fs::create_dir(&small).unwrap();
+    let script = r#"mount -t tmpfs -o size=16k tmpfs "$SMALL" || exit 99
+"$@"; status=$?
+echo "listing: $(ls -A "$SMALL/out" | tr '\n' ' ')"
+cp -r "$SMALL/out" "$COPY"
+exit $status"#;
+    let weights = fixture("weights_full.safetensors");
+    let out = Command::new("unshare")
+        .args(["-rm", "sh", "-c", script, "sh", env!("CARGO_BIN_EXE_rae-cli"), "denoise"])
+        .arg(&seq)
+        .args(["-o", &format!("{}/out", small.display()), "--weights", &weights, "--no-compile-helper", "--tile", REFERENCE_TILE])
+        .env("SMALL", &small)
+        .env("COPY", &copy)
+        .output()
+        .unwrap();
+    let (stdout, stderr) = (String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+    assert_ne!(out.status.code(), Some(99), "mount failed: {stderr}");
+    assert!(!out.status.success(), "a full disk is an error: {stdout}");
+    let listing_line = stdout.lines().find(|l| l.starts_with("listing:")).expect("the folder was listed");
+    let written: Vec<&str> = listing_line["listing:".len()..].split_whitespace().collect();
+    assert!(written.len() < 6, "the disk filled before the last frame: {written:?}");
+    assert!(written.iter().all(|f| f.starts_with("denoised_") && !f.contains("partial")), "no partial file is left: {written:?}");
+    let failed = format!("denoised_{:04}.exr", written.len());
+    assert!(stderr.contains(&failed) && stderr.to_lowercase().contains("space"), "the error names {failed} and the problem: {stderr}");
+    // What is there is whole: each frame reads back at full size.
+    for f in &written {
+        let pixels = pixels(&copy.join(f));
+        assert_eq!(pixels.len(), W * H, "{f}");
+    }
+}

@@ -55,11 +55,15 @@ impl Golden {
     /// Read a golden file.
     pub fn load(path: impl AsRef<Path>) -> Result<Golden> {
         let path = path.as_ref();
-        let origin = path.display().to_string();
         let bytes = std::fs::read(path).map_err(|source| Error::Io { path: path.into(), source })?;
-        let bad = |reason: String| Error::WeightsFormat { origin: origin.clone(), reason };
-        let (_, meta) = safetensors::SafeTensors::read_metadata(&bytes).map_err(|e| bad(e.to_string()))?;
-        let st = safetensors::SafeTensors::deserialize(&bytes).map_err(|e| bad(e.to_string()))?;
+        Self::from_bytes(&bytes, &path.display().to_string())
+    }
+
+    /// Read a golden file held in memory; `origin` names it in errors.
+    pub fn from_bytes(bytes: &[u8], origin: &str) -> Result<Golden> {
+        let bad = |reason: String| Error::WeightsFormat { origin: origin.to_string(), reason };
+        let (_, meta) = safetensors::SafeTensors::read_metadata(bytes).map_err(|e| bad(e.to_string()))?;
+        let st = safetensors::SafeTensors::deserialize(bytes).map_err(|e| bad(e.to_string()))?;
         let info: serde_json::Value = meta
             .metadata()
             .as_ref()

@@ -10,6 +10,8 @@ pub struct Gpu {
     pub device: wgpu::Device,
     /// Its queue.
     pub queue: wgpu::Queue,
+    /// Why the device was lost, once it is (its device-lost callback writes it).
+    lost: std::sync::Arc<std::sync::Mutex<Option<String>>>,
 }
 
 /// Mesa's llvmpipe (lavapipe) variable for the width of its vectors in bits; a subgroup is that
@@ -145,7 +147,18 @@ impl Gpu {
             },
             ..Default::default()
         }))?;
-        Ok(Self { adapter, device, queue })
+        let lost = std::sync::Arc::new(std::sync::Mutex::new(None));
+        let record = lost.clone();
+        device.set_device_lost_callback(move |reason, message| {
+            *record.lock().unwrap_or_else(|e| e.into_inner()) = Some(format!("{reason:?}: {message}"));
+        });
+        Ok(Self { adapter, device, queue, lost })
+    }
+
+    /// Why the device was lost (a driver reset, a crash, [`wgpu::Device::destroy`]), if it
+    /// was: after that every frame fails, and a new `Gpu` and `Denoiser` are needed.
+    pub fn lost(&self) -> Option<String> {
+        self.lost.lock().unwrap_or_else(|e| e.into_inner()).clone()
     }
 
     /// Name and backend of the adapter, for reports.

@@ -208,8 +208,38 @@ type ChannelGroups = Vec<(String, Vec<String>)>;
 /// An EXR file's pixels by channel group: each group's channels by name, with their values.
 type GroupPixels = BTreeMap<String, Vec<(String, Vec<f32>)>>;
 
-fn exr_size_and_groups(path: &Path) -> Result<((u32, u32), ChannelGroups)> {
+/// The largest frame side rae reads (wgpu's textures are smaller still; larger frames go in
+/// tiles).
+pub const MAX_SIDE: u32 = 16384;
+
+/// The most samples (pixels times channels, over every layer) rae reads from one EXR file:
+/// 4 GiB as f32. A header that declares more is refused before any pixel is read, so a
+/// malformed or hostile file cannot make the reader allocate without bound.
+pub const MAX_SAMPLES: u64 = 1 << 30;
+
+/// An EXR file's headers, refused if they declare a frame past [`MAX_SIDE`] or
+/// [`MAX_SAMPLES`].
+fn exr_meta(path: &Path) -> Result<exr::meta::MetaData> {
     let meta = exr::meta::MetaData::read_from_file(path, false).map_err(|e| input_err(path, format!("not a readable EXR file: {e}")))?;
+    let mut samples = 0u64;
+    for h in meta.headers.iter() {
+        let (w, h_) = (h.layer_size.width() as u64, h.layer_size.height() as u64);
+        if w > MAX_SIDE as u64 || h_ > MAX_SIDE as u64 {
+            return Err(input_err(path, format!("{w}x{h_} is larger than rae reads ({MAX_SIDE} pixels a side)")));
+        }
+        samples += w * h_ * h.channels.list.len() as u64;
+    }
+    if samples > MAX_SAMPLES {
+        return Err(input_err(
+            path,
+            format!("{samples} samples (pixels times channels) is more than rae reads from one file ({MAX_SAMPLES})"),
+        ));
+    }
+    Ok(meta)
+}
+
+fn exr_size_and_groups(path: &Path) -> Result<((u32, u32), ChannelGroups)> {
+    let meta = exr_meta(path)?;
     let mut groups: BTreeMap<String, Vec<String>> = BTreeMap::new();
     let mut size = None;
     for h in meta.headers.iter() {
@@ -237,7 +267,11 @@ fn image_size(path: &Path) -> Result<(u32, u32)> {
     if extension(path).as_deref() == Some("exr") {
         return Ok(exr_size_and_groups(path)?.0);
     }
-    image::image_dimensions(path).map_err(|e| input_err(path, format!("not a readable image: {e}")))
+    let (w, h) = image::image_dimensions(path).map_err(|e| input_err(path, format!("not a readable image: {e}")))?;
+    if w > MAX_SIDE || h > MAX_SIDE {
+        return Err(input_err(path, format!("{w}x{h} is larger than rae reads ({MAX_SIDE} pixels a side)")));
+    }
+    Ok((w, h))
 }
 
 /// The buffer a multi-layer group name stands for ("ViewLayer.Denoising Albedo" -> albedo).
@@ -520,6 +554,7 @@ fn pick_channels(path: &Path, slot: Slot, chans: &[(String, Vec<f32>)], n: usize
 }
 
 fn read_exr_groups(path: &Path) -> Result<GroupPixels> {
+    exr_meta(path)?;
     let image = exr::prelude::read_all_flat_layers_from_file(path).map_err(|e| input_err(path, format!("cannot read EXR: {e}")))?;
     let mut groups = GroupPixels::new();
     for layer in &image.layer_data {

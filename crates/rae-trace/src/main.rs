@@ -18,24 +18,29 @@ struct Cli {
 
 #[derive(Args)]
 struct SceneChoice {
-    /// A fixed scene: cornell, glossy or firefly.
-    #[arg(long, conflicts_with = "random")]
+    /// A fixed scene: cornell, glossy, firefly, cornell-moving or glossy-moving.
+    #[arg(long, conflicts_with_all = ["random", "varied"])]
     scene: Option<String>,
     /// A procedural scene from this seed.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "varied")]
     random: Option<u64>,
+    /// A procedural scene from this seed, from the wider generator the training set at scale
+    /// uses (moving objects, thin geometry, rooms, many lights, still to fast cameras).
+    #[arg(long)]
+    varied: Option<u64>,
 }
 
 impl SceneChoice {
     fn build(&self) -> Result<(Scene, String)> {
-        match (&self.scene, self.random) {
-            (Some(name), _) => {
+        match (&self.scene, self.random, self.varied) {
+            (Some(name), _, _) => {
                 let scene =
                     scenes::by_name(name).with_context(|| format!("unknown scene `{name}` (known: {})", scenes::NAMES.join(", ")))?;
                 Ok((scene, name.clone()))
             }
-            (None, Some(seed)) => Ok((scenes::random(seed), format!("random {seed}"))),
-            (None, None) => bail!("choose --scene NAME or --random SEED"),
+            (None, Some(seed), _) => Ok((scenes::random(seed), format!("random {seed}"))),
+            (None, None, Some(seed)) => Ok((scenes::varied(seed), format!("varied {seed}"))),
+            (None, None, None) => bail!("choose --scene NAME, --random SEED or --varied SEED"),
         }
     }
 }
@@ -71,6 +76,28 @@ enum Command {
         /// Output folder (created).
         out: PathBuf,
     },
+    /// Render a training set: --count sequences of `--varied` scenes (seeds from --first-seed),
+    /// their sample counts cycling through 1, 2, 4 and 8 spp, references at --ref-spp, each in
+    /// OUT/vSEED-Nspp. Sequences already there are kept, so an interrupted run continues.
+    Dataset {
+        /// Sequences to render.
+        #[arg(long, default_value_t = 300)]
+        count: u64,
+        /// Seed of the first scene.
+        #[arg(long, default_value_t = 1)]
+        first_seed: u64,
+        /// Frames per sequence.
+        #[arg(long, default_value_t = 8)]
+        frames: u32,
+        /// Samples per pixel of the references.
+        #[arg(long, default_value_t = 256)]
+        ref_spp: u32,
+        /// Image size, WxH.
+        #[arg(long, default_value = "128x128", value_parser = parse_size)]
+        size: (u32, u32),
+        /// Output folder (created).
+        out: PathBuf,
+    },
     /// Trace 1 spp per frame and denoise each with rae-core, hidden state carried: prints trace
     /// and denoise times per frame and writes color and denoised EXRs. The code to copy.
     Live {
@@ -94,10 +121,65 @@ enum Command {
     },
 }
 
-fn progress(frames: u32) -> ProgressBar {
-    let bar = ProgressBar::new(frames as u64);
+fn progress(frames: u64) -> ProgressBar {
+    let bar = ProgressBar::new(frames);
     bar.set_style(ProgressStyle::with_template("{bar:40} {pos}/{len} frames  {per_sec}  ETA {eta}  {msg}").expect("valid template"));
     bar
+}
+
+/// Renders every frame of `scene` into `out`, a step of `bar` per frame.
+fn render_frames(
+    scene: &Scene,
+    frames: u32,
+    settings: &Settings,
+    precision: output::Precision,
+    out: &Path,
+    bar: &ProgressBar,
+) -> Result<()> {
+    create_dir(out)?;
+    for f in 0..frames {
+        let fb = render_frame(scene, f, frames, settings);
+        output::write_frame(out, f, settings.width as usize, settings.height as usize, &fb, precision)?;
+        bar.inc(1);
+    }
+    Ok(())
+}
+
+/// Sample counts a training set cycles through, so one model serves them all.
+const DATASET_SPP: [u32; 4] = [1, 2, 4, 8];
+
+fn dataset(count: u64, first_seed: u64, frames: u32, ref_spp: u32, (width, height): (u32, u32), out: &Path) -> Result<()> {
+    create_dir(out)?;
+    let bar = progress(count * frames as u64);
+    let start = Instant::now();
+    let mut rendered = 0;
+    for seed in first_seed..first_seed + count {
+        let spp = DATASET_SPP[(seed % DATASET_SPP.len() as u64) as usize];
+        let name = format!("v{seed:05}-{spp}spp");
+        let dir = out.join(&name);
+        if dir.is_dir() {
+            bar.inc(frames as u64);
+            continue;
+        }
+        bar.set_message(name.clone());
+        // Written under a hidden name, then renamed: readers never see half a sequence.
+        let partial = out.join(format!(".{name}.partial"));
+        if partial.exists() {
+            std::fs::remove_dir_all(&partial).with_context(|| format!("removing {}", partial.display()))?;
+        }
+        let settings = Settings { width, height, spp, ref_spp, seed, max_depth: 8 };
+        render_frames(&scenes::varied(seed), frames, &settings, output::Precision::F32, &partial, &bar)?;
+        std::fs::rename(&partial, &dir).with_context(|| format!("renaming {} to {}", partial.display(), dir.display()))?;
+        rendered += 1;
+    }
+    bar.finish_and_clear();
+    println!(
+        "{count} sequences in {} ({rendered} rendered now, {} already there) in {:.1} s",
+        out.display(),
+        count - rendered,
+        start.elapsed().as_secs_f64()
+    );
+    Ok(())
 }
 
 fn create_dir(out: &Path) -> Result<()> {
@@ -106,14 +188,9 @@ fn create_dir(out: &Path) -> Result<()> {
 
 fn render(choice: &SceneChoice, frames: u32, settings: Settings, precision: output::Precision, out: &Path) -> Result<()> {
     let (scene, name) = choice.build()?;
-    create_dir(out)?;
-    let bar = progress(frames);
+    let bar = progress(frames as u64);
     let start = Instant::now();
-    for f in 0..frames {
-        let fb = render_frame(&scene, f, frames, &settings);
-        output::write_frame(out, f, settings.width as usize, settings.height as usize, &fb, precision)?;
-        bar.inc(1);
-    }
+    render_frames(&scene, frames, &settings, precision, out, &bar)?;
     bar.finish_and_clear();
     let secs = start.elapsed().as_secs_f64();
     let paths = frames as f64 * (settings.width * settings.height) as f64 * (settings.spp + settings.ref_spp) as f64;
@@ -192,6 +269,7 @@ fn main() -> Result<()> {
             let precision = if half { output::Precision::F16 } else { output::Precision::F32 };
             render(&scene, frames, Settings { width, height, spp, ref_spp, seed, max_depth }, precision, &out)
         }
+        Command::Dataset { count, first_seed, frames, ref_spp, size, out } => dataset(count, first_seed, frames, ref_spp, size, &out),
         Command::Live { scene, weights, frames, size, no_motion, out } => live(&scene, &weights, frames, size, !no_motion, &out),
     }
 }

@@ -25,8 +25,8 @@ pub enum Material {
     },
     /// Metal with Schlick Fresnel from `f0` and GGX roughness.
     Conductor {
-        /// Reflectance at normal incidence.
-        f0: Vec3A,
+        /// Reflectance at normal incidence (textured: tarnish, brushed patterns).
+        f0: Texture,
         /// Perceptual roughness (alpha = roughness^2).
         roughness: f32,
     },
@@ -158,7 +158,7 @@ impl Material {
     pub fn albedo(&self, uv: Vec2) -> Vec3A {
         match self {
             Material::Diffuse { albedo } | Material::Plastic { albedo, .. } => albedo.eval(uv),
-            Material::Conductor { f0, .. } => *f0,
+            Material::Conductor { f0, .. } => f0.eval(uv),
             Material::Dielectric { .. } | Material::Emitter { .. } => Vec3A::ONE,
         }
     }
@@ -180,7 +180,10 @@ impl Material {
         }
         match self {
             Material::Diffuse { albedo } => (albedo.eval(uv) * wi.z / PI, wi.z / PI),
-            Material::Conductor { f0, roughness } => ggx_reflect_eval(wo, wi, alpha(*roughness), |c| schlick(*f0, c)),
+            Material::Conductor { f0, roughness } => {
+                let f0 = f0.eval(uv);
+                ggx_reflect_eval(wo, wi, alpha(*roughness), |c| schlick(f0, c))
+            }
             Material::Plastic { albedo, roughness } => {
                 let p = plastic_spec_probability(*roughness);
                 let (spec, spec_pdf) = ggx_reflect_eval(wo, wi, alpha(*roughness), |c| Vec3A::splat(schlick(Vec3A::splat(COAT_F0), c).x));
@@ -201,9 +204,10 @@ impl Material {
                 (wi.z > 0.0).then(|| BsdfSample { wi, weight: albedo.eval(uv), pdf: wi.z / PI, specular: false })
             }
             Material::Conductor { f0, roughness } => {
+                let f0 = f0.eval(uv);
                 if *roughness < SMOOTH {
                     let wi = vec3a(-wo.x, -wo.y, wo.z);
-                    return Some(BsdfSample { wi, weight: schlick(*f0, wo.z), pdf: 0.0, specular: true });
+                    return Some(BsdfSample { wi, weight: schlick(f0, wo.z), pdf: 0.0, specular: true });
                 }
                 let a = alpha(*roughness);
                 let h = sample_vndf(wo, a, s.uniform2());
@@ -211,7 +215,7 @@ impl Material {
                 if wi.z <= 0.0 {
                     return None;
                 }
-                let (f_cos, pdf) = ggx_reflect_eval(wo, wi, a, |c| schlick(*f0, c));
+                let (f_cos, pdf) = ggx_reflect_eval(wo, wi, a, |c| schlick(f0, c));
                 (pdf > 0.0).then(|| BsdfSample { wi, weight: f_cos / pdf, pdf, specular: false })
             }
             Material::Plastic { roughness, .. } => {

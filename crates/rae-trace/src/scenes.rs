@@ -48,6 +48,11 @@ impl Builder {
         self.prims.push(Prim { shape: Shape::Sphere { center, radius }, material: m, velocity });
     }
 
+    /// Primitives that move together by `velocity` each frame (a box's faces).
+    fn moving(&mut self, prims: impl IntoIterator<Item = Prim>, velocity: Vec3A) {
+        self.prims.extend(prims.into_iter().map(|p| Prim { velocity, ..p }));
+    }
+
     fn finish(self, env: Environment, keys: Vec<Camera>) -> Scene {
         Scene::new(self.prims, self.materials, env, CameraPath { keys })
     }
@@ -93,7 +98,7 @@ pub fn glossy() -> Scene {
     for i in 0..5 {
         let r = [0.03, 0.15, 0.3, 0.5, 0.8][i];
         let x = -2.0 + i as f32;
-        let metal = b.material(Material::Conductor { f0: v(0.95, 0.64, 0.54), roughness: r });
+        let metal = b.material(Material::Conductor { f0: Texture::Constant(v(0.95, 0.64, 0.54)), roughness: r });
         let plastic = b.material(Material::Plastic { albedo: Texture::Constant(v(0.1, 0.3, 0.8)), roughness: r });
         b.sphere(v(x, 0.4, 0.0), 0.4, metal);
         b.sphere(v(x, 0.3, 1.2), 0.3, plastic);
@@ -122,7 +127,7 @@ pub fn cornell_moving() -> Scene {
     let green = b.material(diffuse(v(0.12, 0.45, 0.15)));
     let light = b.material(Material::Emitter { radiance: v(17.0, 12.0, 4.0) });
     let ball = b.material(Material::Diffuse { albedo: Texture::Checker { a: v(0.8, 0.5, 0.1), b: v(0.1, 0.2, 0.6), scale: 6.0 } });
-    let gold = b.material(Material::Conductor { f0: v(0.95, 0.64, 0.54), roughness: 0.2 });
+    let gold = b.material(Material::Conductor { f0: Texture::Constant(v(0.95, 0.64, 0.54)), roughness: 0.2 });
     b.prims.extend(quad(v(-1.0, 0.0, 1.0), v(2.0, 0.0, 0.0), v(0.0, 0.0, -2.0), 1.0, white));
     b.prims.extend(quad(v(-1.0, 2.0, -1.0), v(2.0, 0.0, 0.0), v(0.0, 0.0, 2.0), 1.0, white));
     b.prims.extend(quad(v(-1.0, 0.0, -1.0), v(2.0, 0.0, 0.0), v(0.0, 2.0, 0.0), 1.0, white));
@@ -142,7 +147,7 @@ pub fn glossy_moving() -> Scene {
     let mut scene = glossy();
     let mut prims = std::mem::take(&mut scene.prims);
     let mut materials = std::mem::take(&mut scene.materials);
-    materials.push(Material::Conductor { f0: v(0.9, 0.9, 0.9), roughness: 0.05 });
+    materials.push(Material::Conductor { f0: Texture::Constant(v(0.9, 0.9, 0.9)), roughness: 0.05 });
     materials.push(Material::Plastic { albedo: Texture::Constant(v(0.8, 0.15, 0.1)), roughness: 0.3 });
     let (mirror, red) = (materials.len() as u32 - 2, materials.len() as u32 - 1);
     prims.push(Prim { shape: Shape::Sphere { center: v(-2.6, 0.35, 2.2), radius: 0.35 }, material: mirror, velocity: v(0.3, 0.0, 0.0) });
@@ -159,7 +164,7 @@ pub fn firefly() -> Scene {
     let floor = b.material(Material::Diffuse { albedo: Texture::Noise { a: v(0.3, 0.25, 0.2), b: v(0.7, 0.6, 0.5), scale: 6.0, seed: 3 } });
     let light = b.material(Material::Emitter { radiance: v(40000.0, 36000.0, 30000.0) });
     let glass = b.material(Material::Dielectric { ior: 1.5, roughness: 0.0 });
-    let metal = b.material(Material::Conductor { f0: v(0.9, 0.9, 0.9), roughness: 0.05 });
+    let metal = b.material(Material::Conductor { f0: Texture::Constant(v(0.9, 0.9, 0.9)), roughness: 0.05 });
     // Room [-3,3] x [0,3] x [-3,3], inward-facing walls.
     b.prims.extend(quad(v(-3.0, 0.0, 3.0), v(6.0, 0.0, 0.0), v(0.0, 0.0, -6.0), 2.0, floor));
     b.prims.extend(quad(v(-3.0, 3.0, -3.0), v(6.0, 0.0, 0.0), v(0.0, 0.0, 6.0), 1.0, white));
@@ -211,7 +216,7 @@ pub fn random(seed: u64) -> Scene {
                 let t = texture(&mut r);
                 Material::Diffuse { albedo: t }
             }
-            2 => Material::Conductor { f0: color(&mut r) + v(0.1, 0.1, 0.1), roughness: r.random_range(0.0..0.7) },
+            2 => Material::Conductor { f0: Texture::Constant(color(&mut r) + v(0.1, 0.1, 0.1)), roughness: r.random_range(0.0..0.7) },
             3 => Material::Dielectric { ior: r.random_range(1.3..1.8), roughness: r.random_range(0.0..0.3) },
             _ => {
                 let t = texture(&mut r);
@@ -257,6 +262,150 @@ pub fn random(seed: u64) -> Scene {
             let a = a0 + da * k as f32 / 3.0;
             let jitter = v(r.random_range(-0.3..0.3), r.random_range(-0.2..0.2), r.random_range(-0.3..0.3));
             Camera { position: v(dist * a.sin(), height, dist * a.cos()) + jitter, target: center, vfov }
+        })
+        .collect();
+    b.finish(env, keys)
+}
+
+/// A texture from a wider range than [`random`]'s: patterns from coarse to a few pixels wide.
+fn detailed_texture(r: &mut Pcg32) -> Texture {
+    match r.random_range(0..5) {
+        0 => Texture::Constant(color(r)),
+        1 => Texture::Checker { a: color(r), b: color(r), scale: r.random_range(1.0..40.0) },
+        2 | 3 => Texture::Noise { a: color(r), b: color(r), scale: r.random_range(2.0..80.0), seed: r.random() },
+        _ => Texture::bricks(color(r), color(r)),
+    }
+}
+
+/// A material for an object of [`varied`]: diffuse, plastic, metal (plain or textured, smooth
+/// to rough), glass (smooth or frosted) or, now and then, an emitter.
+fn varied_material(r: &mut Pcg32) -> Material {
+    match r.random_range(0..20) {
+        0..=4 => Material::Diffuse { albedo: detailed_texture(r) },
+        5..=9 => Material::Plastic { albedo: detailed_texture(r), roughness: r.random_range(0.02..0.9) },
+        10..=14 => {
+            let tint = color(r) * 0.5 + v(0.45, 0.45, 0.45);
+            let f0 = if r.random_bool(0.5) {
+                Texture::Constant(tint)
+            } else {
+                Texture::Noise { a: tint, b: tint * r.random_range(0.3..0.8), scale: r.random_range(2.0..40.0), seed: r.random() }
+            };
+            Material::Conductor { f0, roughness: r.random_range(0.0..0.8) }
+        }
+        15..=18 => Material::Dielectric {
+            ior: r.random_range(1.3..1.9),
+            roughness: if r.random_bool(0.6) { 0.0 } else { r.random_range(0.05..0.4) },
+        },
+        _ => {
+            let tint = v(r.random_range(0.4..1.0), r.random_range(0.4..1.0), r.random_range(0.4..1.0));
+            Material::Emitter { radiance: tint * r.random_range(1.0..20.0) }
+        }
+    }
+}
+
+/// A seeded scene from a wider space than [`random`]'s, for training at scale: an open floor
+/// (with or without a back wall) or a closed room; 5-16 objects (spheres, boxes, thin poles and
+/// panels) of diffuse, plastic, metal, glass or emissive materials, up to three of them moving;
+/// one to eight area lights from small to large, sometimes a tiny bright one, a sky or darkness;
+/// and a camera that stands still, drifts, pans fast or dollies (from 0 to about 30 pixels a
+/// frame at 128x128 over 8 frames).
+pub fn varied(seed: u64) -> Scene {
+    // Its own stream: `varied(s)` shares nothing with `random(s)`.
+    let mut r = Pcg32::seed_from_u64(seed ^ 0x9e37_79b9_7f4a_7c15);
+    let mut b = Builder::new();
+    let room = r.random_bool(0.3);
+    let floor = match r.random_range(0..4) {
+        0 => Material::Diffuse { albedo: detailed_texture(&mut r) },
+        1 => Material::Conductor {
+            f0: Texture::Noise { a: v(0.6, 0.6, 0.6), b: v(0.3, 0.3, 0.3), scale: r.random_range(2.0..30.0), seed: r.random() },
+            roughness: r.random_range(0.1..0.6),
+        },
+        _ => Material::Plastic { albedo: detailed_texture(&mut r), roughness: r.random_range(0.05..1.0) },
+    };
+    let floor = b.material(floor);
+    let uv = r.random_range(1.0..6.0);
+    b.prims.extend(quad(v(-8.0, 0.0, 8.0), v(16.0, 0.0, 0.0), v(0.0, 0.0, -16.0), uv, floor));
+    let wall = b.material(Material::Diffuse { albedo: detailed_texture(&mut r) });
+    if room {
+        // Walls and ceiling of [-6, 6] x [0, 5] x [-6, 6], facing in.
+        b.prims.extend(quad(v(-6.0, 0.0, -6.0), v(12.0, 0.0, 0.0), v(0.0, 5.0, 0.0), uv, wall));
+        b.prims.extend(quad(v(6.0, 0.0, 6.0), v(-12.0, 0.0, 0.0), v(0.0, 5.0, 0.0), uv, wall));
+        b.prims.extend(quad(v(-6.0, 0.0, 6.0), v(0.0, 0.0, -12.0), v(0.0, 5.0, 0.0), uv, wall));
+        b.prims.extend(quad(v(6.0, 0.0, -6.0), v(0.0, 0.0, 12.0), v(0.0, 5.0, 0.0), uv, wall));
+        b.prims.extend(quad(v(-6.0, 5.0, -6.0), v(12.0, 0.0, 0.0), v(0.0, 0.0, 12.0), uv, wall));
+    } else if r.random_bool(0.7) {
+        b.prims.extend(quad(v(-8.0, 0.0, -4.0), v(16.0, 0.0, 0.0), v(0.0, 6.0, 0.0), uv, wall));
+    }
+    let objects = r.random_range(5..17);
+    let movers = if r.random_bool(0.5) { r.random_range(1..4) } else { 0 };
+    for i in 0..objects {
+        let m = varied_material(&mut r);
+        let m = b.material(m);
+        let velocity =
+            if i < movers { v(r.random_range(-0.25..0.25), r.random_range(-0.03..0.03), r.random_range(-0.25..0.25)) } else { Vec3A::ZERO };
+        let (x, z) = (r.random_range(-3.5..3.5), r.random_range(-3.5..2.5));
+        #[allow(clippy::approx_constant)]
+        let yaw = r.random_range(0.0..3.14);
+        match r.random_range(0..20) {
+            0..=8 => {
+                let rad = r.random_range(0.1..0.9);
+                b.moving_sphere(v(x, rad + velocity.y.abs() * 8.0, z), rad, m, velocity);
+            }
+            9..=14 => {
+                let half = v(r.random_range(0.1..0.8), r.random_range(0.1..1.0), r.random_range(0.1..0.8));
+                b.moving(cuboid(v(x, half.y, z), half, yaw, m), velocity);
+            }
+            15..=17 => {
+                // A thin pole: a few pixels wide.
+                let (w, h) = (r.random_range(0.015..0.06), r.random_range(0.5..2.0));
+                b.moving(cuboid(v(x, h, z), v(w, h, w), yaw, m), velocity);
+            }
+            _ => {
+                // A thin panel on edge.
+                let half = v(r.random_range(0.4..1.2), r.random_range(0.3..1.0), r.random_range(0.01..0.03));
+                b.moving(cuboid(v(x, half.y, z), half, yaw, m), velocity);
+            }
+        }
+    }
+    let top = if room { 4.95 } else { 4.5 };
+    for _ in 0..r.random_range(1..9) {
+        let s: f32 = r.random_range(0.1..2.5);
+        let tint = v(r.random_range(0.6..1.0), r.random_range(0.6..1.0), r.random_range(0.6..1.0));
+        let light = b.material(Material::Emitter { radiance: tint * r.random_range(3.0..20.0) / s.max(0.4).powi(2) });
+        let (x, z) = (r.random_range(-4.0..4.0), r.random_range(-4.0..4.0));
+        b.prims.extend(quad(v(x, top, z), v(s, 0.0, 0.0), v(0.0, 0.0, s), 1.0, light)); // facing down
+    }
+    if r.random_bool(0.3) {
+        let light = b.material(Material::Emitter { radiance: v(1.0, 0.9, 0.8) * r.random_range(5e3..5e4) });
+        b.sphere(v(r.random_range(-3.0..3.0), r.random_range(1.0..3.5), r.random_range(-3.0..2.0)), 0.03, light);
+    }
+    let env = if !room && r.random_bool(0.6) {
+        let s = r.random_range(0.1..2.0);
+        Environment::Sky { zenith: v(0.3, 0.45, 0.9) * s, horizon: v(0.9, 0.85, 0.8) * s, ground: v(0.1, 0.1, 0.1) * s }
+    } else {
+        Environment::Black
+    };
+    // Orbit angle over the whole sequence: still, drifting, panning or fast.
+    let sweep = match r.random_range(0..4) {
+        0 => 0.0,
+        1 => r.random_range(0.02..0.2),
+        2 => r.random_range(0.2..0.7),
+        _ => r.random_range(0.7..1.5),
+    } * if r.random_bool(0.5) { 1.0 } else { -1.0 };
+    let dolly = if r.random_bool(0.3) { r.random_range(-0.35..0.35) } else { 0.0 };
+    let shake = if sweep == 0.0 && dolly == 0.0 { 0.0 } else { r.random_range(0.0..0.3) };
+    let center = v(r.random_range(-1.0..1.0), r.random_range(0.3..1.0), r.random_range(-1.0..1.0));
+    let a0 = r.random_range(-0.8..0.8);
+    let (dist, height) =
+        if room { (r.random_range(2.5..4.0), r.random_range(1.0..3.0)) } else { (r.random_range(4.0..8.0), r.random_range(0.6..3.5)) };
+    let vfov = r.random_range(30.0..65.0);
+    let keys = (0..4)
+        .map(|k| {
+            let f = k as f32 / 3.0;
+            let a = a0 + sweep * f;
+            let d = dist * (1.0 + dolly * f);
+            let jitter = v(r.random_range(-1.0..1.0), r.random_range(-0.6..0.6), r.random_range(-1.0..1.0)) * shake;
+            Camera { position: v(d * a.sin(), height, d * a.cos()) + jitter, target: center, vfov }
         })
         .collect();
     b.finish(env, keys)

@@ -170,3 +170,44 @@ fn the_moving_scenes_move_and_the_fixed_ones_do_not() {
         assert_eq!(scene.at_frame(3).is_some(), name.ends_with("-moving"), "{name}");
     }
 }
+
+#[test]
+fn varied_scenes_span_still_to_fast_cameras_moving_objects_and_every_material() {
+    let (mut still, mut fast, mut moving, mut emissive_objects) = (0, 0, 0, 0);
+    let mut materials = [0usize; 5];
+    for seed in 1..=60 {
+        let scene = scenes::varied(seed);
+        assert!(scene.has_lights(), "varied {seed} has a light");
+        // The camera's sweep, in radians of view direction over the sequence.
+        let (first, last) = (scene.camera.frame(0, 8), scene.camera.frame(7, 8));
+        let turn = (first.target - first.position).normalize().angle_between((last.target - last.position).normalize());
+        if (first.position - last.position).length() < 1e-4 && turn < 1e-4 {
+            still += 1;
+        }
+        if turn > 0.6 {
+            fast += 1;
+        }
+        moving += scene.at_frame(1).is_some() as usize;
+        for m in &scene.materials {
+            materials[match m {
+                Material::Diffuse { .. } => 0,
+                Material::Plastic { .. } => 1,
+                Material::Conductor { .. } => 2,
+                Material::Dielectric { .. } => 3,
+                Material::Emitter { .. } => 4,
+            }] += 1;
+        }
+        let glowing_sphere = |(i, p): (usize, &Prim)| {
+            matches!(scene.material(i), Material::Emitter { .. }) && matches!(p.shape, Shape::Sphere { radius, .. } if radius > 0.05)
+        };
+        emissive_objects += scene.prims.iter().enumerate().any(glowing_sphere) as usize;
+    }
+    assert!(still >= 5 && fast >= 5 && moving >= 15, "still {still}, fast {fast}, with moving objects {moving} of 60");
+    assert!(materials.iter().all(|&n| n >= 10), "materials (diffuse, plastic, metal, glass, emitter): {materials:?}");
+    assert!(emissive_objects >= 1, "some scene has an emissive sphere");
+    let (a, b) = (
+        render_frame(&scenes::varied(3), 1, 3, &settings(16, 16, 1, 0, 1)),
+        render_frame(&scenes::varied(3), 1, 3, &settings(16, 16, 1, 0, 1)),
+    );
+    assert_eq!(a, b, "a seed reproduces its scene");
+}

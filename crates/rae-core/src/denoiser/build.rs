@@ -286,7 +286,9 @@ fn prep_layout(arch: &Arch, graph: &Graph) -> PrepLayout {
 
 impl Denoiser {
     /// [`Self::new`] with every choice spelled out: storage precision, conv tiles, weight
-    /// memory, source access and staging ([`Options`]).
+    /// memory, source access and staging ([`Options`]). A frame past the device's limits, or
+    /// GPU memory that runs out while building, is an error ([`Error::FrameSize`],
+    /// [`Error::Gpu`]), never a panic.
     pub fn with_options(
         device: &wgpu::Device,
         queue: &wgpu::Queue,
@@ -295,6 +297,11 @@ impl Denoiser {
         height: u32,
         options: Options,
     ) -> Result<Self> {
+        let what = format!("building the denoiser for {width}x{height}");
+        catching_gpu_errors(device, &what, || Self::build(device, queue, weights, width, height, options))
+    }
+
+    fn build(device: &wgpu::Device, queue: &wgpu::Queue, weights: &Weights, width: u32, height: u32, options: Options) -> Result<Self> {
         let Options { precision, tiles, weights: chosen_memory, sources, staging, motion } = options;
         let device_type = device.adapter_info().device_type;
         let arch = weights.arch.clone();
@@ -388,4 +395,20 @@ pub fn activation_bytes(graph: &Graph, pwidth: u32, pheight: u32, precision: Pre
 pub(super) fn create_init(device: &wgpu::Device, label: &str, contents: &[u8], usage: wgpu::BufferUsages) -> wgpu::Buffer {
     use wgpu::util::DeviceExt;
     device.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some(label), contents, usage })
+}
+
+/// Runs `f` with wgpu's validation and out-of-memory errors caught in error scopes on this
+/// thread, instead of going to the device's uncaptured-error handler (which panics by default):
+/// a buffer past the device's limits, or GPU memory that runs out, becomes [`Error::Gpu`].
+pub(crate) fn catching_gpu_errors<T>(device: &wgpu::Device, what: &str, f: impl FnOnce() -> Result<T>) -> Result<T> {
+    let oom = device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+    let validation = device.push_error_scope(wgpu::ErrorFilter::Validation);
+    let result = f();
+    let validation = pollster::block_on(validation.pop());
+    let oom = pollster::block_on(oom.pop());
+    match (oom, validation) {
+        (Some(e), _) => Err(Error::Gpu(format!("{what}: out of GPU memory: {e}"))),
+        (None, Some(e)) => Err(Error::Gpu(format!("{what}: {e}"))),
+        (None, None) => result,
+    }
 }

@@ -65,7 +65,8 @@ impl Denoiser {
             });
         }
         if self.host.is_none() {
-            self.host = Some(self.make_host_io()?);
+            self.host =
+                Some(super::build::catching_gpu_errors(&self.device, "allocating the host transfer buffers", || self.make_host_io())?);
         }
         let t0 = Instant::now();
         let host = self.host.take().expect("made above");
@@ -141,7 +142,8 @@ impl Denoiser {
         }
         self.validate(frame)?;
         if self.host.is_none() {
-            self.host = Some(self.make_host_io()?);
+            self.host =
+                Some(super::build::catching_gpu_errors(&self.device, "allocating the host transfer buffers", || self.make_host_io())?);
         }
         if self.profiler.is_none() {
             // A timestamp before the frame and after each stage, and the opening one's spare.

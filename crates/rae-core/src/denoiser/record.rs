@@ -231,7 +231,8 @@ impl Denoiser {
     /// meaningless, so the hidden state is reset after it.
     pub fn compile_backwards(&mut self) -> Result<()> {
         if self.host.is_none() {
-            self.host = Some(self.make_host_io()?);
+            self.host =
+                Some(super::build::catching_gpu_errors(&self.device, "allocating the host transfer buffers", || self.make_host_io())?);
         }
         let host = self.host.as_ref().expect("made above");
         let parity = self.parity;
