@@ -179,7 +179,10 @@ fn prepare(gid: vec2<u32>) -> u32 {
         px.normal = vec3<f32>(sanitize(n.x, -1.0, 1.0, 0.0), sanitize(n.y, -1.0, 1.0, 0.0), sanitize(n.z, -1.0, 1.0, 0.0));
     }
     if OFF_DEPTH != NONE {
-        px.depth = log(1.0 + sanitize(depth[i], 0.0, DEPTH_MAX, DEPTH_MAX));
+        // A miss is a miss whatever the renderer writes for it: +inf (rae-trace), 0 (Blender's
+        // Denoising Depth), NaN or a negative value all become DEPTH_MAX.
+        let d = sanitize(depth[i], 0.0, DEPTH_MAX, DEPTH_MAX);
+        px.depth = log(1.0 + select(DEPTH_MAX, d, d > 0.0));
     }
     if OFF_ROUGHNESS != NONE {
         px.roughness = sanitize(roughness[i], 0.0, 1.0, 0.0);

@@ -65,3 +65,15 @@ fn buffers_past_the_device_limits_are_an_error_not_a_panic() {
     let message = message.expect("a denoiser past the device's limits is an error");
     assert!(message.contains("256x256"), "{message}");
 }
+
+#[test]
+fn a_frame_past_the_device_texture_limit_is_an_error_naming_the_limit() {
+    let g = crate::gpu();
+    let weights = Weights::load(fixture("weights_color_tiny.safetensors")).unwrap();
+    let max = g.device.limits().max_texture_dimension_2d;
+    for (w, h) in [(max + 1, 16), (16, max + 1), (0, 16)] {
+        let err = Denoiser::with_options(&g.device, &g.queue, &weights, w, h, Options::default()).err().map(|e| e.to_string());
+        let err = err.unwrap_or_else(|| panic!("{w}x{h} is refused"));
+        assert!(err.contains(&format!("{w}x{h}")) && (err.contains(&max.to_string()) || err.contains("empty")), "{err}");
+    }
+}

@@ -182,9 +182,32 @@ def transform(name: str, v: torch.Tensor, k: int, flip: bool) -> torch.Tensor:
     return torch.rot90(v, k, dims=(-2, -1)).contiguous()
 
 
-def sample(seqs: list[Sequence], frames: int, crop: int, rng: np.random.Generator) -> dict[str, torch.Tensor]:
+def random_orthogonal(rng: np.random.Generator) -> torch.Tensor:
+    """A uniformly random 3x3 orthogonal matrix (a rotation, or a rotation and a mirror)."""
+    q, r = np.linalg.qr(rng.standard_normal((3, 3)))
+    return torch.from_numpy(q * np.sign(np.diag(r))).float()
+
+
+def vary_conventions(clip: dict[str, torch.Tensor], rng: np.random.Generator) -> dict[str, torch.Tensor]:
+    """The clip as another renderer might have written it, so that a model trained on it does
+    not rely on one renderer's conventions: half the time its normals are turned (and perhaps
+    mirrored) by one random orthogonal matrix, as world-space normals differ from camera-space
+    ones and renderers differ in handedness and sign; half the time its depth is in other units
+    (scaled by 10^U(-1, 1)). Misses stay misses (+inf scaled is +inf, 0 stays 0; prep maps
+    both to the same value). The same change holds for every frame of the clip."""
+    out = dict(clip)
+    if "normal" in out and rng.random() < 0.5:
+        m = random_orthogonal(rng)
+        out["normal"] = torch.einsum("ij,tjhw->tihw", m, out["normal"])
+    if "depth" in out and rng.random() < 0.5:
+        out["depth"] = out["depth"] * float(10.0 ** rng.uniform(-1.0, 1.0))
+    return out
+
+
+def sample(seqs: list[Sequence], frames: int, crop: int, rng: np.random.Generator, vary: bool = False) -> dict[str, torch.Tensor]:
     """A random clip: `frames` consecutive frames, a random crop, flip and 90-degree rotation
-    (motion turned with it, ``transform``). Returns buffer -> [T, C, crop, crop]."""
+    (motion turned with it, ``transform``), and with `vary` the conventions of another
+    renderer (``vary_conventions``). Returns buffer -> [T, C, crop, crop]."""
     s = seqs[rng.integers(len(seqs))]
     t0 = rng.integers(s.frames - frames + 1)
     _, _, h, w = s.buffers["color"].shape
@@ -194,4 +217,4 @@ def sample(seqs: list[Sequence], frames: int, crop: int, rng: np.random.Generato
     out = {}
     for name, t in s.buffers.items():
         out[name] = transform(name, t[t0 : t0 + frames, :, y : y + c, x : x + c], k, flip)
-    return out
+    return vary_conventions(out, rng) if vary else out

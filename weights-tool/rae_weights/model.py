@@ -148,7 +148,10 @@ def sanitize_buffers(frame: dict[str, torch.Tensor]) -> dict[str, torch.Tensor]:
         elif name == "normal":
             out[name] = _sanitize(t, -1.0, 1.0, 0.0)
         elif name == "depth":
-            out[name] = _sanitize(t, 0.0, DEPTH_MAX, DEPTH_MAX)
+            # A miss is a miss whatever the renderer writes for it: +inf (rae-trace), 0
+            # (Blender's Denoising Depth), NaN or a negative value all become DEPTH_MAX.
+            d = _sanitize(t, 0.0, DEPTH_MAX, DEPTH_MAX)
+            out[name] = torch.where(d > 0.0, d, torch.full_like(d, DEPTH_MAX))
         elif name == "roughness":
             out[name] = _sanitize(t, 0.0, 1.0, 0.0)
     return out

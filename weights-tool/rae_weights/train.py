@@ -156,7 +156,7 @@ def warm_start(model: RecurrentAE, arch: Arch, state: dict[str, torch.Tensor], s
 
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(prog="rae-weights train", description=__doc__)
-    p.add_argument("--data", required=True, type=Path)
+    p.add_argument("--data", required=True, type=Path, nargs="+", help="folders of training sequences (searched recursively)")
     p.add_argument("--val", type=Path)
     p.add_argument("--out", required=True, type=Path)
     p.add_argument("--steps", type=int, default=4000)
@@ -176,6 +176,12 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--val-every", type=int, default=500)
     p.add_argument("--ckpt-every", type=int, default=250)
     p.add_argument("--seed", type=int, default=0)
+    p.add_argument(
+        "--conventions",
+        choices=["varied", "as-rendered"],
+        default="varied",
+        help="varied: clips as other renderers might write them (normals turned, depth in other units; data.vary_conventions)",
+    )
     p.add_argument("--threads", type=int, default=max(1, (os.cpu_count() or 2)))
     p.add_argument("--max-minutes", type=float, default=0.0, help="stop (checkpoint and export) after this long")
     a = p.parse_args(argv)
@@ -204,7 +210,7 @@ def main(argv: list[str] | None = None) -> int:
         sched.load_state_dict(state["scheduler"])
         step = int(state["step"])
         print(f"resumed at step {step}")
-    train = load_sequences(a.data)
+    train = [s for d in a.data for s in load_sequences(d)]
     val = load_sequences(a.val) if a.val else []
     print(f"{len(train)} training sequences, {len(val)} held out; arch {arch.to_json()}")
     weights = PAPER_FRAME_WEIGHTS if a.frame_weights == "paper" and a.frames == 7 else (1.0,) * a.frames
@@ -223,7 +229,7 @@ def main(argv: list[str] | None = None) -> int:
         os.replace(tmp, ckpt)
 
     while step < a.steps:
-        clip = sample(train, a.frames, a.crop, rng)
+        clip = sample(train, a.frames, a.crop, rng, vary=a.conventions == "varied")
         ys = run_clip(model, arch, clip)
         ts = [target_space(arch, {k: v[i : i + 1] for k, v in clip.items()}) for i in range(a.frames)]
         motions = [clip["motion"][i : i + 1] for i in range(a.frames)] if "motion" in clip else None

@@ -69,3 +69,17 @@ def test_transfer_functions_invert_and_bound() -> None:
         lim = transfer.limit(name, y, 2.0, 1e8, 80.0)
         assert torch.allclose(transfer.decode(name, lim), 2 * x, rtol=1e-6, atol=1e-9), name
     assert abs(float(transfer.encode("pu21", torch.tensor(1.0, dtype=torch.float64))) - 1.0) < 1e-12
+
+
+def test_a_depth_miss_is_the_same_whatever_the_renderer_writes() -> None:
+    # rae-trace writes +inf at a miss, Blender's Denoising Depth 0; NaN and negative values
+    # are misses too. Prep maps every one to DEPTH_MAX, and hits keep their depth.
+    from rae_weights.model import DEPTH_MAX
+
+    arch = Arch(inputs=["color", "albedo", "depth"])
+    depth = torch.tensor([math.inf, 0.0, math.nan, -1.0, 1e9, 3.0, 1e-3]).view(1, 1, 1, 7)
+    x = prepare_input(arch, {"color": torch.ones(1, 3, 1, 7), "albedo": torch.ones(1, 3, 1, 7), "depth": depth})
+    d = x[0, 6, 0]
+    miss = math.log1p(DEPTH_MAX)
+    assert torch.allclose(d[:5], torch.full((5,), miss)), d
+    assert torch.allclose(d[5:], torch.log1p(torch.tensor([3.0, 1e-3]))), d

@@ -212,6 +212,13 @@ pub fn sanitize(v: f32, lo: f32, hi: f32, posinf: f32) -> f32 {
     }
 }
 
+/// Depth as prep reads it: a miss is a miss whatever the renderer writes for it (+inf, 0, NaN,
+/// a negative value): all become [`limits::DEPTH_MAX`].
+pub fn sanitize_depth(v: f32) -> f32 {
+    let d = sanitize(v, 0.0, limits::DEPTH_MAX, limits::DEPTH_MAX);
+    if d > 0.0 { d } else { limits::DEPTH_MAX }
+}
+
 fn sanitize_albedo(v: f32) -> f32 {
     sanitize(v, 0.0, limits::ALBEDO_MAX, 0.0)
 }
@@ -238,7 +245,7 @@ pub fn prepare(arch: &crate::Arch, frame: &crate::FrameInputs, w: usize, h: usiz
                         .collect(),
                     InputBuffer::Albedo => (0..3).map(|k| sanitize_albedo(data[3 * i + k])).collect(),
                     InputBuffer::Normal => (0..3).map(|k| sanitize(data[3 * i + k], -1.0, 1.0, 0.0)).collect(),
-                    InputBuffer::Depth => vec![(1.0 + sanitize(data[i], 0.0, limits::DEPTH_MAX, limits::DEPTH_MAX)).ln()],
+                    InputBuffer::Depth => vec![(1.0 + sanitize_depth(data[i])).ln()],
                     InputBuffer::Roughness => vec![sanitize(data[i], 0.0, 1.0, 0.0)],
                 };
                 for (k, v) in vals.into_iter().enumerate() {
