@@ -23,6 +23,13 @@ cargo fmt --version >/dev/null 2>&1 || rustup component add rustfmt
 cargo fmt --all --check
 cargo fmt --manifest-path scripts/spirv-val/Cargo.toml --check
 
+# Metal and DX12: the workspace compiles for macOS and Windows (cargo check does not link, so
+# neither platform's SDK is needed; running there is not tested here).
+echo "== native backends: cargo check for aarch64-apple-darwin (Metal) and x86_64-pc-windows-msvc (DX12)"
+rustup target add aarch64-apple-darwin x86_64-pc-windows-msvc >/dev/null
+cargo check --locked -q --workspace --target aarch64-apple-darwin
+cargo check --locked -q --workspace --target x86_64-pc-windows-msvc
+
 echo "== Rust tests (workspace)"
 cargo test --workspace --locked
 
