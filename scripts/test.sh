@@ -24,11 +24,13 @@ cargo fmt --all --check
 cargo fmt --manifest-path scripts/spirv-val/Cargo.toml --check
 
 # Metal and DX12: the workspace compiles for macOS and Windows (cargo check does not link, so
-# neither platform's SDK is needed; running there is not tested here).
-echo "== native backends: cargo check for aarch64-apple-darwin (Metal) and x86_64-pc-windows-msvc (DX12)"
-rustup target add aarch64-apple-darwin x86_64-pc-windows-msvc >/dev/null
+# neither platform's SDK is needed; running there is not tested here); rae-core compiles for
+# the browser (wasm32, wgpu's WebGPU backend).
+echo "== other targets: cargo check for aarch64-apple-darwin (Metal), x86_64-pc-windows-msvc (DX12), rae-core on wasm32-unknown-unknown (WebGPU)"
+rustup target add aarch64-apple-darwin x86_64-pc-windows-msvc wasm32-unknown-unknown >/dev/null
 cargo check --locked -q --workspace --target aarch64-apple-darwin
 cargo check --locked -q --workspace --target x86_64-pc-windows-msvc
+cargo check --locked -q -p rae-core --target wasm32-unknown-unknown
 
 echo "== Rust tests (workspace)"
 cargo test --workspace --locked

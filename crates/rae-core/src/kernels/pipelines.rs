@@ -743,25 +743,36 @@ impl Kernels {
             m.rows_b = m.rows_b.take().or(rows_b);
             m.mma = m.mma.take().or(mma);
         }
-        let threads = std::thread::available_parallelism().map_or(1, |n| n.get()).min(missing.len());
-        let this = &*self;
-        let made: Vec<(ConvVariant, wgpu::ComputePipeline)> = if threads <= 1 {
-            missing.iter().map(|&v| (v, this.create_conv(device, v))).collect()
-        } else {
-            // Thread t makes variants t, t + threads, ...; the results are gathered in order.
-            std::thread::scope(|scope| {
-                let workers: Vec<_> = (0..threads)
-                    .map(|t| {
-                        let missing = &missing;
-                        scope.spawn(move || {
-                            missing.iter().skip(t).step_by(threads).map(|&v| (v, this.create_conv(device, v))).collect::<Vec<_>>()
-                        })
-                    })
-                    .collect();
-                workers.into_iter().flat_map(|w| w.join().expect("a pipeline-creating thread panicked")).collect()
-            })
-        };
+        let made = self.create_convs(device, &missing);
         self.conv.extend(made);
+    }
+
+    /// Create the conv pipelines of `missing`, on as many threads as there are cores (the
+    /// driver compiles them as they are created on some platforms), in order.
+    #[cfg(not(target_arch = "wasm32"))]
+    fn create_convs(&self, device: &wgpu::Device, missing: &[ConvVariant]) -> Vec<(ConvVariant, wgpu::ComputePipeline)> {
+        let threads = std::thread::available_parallelism().map_or(1, |n| n.get()).min(missing.len());
+        if threads <= 1 {
+            return missing.iter().map(|&v| (v, self.create_conv(device, v))).collect();
+        }
+        // Thread t makes variants t, t + threads, ...; the results are gathered in order.
+        std::thread::scope(|scope| {
+            let workers: Vec<_> = (0..threads)
+                .map(|t| {
+                    scope.spawn(move || {
+                        missing.iter().skip(t).step_by(threads).map(|&v| (v, self.create_conv(device, v))).collect::<Vec<_>>()
+                    })
+                })
+                .collect();
+            workers.into_iter().flat_map(|w| w.join().expect("a pipeline-creating thread panicked")).collect()
+        })
+    }
+
+    /// Create the conv pipelines of `missing` in order (a browser's WebGPU objects stay on
+    /// their thread).
+    #[cfg(target_arch = "wasm32")]
+    fn create_convs(&self, device: &wgpu::Device, missing: &[ConvVariant]) -> Vec<(ConvVariant, wgpu::ComputePipeline)> {
+        missing.iter().map(|&v| (v, self.create_conv(device, v))).collect()
     }
 
     /// Create one conv pipeline (its module made by [`Kernels::prepare`]).
