@@ -211,3 +211,24 @@ fn varied_scenes_span_still_to_fast_cameras_moving_objects_and_every_material() 
     );
     assert_eq!(a, b, "a seed reproduces its scene");
 }
+
+#[test]
+fn dataset_renders_varied_sequences_at_cycling_sample_counts_and_continues_where_it_stopped() {
+    let out = tempfile::tempdir().unwrap();
+    let run = |count: &str| {
+        let status = std::process::Command::new(env!("CARGO_BIN_EXE_rae-trace"))
+            .args(["dataset", "--count", count, "--first-seed", "3", "--frames", "2", "--ref-spp", "2", "--size", "16x8"])
+            .arg(out.path())
+            .output()
+            .unwrap();
+        assert!(status.status.success(), "{}", String::from_utf8_lossy(&status.stderr));
+        String::from_utf8_lossy(&status.stdout).to_string()
+    };
+    run("2");
+    let mut names: Vec<String> = std::fs::read_dir(out.path()).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into()).collect();
+    names.sort();
+    assert_eq!(names, ["v00003-8spp", "v00004-1spp"], "seed 3 at 8 spp, seed 4 at 1 spp: the counts cycle 1, 2, 4, 8 by seed");
+    assert!(out.path().join("v00004-1spp/reference_0001.exr").exists() && out.path().join("v00004-1spp/motion_0000.exr").exists());
+    let again = run("3");
+    assert!(again.contains("1 rendered now, 2 already there"), "{again}");
+}
