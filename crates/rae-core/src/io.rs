@@ -208,8 +208,8 @@ type ChannelGroups = Vec<(String, Vec<String>)>;
 /// An EXR file's pixels by channel group: each group's channels by name, with their values.
 type GroupPixels = BTreeMap<String, Vec<(String, Vec<f32>)>>;
 
-/// The largest frame side rae reads (wgpu's textures are smaller still; larger frames go in
-/// tiles).
+/// The largest frame side rae reads; a file that declares more is refused before its pixels
+/// are read.
 pub const MAX_SIDE: u32 = 16384;
 
 /// The most samples (pixels times channels, over every layer) rae reads from one EXR file:

@@ -64,10 +64,7 @@ impl Denoiser {
                 channels: 3,
             });
         }
-        if self.host.is_none() {
-            self.host =
-                Some(super::build::catching_gpu_errors(&self.device, "allocating the host transfer buffers", || self.make_host_io())?);
-        }
+        self.ensure_host_io()?;
         let t0 = Instant::now();
         let host = self.host.take().expect("made above");
         let mut encoder = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("rae frame") });
@@ -141,10 +138,7 @@ impl Denoiser {
             return Err(Error::Gpu("the device has no TIMESTAMP_QUERY_INSIDE_PASSES: no per-stage times".into()));
         }
         self.validate(frame)?;
-        if self.host.is_none() {
-            self.host =
-                Some(super::build::catching_gpu_errors(&self.device, "allocating the host transfer buffers", || self.make_host_io())?);
-        }
+        self.ensure_host_io()?;
         if self.profiler.is_none() {
             // A timestamp before the frame and after each stage, and the opening one's spare.
             let count = self.graph.nodes.len() as u32 + 4;
@@ -188,7 +182,17 @@ impl Denoiser {
         Ok(names.zip(ticks.windows(2)).map(|(n, w)| (n, w[1].saturating_sub(w[0]) as f64 * period * 1e-6)).collect())
     }
 
-    pub(super) fn make_host_io(&self) -> Result<HostIo> {
+    /// Makes the host transfer buffers at the first frame that needs them; wgpu's validation
+    /// and out-of-memory errors while allocating them are an [`Error::Gpu`].
+    pub(super) fn ensure_host_io(&mut self) -> Result<()> {
+        if self.host.is_none() {
+            let host = super::build::catching_gpu_errors(&self.device, "allocating the host transfer buffers", || self.make_host_io())?;
+            self.host = Some(host);
+        }
+        Ok(())
+    }
+
+    fn make_host_io(&self) -> Result<HostIo> {
         let pixels = self.width as u64 * self.height as u64;
         let buffer = |label, size, usage| {
             self.device.create_buffer(&wgpu::BufferDescriptor { label: Some(label), size, usage, mapped_at_creation: false })

@@ -230,10 +230,7 @@ impl Denoiser {
     /// one workgroup costs no arithmetic to speak of at any frame size). What it writes is
     /// meaningless, so the hidden state is reset after it.
     pub fn compile_backwards(&mut self) -> Result<()> {
-        if self.host.is_none() {
-            self.host =
-                Some(super::build::catching_gpu_errors(&self.device, "allocating the host transfer buffers", || self.make_host_io())?);
-        }
+        self.ensure_host_io()?;
         let host = self.host.as_ref().expect("made above");
         let parity = self.parity;
         let mut encoder = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("rae compile") });
