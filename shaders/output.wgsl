@@ -1,5 +1,6 @@
 // Output: network result (channel block 0 of a texture array, padded size) -> radiance, tightly
-// packed RGB f32 at the frame size (the padding is cropped here). Inverts the transfer function,
+// packed RGB f32: the rectangle at (x0, y0) of size width x height (the frame, cropping the
+// padding; or a frame tile's interior, cropping its overlap). Inverts the transfer function,
 // clamping first so the result is finite, non-negative and bounded, and remodulates by
 // (albedo + eps).
 //
@@ -16,14 +17,14 @@ const OUT_LOG_MAX: f32 = 80.0;
 const OUT_GAIN: f32 = 2.0;
 
 struct Params {
-    width: u32,
+    x0: u32,          // the rectangle read from the network output
+    y0: u32,
+    width: u32,       // its size: the output buffer is width x height
     height: u32,
+    in_stride: u32,   // row length of the albedo buffer (the network's pixel (x, y) is its)
     demodulate: u32,
     transfer: u32,    // 0: none, 1: log1p
     albedo_eps: f32,
-    _pad0: u32,
-    _pad1: u32,
-    _pad2: u32,
 }
 
 @group(0) @binding(0) var<uniform> params: Params;
@@ -45,7 +46,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     if gid.x >= params.width || gid.y >= params.height {
         return;
     }
-    let y = textureLoad(src, vec2<u32>(gid.x, gid.y), 0u, 0).xyz;
+    let at = vec2<u32>(params.x0 + gid.x, params.y0 + gid.y);
+    let y = textureLoad(src, at, 0u, 0).xyz;
     let in_max = bitcast<f32>(stats[0]);
     var r: vec3<f32>;
     if params.transfer == 1u {
@@ -56,8 +58,9 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let i = gid.y * params.width + gid.x;
     if params.demodulate != 0u {
-        let a = vec3<f32>(albedo_channel(albedo[3u * i]), albedo_channel(albedo[3u * i + 1u]),
-                          albedo_channel(albedo[3u * i + 2u]));
+        let j = at.y * params.in_stride + at.x;
+        let a = vec3<f32>(albedo_channel(albedo[3u * j]), albedo_channel(albedo[3u * j + 1u]),
+                          albedo_channel(albedo[3u * j + 2u]));
         r = r * (a + vec3<f32>(params.albedo_eps));
     }
     radiance[3u * i] = r.x;

@@ -15,6 +15,7 @@ mod mma;
 mod shaders;
 mod stability;
 mod state;
+mod tiles;
 mod weights;
 mod winograd;
 

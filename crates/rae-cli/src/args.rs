@@ -47,9 +47,15 @@ pub enum Command {
         /// Also write tonemapped sRGB PNG previews.
         #[arg(long)]
         png: bool,
-        /// Storage precision of activations on the GPU (arithmetic is f32 either way).
-        #[arg(long, value_enum, default_value_t = PrecisionArg::F32)]
-        precision: PrecisionArg,
+        /// Storage precision of activations on the GPU (arithmetic is f32 either way); default
+        /// f32, or f16 where --max-memory is too small for f32.
+        #[arg(long, value_enum)]
+        precision: Option<PrecisionArg>,
+        /// Cap in MiB on the GPU memory the denoiser holds (its transfer buffers included):
+        /// frames whose whole plan exceeds it run in overlapping tiles, the largest that fit
+        /// (frames past the device's texture or binding limits too, cap or not).
+        #[arg(long)]
+        max_memory: Option<u64>,
         /// Write half-float EXR instead of float.
         #[arg(long)]
         half: bool,
@@ -91,6 +97,10 @@ pub enum Command {
         /// Also report GPU memory for these frame sizes (WxH), f32 and f16.
         #[arg(long, value_delimiter = ',', value_parser = parse_size)]
         size: Vec<(u32, u32)>,
+        /// With --size: the plan under this cap in MiB (whole frame or tiles), on a device
+        /// with WebGPU's default limits (8192-pixel textures, 128 MiB storage bindings).
+        #[arg(long)]
+        max_memory: Option<u64>,
     },
     /// List the adapters wgpu sees (WGPU_BACKEND filters; WGPU_ADAPTER_NAME picks one).
     Devices,
@@ -178,6 +188,10 @@ pub enum Command {
         /// state is reprojected: the cost of the warp), or both.
         #[arg(long, value_delimiter = ',', default_value = "off")]
         motion: Vec<String>,
+        /// Caps in MiB on the denoiser's GPU memory, or `none`: sizes whose whole plan exceeds
+        /// a cap run in tiles (the table's tiles column: columns x rows).
+        #[arg(long, value_delimiter = ',', default_value = "none")]
+        max_memory: Vec<String>,
     },
 }
 
@@ -224,6 +238,17 @@ pub fn parse_memory(s: &str) -> Result<Option<WeightMemory>> {
     }
 }
 
+/// `bench --max-memory` values: `none` or MiB, in bytes.
+pub fn parse_cap(s: &str) -> Result<Option<u64>> {
+    match s {
+        "none" => Ok(None),
+        _ => match s.parse::<u64>() {
+            Ok(m) if m > 0 => Ok(Some(m.saturating_mul(1 << 20))),
+            _ => bail!("max memory `{s}`: MiB (a positive whole number) or none"),
+        },
+    }
+}
+
 /// `bench --motion` values: `off` and `on`.
 pub fn parse_motion(s: &str) -> Result<bool> {
     match s {
@@ -245,7 +270,10 @@ impl Command {
             Command::Verify { tile, .. } => {
                 parse_tile(tile)?;
             }
-            Command::Bench { tile, weights_memory, sources, motion, .. } => {
+            Command::Bench { tile, weights_memory, sources, motion, max_memory, .. } => {
+                for m in max_memory {
+                    parse_cap(m)?;
+                }
                 for t in tile {
                     parse_tile(t)?;
                 }

@@ -6,6 +6,7 @@ use std::time::Duration;
 
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressStyle};
+use rae_core::denoiser::MemoryPlan;
 use rae_core::gpu::CompileHelper;
 use rae_core::io::{self, Sequence, Slot};
 use rae_core::metrics::median;
@@ -31,8 +32,11 @@ pub struct Options {
     pub half: bool,
     /// Sanitize NaN/Inf input values instead of refusing the frame.
     pub allow_nonfinite: bool,
-    /// Storage precision of activations on the GPU.
-    pub precision: Precision,
+    /// Storage precision of activations on the GPU (`None`: f32, or f16 where `max_memory` is
+    /// too small for f32).
+    pub precision: Option<Precision>,
+    /// Cap in bytes on the denoiser's GPU memory ([`rae_core::Options::max_memory`]).
+    pub max_memory: Option<u64>,
     /// Write per-frame times (and errors, where a reference exists) as CSV to this file.
     pub csv: Option<PathBuf>,
     /// The conv tile (`--tile`).
@@ -163,6 +167,24 @@ fn csv_text(reports: &[FrameReport]) -> String {
     s
 }
 
+/// The storage precision and the memory plan: the one asked for, else f32, or f16 where the
+/// cap is too small for f32 tiles.
+fn memory_plan(o: &Options, weights: &Weights, seq: &Sequence, gpu: &Gpu, motion: bool) -> Result<(Precision, MemoryPlan)> {
+    let limits = gpu.device.limits();
+    let plan = |p: Precision| MemoryPlan::new(&weights.arch, seq.width, seq.height, p, o.max_memory, None, motion, &limits);
+    match (o.precision, plan(o.precision.unwrap_or(Precision::F32))) {
+        (None, Err(rae_core::Error::MemoryCap { .. })) => {
+            let f16 = plan(Precision::F16).context("--max-memory: too small for f32 or f16 activations")?;
+            Ok((Precision::F16, f16))
+        }
+        (Some(Precision::F32), Err(e @ rae_core::Error::MemoryCap { .. })) => {
+            let hint = plan(Precision::F16).map_or(String::new(), |_| " (f16 activations fit: --precision f16)".into());
+            Err(anyhow::Error::from(e).context(format!("--max-memory{hint}")))
+        }
+        (p, plan) => Ok((p.unwrap_or(Precision::F32), plan.context("--max-memory")?)),
+    }
+}
+
 /// Run `denoise`.
 pub fn run(o: &Options) -> Result<()> {
     let seq = Sequence::scan(&o.input)?;
@@ -200,10 +222,12 @@ pub fn run(o: &Options) -> Result<()> {
 
     let gpu = Gpu::new()?;
     let motion_source = seq.motion_source();
-    let motion = o.motion.filter(|_| motion_source.is_some());
+    let (precision, plan) = memory_plan(o, &weights, &seq, &gpu, motion_source.is_some() && o.motion.is_some())?;
+    // Frames in tiles are not reprojected: their motion is left unread.
+    let motion = o.motion.filter(|_| motion_source.is_some() && plan.tiles.is_none());
     // Blender's Vector pass is converted as it is read; other motion is negated for OptiX's.
     let negate = motion == Some(MotionConvention::Optix) && motion_source != Some(io::MotionSource::BlenderVector);
-    let options = rae_core::Options { precision: o.precision, tiles: o.tiles, motion: motion.is_some(), ..Default::default() };
+    let options = rae_core::Options { precision, tiles: o.tiles, motion: motion.is_some(), max_memory: o.max_memory, ..Default::default() };
     let mut d = Denoiser::with_options(&gpu.device, &gpu.queue, &weights, seq.width, seq.height, options)?;
     let used: Vec<&str> = weights.arch.required_buffers().iter().map(|b| b.name()).collect();
     println!(
@@ -228,6 +252,7 @@ pub fn run(o: &Options) -> Result<()> {
     match (motion_source, o.motion) {
         (None, _) => println!("motion:  none (the hidden state is not reprojected)"),
         (Some(_), None) => println!("motion:  not used (--no-motion)"),
+        (Some(source), Some(_)) if plan.tiles.is_some() => println!("motion:  {source} not used (frames in tiles are not reprojected)"),
         (Some(source @ io::MotionSource::BlenderVector), Some(_)) => println!("motion:  {source}"),
         (Some(source), Some(MotionConvention::Rae)) => println!("motion:  {source}, rae convention"),
         (Some(source), Some(MotionConvention::Optix)) => println!("motion:  {source}, OptiX convention (negated)"),
@@ -244,6 +269,21 @@ pub fn run(o: &Options) -> Result<()> {
             TileChoice::Fixed(_) => "--tile",
         }
     );
+    let mib = |b: u64| b.div_ceil(1 << 20);
+    let cap = o.max_memory.map_or(String::new(), |c| format!(" under a cap of {} MiB", mib(c)));
+    match d.tile_plan() {
+        None => println!("memory:  {} MiB, {} activations, the frame whole{cap}", mib(plan.total()), precision.name()),
+        Some(t) => println!(
+            "memory:  {} MiB, {} activations{cap}: {} tiles of {}x{} ({} pixels of overlap; {:.2}x the whole frame's pixels)",
+            mib(plan.total()),
+            precision.name(),
+            t.count(),
+            t.extent.0,
+            t.extent.1,
+            t.overlap,
+            t.work_ratio()
+        ),
+    }
     println!("output:  {}", out_dir.display());
 
     let n = (seq.width * seq.height * 3) as usize;
@@ -260,7 +300,13 @@ pub fn run(o: &Options) -> Result<()> {
     let note = move || {
         said.suspend(|| eprintln!("the first frame is slow to come: compiling kernels on a second device too (lavapipe compiles at first use, into Mesa's shader cache)"))
     };
-    let mut helper = if o.no_helper { None } else { CompileHelper::start(&gpu, &weights, seq.width, seq.height, options, note) };
+    // Tiles run one network at their extent: the helper compiles it whole at that size (the
+    // same pipelines, without a second copy of the frame's state).
+    let (hw, hh, helper_options) = match d.tile_plan() {
+        Some(t) => (t.extent.0, t.extent.1, rae_core::Options { max_memory: None, ..options }),
+        None => (seq.width, seq.height, options),
+    };
+    let mut helper = if o.no_helper { None } else { CompileHelper::start(&gpu, &weights, hw, hh, helper_options, note) };
     for &i in &indices {
         let mut frame = seq.load(i)?;
         if let Some((buffer, path, count)) = frame.nonfinite.first()

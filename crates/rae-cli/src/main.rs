@@ -5,7 +5,7 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 use clap::Parser;
-use rae_cli::args::{Cli, Command, PrecisionArg, parse_memory, parse_motion, parse_sources, parse_tile};
+use rae_cli::args::{Cli, Command, PrecisionArg, parse_cap, parse_memory, parse_motion, parse_sources, parse_tile};
 use rae_cli::denoise;
 use rae_core::golden::{Golden, Tolerance};
 use rae_core::graph::Graph;
@@ -44,13 +44,14 @@ fn bench(path: &Path, sizes: &[(u32, u32)], frames: usize, warmup: usize, layers
         if rae_core::kernels::matrix_units_supported(&gpu.device) { "yes" } else { "no (mma tiles emulated)" }
     );
     println!(
-        "{:>10} {:>9} {:>12} {:>7} {:>7} {:>6} {:>6} {:>10} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>7} {:>9} {:>9} {:>8}",
+        "{:>10} {:>9} {:>12} {:>7} {:>7} {:>6} {:>6} {:>6} {:>10} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>7} {:>9} {:>9} {:>8}",
         "size",
         "precision",
         "tile",
         "weights",
         "sources",
         "motion",
+        "tiles",
         "build",
         "total ms",
         "upload",
@@ -116,10 +117,16 @@ fn bench(path: &Path, sizes: &[(u32, u32)], frames: usize, warmup: usize, layers
                 gpu_t.push(f.gpu.as_secs_f64() * 1e3);
                 down.push(f.download.as_secs_f64() * 1e3);
             }
-            let (pw, ph) = d.padded_size();
+            // The frame's padded size (a tiled denoiser's network runs at its tiles' extent).
+            let (pw, ph) = d.tile_plan().map_or(d.padded_size(), |t| (t.pwidth, t.pheight));
             let g = median(&mut gpu_t);
             let err = relative_difference(&out, reference);
-            let timed = if resident { Some(resident_frames(&gpu, &mut d, &frame, frames.max(1), warmup)?) } else { None };
+            // Tiled frames take host slices only: no resident run.
+            let timed = if resident && d.tile_plan().is_none() {
+                Some(resident_frames(&gpu, &mut d, &frame, frames.max(1), warmup)?)
+            } else {
+                None
+            };
             let rate_ms = timed.map_or(g, |(r, _)| r);
             let gflops = flop_px * (pw * ph) as f64 / (rate_ms * 1e-3) / 1e9;
             // What the denoiser holds (frames allocate nothing, so it is the peak); where the
@@ -133,12 +140,13 @@ fn bench(path: &Path, sizes: &[(u32, u32)], frames: usize, warmup: usize, layers
             let share = peak.map_or("-".to_string(), |p| format!("{:.1}%", 100.0 * gflops / p));
             let (res, pipe) = timed.map_or(("-".to_string(), "-".to_string()), |(r, p)| (format!("{r:.2}"), format!("{p:.2}")));
             println!(
-                "{s:>10} {:>9} {:>12} {:>7} {:>7} {:>6} {build_s:>6.1} {:>10.2} {:>9.2} {g:>9.2} {:>9.2} {res:>9} {pipe:>9} {gflops:>9.1} {share:>7} {mib:>9.1} {alloc:>9} {err:>8.1e}",
+                "{s:>10} {:>9} {:>12} {:>7} {:>7} {:>6} {:>6} {build_s:>6.1} {:>10.2} {:>9.2} {g:>9.2} {:>9.2} {res:>9} {pipe:>9} {gflops:>9.1} {share:>7} {mib:>9.1} {alloc:>9} {err:>8.1e}",
                 precision.name(),
                 tiles.to_string(),
                 d.weights_name(),
                 d.sources_name(),
                 if options.motion { "on" } else { "off" },
+                tiles_name(&d),
                 median(&mut total),
                 median(&mut up),
                 median(&mut down)
@@ -172,6 +180,8 @@ struct Sweep {
     sources: Vec<Option<SourceAccess>>,
     tiles: Vec<TileChoice>,
     motions: Vec<bool>,
+    /// `--max-memory` caps in bytes (`None`: the whole frame where the device takes it).
+    caps: Vec<Option<u64>>,
 }
 
 impl Sweep {
@@ -181,12 +191,27 @@ impl Sweep {
             self.precisions.iter().flat_map(move |&p| {
                 self.memories.iter().flat_map(move |&weights| {
                     self.sources.iter().flat_map(move |&sources| {
-                        self.tiles.iter().map(move |&tiles| Options { precision: p.into(), tiles, weights, sources, staging: None, motion })
+                        self.tiles.iter().flat_map(move |&tiles| {
+                            self.caps.iter().map(move |&max_memory| Options {
+                                precision: p.into(),
+                                tiles,
+                                weights,
+                                sources,
+                                motion,
+                                max_memory,
+                                ..Default::default()
+                            })
+                        })
                     })
                 })
             })
         })
     }
+}
+
+/// The tiles column of `bench`: `whole`, or columns x rows.
+fn tiles_name(d: &Denoiser) -> String {
+    d.tile_plan().map_or("whole".into(), |t| format!("{}x{}", t.columns.len(), t.rows.len()))
 }
 
 /// Deterministic, smooth-but-noisy host buffers of a `w` x `h` frame (color, then the one-channel
@@ -229,8 +254,8 @@ fn bench_interleaved(path: &Path, sizes: &[(u32, u32)], rounds: usize, warmup: u
         "ms: a frame from host slices to host slices (the `total` of bench); vs first: median over rounds of the ratio to the first combination in the same round"
     );
     println!(
-        "{:>10} {:>9} {:>12} {:>7} {:>7} {:>6} {:>10} {:>10} {:>9}",
-        "size", "precision", "tile", "weights", "sources", "motion", "median ms", "fastest", "vs first"
+        "{:>10} {:>9} {:>12} {:>7} {:>7} {:>6} {:>6} {:>9} {:>10} {:>10} {:>9}",
+        "size", "precision", "tile", "weights", "sources", "motion", "tiles", "held MiB", "median ms", "fastest", "vs first"
     );
     for &(w, h) in sizes {
         let s = format!("{w}x{h}");
@@ -259,12 +284,14 @@ fn bench_interleaved(path: &Path, sizes: &[(u32, u32)], rounds: usize, warmup: u
             let mut ratio: Vec<f64> = ms.iter().zip(&first).map(|(a, b)| a / b).collect();
             let fastest = ms.iter().copied().fold(f64::INFINITY, f64::min);
             println!(
-                "{s:>10} {:>9} {:>12} {:>7} {:>7} {:>6} {:>10.2} {fastest:>10.2} {:>9.3}",
+                "{s:>10} {:>9} {:>12} {:>7} {:>7} {:>6} {:>6} {:>9.1} {:>10.2} {fastest:>10.2} {:>9.3}",
                 precision.name(),
                 tiles.to_string(),
                 d.weights_name(),
                 d.sources_name(),
                 if *motion { "on" } else { "off" },
+                tiles_name(d),
+                d.gpu_bytes() as f64 / (1 << 20) as f64,
                 median(ms),
                 median(&mut ratio)
             );
@@ -381,7 +408,7 @@ fn stage_table(d: &mut Denoiser, frame: &rae_core::FrameInputs, out: &mut [f32],
     Ok(())
 }
 
-fn info(path: &Path, sizes: &[(u32, u32)]) -> Result<()> {
+fn info(path: &Path, sizes: &[(u32, u32)], max_memory: Option<u64>) -> Result<()> {
     let w = Weights::load(path)?;
     let a = &w.arch;
     let macs = Graph::new(a).macs_per_pixel();
@@ -415,8 +442,45 @@ fn info(path: &Path, sizes: &[(u32, u32)]) -> Result<()> {
             if guided { " and previous normal and depth" } else { "" },
             rae_core::denoiser::motion_bytes(pw, ph, a.levels(), guided) as f64 / (1u64 << 20) as f64
         );
+        if let Some(cap) = max_memory {
+            for p in [Precision::F32, Precision::F16] {
+                println!("plan {s} {} under {} MiB:  {}", p.name(), cap >> 20, plan_text(a, w, h, p, cap));
+            }
+        }
     }
     Ok(())
+}
+
+/// What `info --max-memory` says of one plan: whole or tiles, and what it holds.
+fn plan_text(arch: &rae_core::Arch, w: u32, h: u32, precision: Precision, cap: u64) -> String {
+    let limits = wgpu::Limits::default();
+    let mib = |b: u64| b as f64 / (1u64 << 20) as f64;
+    match rae_core::denoiser::MemoryPlan::new(arch, w, h, precision, Some(cap), None, false, &limits) {
+        Err(e) => format!("{e}"),
+        Ok(p) => {
+            let parts = format!(
+                "{:.0} MiB at most: activations {:.0}, state between tiles {:.0}, convs {:.0}, transfer buffers {:.0}",
+                mib(p.total()),
+                mib(p.activations),
+                mib(p.state),
+                mib(p.convs),
+                mib(p.io)
+            );
+            match &p.tiles {
+                None => format!("the frame whole, {parts}"),
+                Some(t) => format!(
+                    "{} tiles of {}x{} ({}x{} interiors, {} pixels of overlap, {:.2}x the frame's pixels), {parts}",
+                    t.count(),
+                    t.extent.0,
+                    t.extent.1,
+                    t.max_interior().0,
+                    t.max_interior().1,
+                    t.overlap,
+                    t.work_ratio()
+                ),
+            }
+        }
+    }
 }
 
 fn devices() -> Result<()> {
@@ -491,6 +555,7 @@ fn main() -> Result<()> {
             half,
             allow_nonfinite,
             precision,
+            max_memory,
             csv,
             tile,
             no_compile_helper,
@@ -509,14 +574,15 @@ fn main() -> Result<()> {
                 png,
                 half,
                 allow_nonfinite,
-                precision: precision.into(),
+                precision: precision.map(Into::into),
+                max_memory: max_memory.map(|m| m.saturating_mul(1 << 20)),
                 csv,
                 tiles,
                 no_helper: no_compile_helper,
                 motion: (!no_motion).then_some(motion_convention),
             })
         }
-        Command::Info { file, size } => info(&file, &size),
+        Command::Info { file, size, max_memory } => info(&file, &size, max_memory.map(|m| m.saturating_mul(1 << 20))),
         Command::Devices => devices(),
         Command::Verify { golden, tile } => verify(&golden, parse_tile(&tile)?),
         Command::Bench {
@@ -532,6 +598,7 @@ fn main() -> Result<()> {
             sources,
             interleave,
             motion,
+            max_memory,
         } => {
             let sweep = Sweep {
                 precisions: precision,
@@ -539,6 +606,7 @@ fn main() -> Result<()> {
                 sources: sources.iter().map(|s| parse_sources(s)).collect::<Result<_>>()?,
                 tiles: tile.iter().map(|t| parse_tile(t)).collect::<Result<_>>()?,
                 motions: motion.iter().map(|m| parse_motion(m)).collect::<Result<_>>()?,
+                caps: max_memory.iter().map(|m| parse_cap(m)).collect::<Result<_>>()?,
             };
             if interleave {
                 bench_interleaved(&weights, &sizes, frames, warmup, &sweep)

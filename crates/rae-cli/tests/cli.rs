@@ -285,6 +285,61 @@ fn a_cold_first_frame_gets_a_compile_helper_and_the_same_frames() {
 }
 
 #[test]
+fn a_memory_cap_runs_the_frames_in_tiles_and_too_small_a_cap_names_the_smallest() {
+    // 448x320 frames: the whole plan of the full network exceeds the cap halfway between it and
+    // the tiles' plan, so the frames run in tiles, close to the whole run.
+    let (w, h) = (448, 320);
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = seq_dir(&tmp);
+    for f in 0..2 {
+        let k = 0.003 * (f + 1) as f32;
+        write_rgb(&dir.join(format!("color_{f:04}.exr")), w, h, &wave(w * h * 3, k));
+        write_rgb(&dir.join(format!("albedo_{f:04}.exr")), w, h, &vec![0.5; w * h * 3]);
+        write_rgb(&dir.join(format!("normal_{f:04}.exr")), w, h, &[0.0, 1.0, 0.0].repeat(w * h));
+        write_y(&dir.join(format!("depth_{f:04}.exr")), w, h, &wave(w * h, 0.001));
+        write_y(&dir.join(format!("roughness_{f:04}.exr")), w, h, &vec![0.5; w * h]);
+    }
+    let arch = rae_core::Weights::load(fixture("weights_full.safetensors")).unwrap().arch;
+    let limits = wgpu::Limits::default();
+    let plan =
+        |tiles| rae_core::denoiser::MemoryPlan::new(&arch, w as u32, h as u32, rae_core::Precision::F32, None, tiles, false, &limits);
+    let whole = plan(None).unwrap().total();
+    let tiled = plan(Some(rae_core::denoiser::FrameTiles { tile: 192, overlap: 64 })).unwrap().total();
+    assert!(tiled < whole);
+    let cap = ((whole + tiled) / 2 >> 20).to_string();
+    let (ok, stdout, stderr) = denoise(&dir, &["--max-memory", &cap, "-o", tmp.path().join("tiled").to_str().unwrap()]);
+    assert!(ok, "{stderr}");
+    assert!(stdout.contains("tiles of") && stdout.contains(&format!("under a cap of {cap} MiB")), "{stdout}");
+    let (ok, _, stderr) = denoise(&dir, &["-o", tmp.path().join("whole").to_str().unwrap()]);
+    assert!(ok, "{stderr}");
+    let read = |d: &str| -> Vec<Vec<f32>> {
+        (0..2)
+            .map(|f| {
+                let img = read_first_rgba_layer_from_file(
+                    tmp.path().join(d).join(format!("denoised_{f:04}.exr")),
+                    |res, _| vec![0f32; res.width() * res.height() * 3],
+                    move |px: &mut Vec<f32>, pos, (r, g, b, _a): (f32, f32, f32, f32)| {
+                        px[3 * (pos.y() * w + pos.x())..][..3].copy_from_slice(&[r, g, b])
+                    },
+                )
+                .unwrap();
+                img.layer_data.channel_data.pixels
+            })
+            .collect()
+    };
+    for (a, b) in read("whole").iter().zip(&read("tiled")) {
+        let mean = a.iter().map(|v| v.abs()).sum::<f32>() / a.len() as f32;
+        let diff = a.iter().zip(b).map(|(x, y)| (x - y).abs()).sum::<f32>() / a.len() as f32;
+        assert!(diff < 1e-2 * mean, "tiled frames {diff} from the whole run on average (mean value {mean})");
+    }
+    // A cap below the smallest tiles: an error that names what they need, and nothing written.
+    let out = tmp.path().join("small");
+    let (ok, _, stderr) = denoise(&dir, &["--max-memory", "1", "-o", out.to_str().unwrap()]);
+    assert!(!ok && stderr.contains("the smallest tiles need"), "{stderr}");
+    assert!(listing(&out).iter().all(|n| !n.starts_with("denoised_")), "{:?}", listing(&out));
+}
+
+#[test]
 fn frame_range_selects_frames() {
     let tmp = tempfile::tempdir().unwrap();
     let seq = seq_dir(&tmp);
@@ -622,13 +677,15 @@ fn bench_32x32(frames: &str, extra: &[&str]) -> String {
 }
 
 /// Every column name of bench's tables (the timing table and `--interleave`'s).
-const BENCH_COLUMNS: [&str; 21] = [
+const BENCH_COLUMNS: [&str; 23] = [
     "size",
     "precision",
     "tile",
     "weights",
     "sources",
     "motion",
+    "tiles",
+    "held MiB",
     "build",
     "total ms",
     "upload",

@@ -258,6 +258,26 @@ pub fn prepare(arch: &crate::Arch, frame: &crate::FrameInputs, w: usize, h: usiz
     o
 }
 
+/// The largest prepared color value (demodulated, transfer space) of a frame, as prep.wgsl
+/// computes it per pixel: the output's bound ([`output_limit`]) for a frame run in tiles, where
+/// each tile's prep sees only its part.
+pub fn prepared_color_max(arch: &crate::Arch, frame: &crate::FrameInputs) -> f32 {
+    use crate::model::{InputBuffer, Transfer};
+    if !arch.inputs.contains(&InputBuffer::Color) {
+        return 0.0;
+    }
+    let mut m = 0f32;
+    for (i, c) in frame.color.iter().enumerate() {
+        let mut s = sanitize(*c, 0.0, limits::RADIANCE_MAX, limits::RADIANCE_MAX);
+        if arch.demodulate {
+            s /= sanitize_albedo(frame.albedo.expect("validated")[i]) + arch.albedo_eps;
+        }
+        m = m.max(s);
+    }
+    // The transfer is monotonic: applied once, to the largest value.
+    if arch.transfer == Transfer::Log1p { (1.0 + m).ln() } else { m }
+}
+
 /// The output kernel on the CPU: raw network output (padded) -> RGB radiance at `w x h`.
 pub fn finish(arch: &crate::Arch, y: &Chw, in_max: f32, albedo: Option<&[f32]>, w: usize, h: usize) -> Vec<f32> {
     use crate::model::Transfer;

@@ -135,6 +135,21 @@ pub enum Error {
         /// What is wrong.
         reason: String,
     },
+    /// A memory cap below what the smallest tiles of a frame need.
+    #[error("a memory cap of {} MiB is too small for {width}x{height} frames: the smallest tiles need {} MiB", cap / (1 << 20), smallest.div_ceil(1 << 20))]
+    MemoryCap {
+        /// Width.
+        width: u32,
+        /// Height.
+        height: u32,
+        /// The cap, in bytes.
+        cap: u64,
+        /// The smallest cap that works, in bytes.
+        smallest: u64,
+    },
+    /// What a tiled denoiser cannot do.
+    #[error("tiled frames: {0}")]
+    Tiled(&'static str),
     /// An input frame file or folder is unusable.
     #[error("{path}: {reason}")]
     Input {

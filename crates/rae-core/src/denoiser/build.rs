@@ -302,10 +302,19 @@ impl Denoiser {
     }
 
     fn build(device: &wgpu::Device, queue: &wgpu::Queue, weights: &Weights, width: u32, height: u32, options: Options) -> Result<Self> {
-        let Options { precision, tiles, weights: chosen_memory, sources, staging, motion } = options;
+        let Options { precision, tiles, weights: chosen_memory, sources, staging, motion, max_memory, frame_tiles } = options;
         let device_type = device.adapter_info().device_type;
         let arch = weights.arch.clone();
-        let (pwidth, pheight) = padded_size(device, &arch, width, height)?;
+        let limits = device.limits();
+        let memory_plan = MemoryPlan::new(&arch, width, height, precision, max_memory, frame_tiles, motion, &limits)?;
+        if memory_plan.tiles.is_some() && motion {
+            return Err(Error::Tiled("frames in tiles are not reprojected: build without Options::motion"));
+        }
+        // The network runs at the padded frame, or at the tiles' extent.
+        let (pwidth, pheight) = match &memory_plan.tiles {
+            None => padded_size(device, &arch, width, height)?,
+            Some(t) => t.extent,
+        };
         let graph = Graph::new(&arch);
         // Mma tiles read storage weights: a fixed one picks them where the caller left it open.
         let fixed_mma = matches!(tiles, TileChoice::Fixed(t) if t.method.is_mma());
@@ -325,6 +334,7 @@ impl Denoiser {
         }
         let convs = ConvPlan::with_choices(device, queue, &mut kernels, &specs, &choices.tiles, &choices.sources, &choices.memories)?;
         debug_assert_eq!(acts.bytes, activation_bytes(&graph, pwidth, pheight, precision));
+        let tiles = memory_plan.tiles.map(|plan| Tiles::new(device, plan, &graph, &arch, precision));
         let layout = prep_layout(&arch, &graph);
         let guide = Guide::of(&layout);
         let motion = motion.then(|| Motion::new(device, &mut kernels, &graph, &acts, &convs, guide, (width, height, pwidth, pheight)));
@@ -338,8 +348,16 @@ impl Denoiser {
             Transfer::None => 0,
             Transfer::Log1p => 1,
         };
-        let output_params =
-            OutputParams { width, height, demodulate: arch.demodulate as u32, transfer, albedo_eps: arch.albedo_eps, _pad: [0; 3] };
+        let output_params = OutputParams {
+            x0: 0,
+            y0: 0,
+            width,
+            height,
+            in_stride: width,
+            demodulate: arch.demodulate as u32,
+            transfer,
+            albedo_eps: arch.albedo_eps,
+        };
         let stats_usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC;
         Ok(Self {
             id: NEXT_ID.fetch_add(1, Ordering::Relaxed),
@@ -353,7 +371,8 @@ impl Denoiser {
             output_params: create_init(device, "output params", bytemuck::bytes_of(&output_params), wgpu::BufferUsages::UNIFORM),
             dummy: create_init(device, "absent buffer", &[0u8; 16], wgpu::BufferUsages::STORAGE),
             stats: create_init(device, "frame stats", &[0u8; 16], stats_usage),
-            bytes: acts.bytes + convs.bytes() + motion.as_ref().map_or(0, |m| m.bytes),
+            bytes: acts.bytes + convs.bytes() + motion.as_ref().map_or(0, |m| m.bytes) + tiles.as_ref().map_or(0, |t| t.bytes),
+            tiles,
             motion,
             input_texture: acts.input_texture,
             output_view,

@@ -16,12 +16,16 @@ pub(super) struct HostIo {
     offsets: Vec<u64>,
     /// The motion buffer and its offset in `upload`, for a denoiser built with motion.
     motion: Option<(wgpu::Buffer, u64)>,
+    /// Offset in `upload` of a tiled frame's output bound, copied into the stats buffer.
+    stats_at: u64,
     upload: wgpu::Buffer,
     /// Whether `upload` is mapped now (wgpu has no query for it).
     upload_mapped: std::sync::atomic::AtomicBool,
     output: wgpu::Buffer,
     readback: wgpu::Buffer,
     pub(super) binding: IoBinding,
+    /// Each tile's prep and output bind groups (tiled frames), row by row.
+    tile_groups: Vec<(wgpu::BindGroup, wgpu::BindGroup)>,
 }
 
 impl HostIo {
@@ -65,6 +69,9 @@ impl Denoiser {
             });
         }
         self.ensure_host_io()?;
+        if self.tiles.is_some() {
+            return self.denoise_tiles(frame, out);
+        }
         let t0 = Instant::now();
         let host = self.host.take().expect("made above");
         let mut encoder = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("rae frame") });
@@ -83,11 +90,101 @@ impl Denoiser {
         result.map(|_| FrameTimings { upload: t1 - t0, gpu: t2 - t1, download: t3 - t2 })
     }
 
-    /// Copy the frame's host slices into the mapped staging buffer, unmap it and record its
-    /// copies into the input buffers.
-    fn upload(&self, host: &HostIo, frame: &FrameInputs, encoder: &mut wgpu::CommandEncoder) -> Result<()> {
+    /// [`Self::denoise_into`] for a frame in tiles: per tile, its extent's inputs uploaded, the
+    /// old state copied in, the network run, the new state written back and its interior read
+    /// back into `out` (one submit per tile: the transfer buffers are a tile's).
+    fn denoise_tiles(&mut self, frame: &FrameInputs, out: &mut [f32]) -> Result<FrameTimings> {
+        let mut timings = FrameTimings::default();
+        let host = self.host.take().expect("made by denoise_into");
+        let tiles = self.tiles.take().expect("a tiled denoiser");
+        let bound = crate::cpu::prepared_color_max(&self.arch, frame);
+        let reset = self.reset_pending;
+        let mut result = Ok(());
+        // The network's state textures: it reads parity 0 and writes parity 1 on every tile.
+        let prev: Vec<&wgpu::Texture> = self.hidden_textures.iter().map(|p| &p[0]).collect();
+        let new: Vec<&wgpu::Texture> = self.hidden_textures.iter().map(|p| &p[1]).collect();
+        for (i, t) in tiles.plan.tiles().enumerate() {
+            let t0 = Instant::now();
+            let mut encoder = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("rae tile") });
+            if let Err(e) = self.upload_tile(&host, frame, &t, bound, &mut encoder) {
+                result = Err(e);
+                break;
+            }
+            if !reset {
+                tiles.copy_in(&mut encoder, &self.graph, &t, &prev);
+            }
+            let (prep, output) = &host.tile_groups[i];
+            self.record_passes(&mut encoder, prep, output, t.interior, None, None, 0, reset);
+            if !reset {
+                tiles.save_bands(&mut encoder, &self.graph, &t);
+            }
+            tiles.write_back(&mut encoder, &self.graph, &t, &new);
+            let bytes = t.interior.0 as u64 * t.interior.1 as u64 * 12;
+            encoder.copy_buffer_to_buffer(&host.output, 0, &host.readback, 0, bytes);
+            let t1 = Instant::now();
+            self.queue.submit(Some(encoder.finish()));
+            let waited = self.device.poll(wgpu::PollType::wait_indefinitely());
+            let t2 = Instant::now();
+            let width = self.width as usize;
+            let (iw, ih) = (t.interior.0 as usize, t.interior.1 as usize);
+            let deliver = |data: &[f32]| {
+                for y in 0..ih {
+                    let at = ((t.iy0 as usize + y) * width + t.ix0 as usize) * 3;
+                    out[at..at + iw * 3].copy_from_slice(&data[y * iw * 3..(y + 1) * iw * 3]);
+                }
+            };
+            let finished =
+                waited.map(|_| ()).map_err(|e| Error::Gpu(e.to_string())).and_then(|_| finish_host_io(&self.device, &host, deliver));
+            let t3 = Instant::now();
+            timings.upload += t1 - t0;
+            timings.gpu += t2 - t1;
+            timings.download += t3 - t2;
+            if let Err(e) = finished {
+                result = Err(e);
+                break;
+            }
+        }
+        self.tiles = Some(tiles);
+        self.host = Some(host);
+        result?;
+        self.reset_pending = false;
+        Ok(timings)
+    }
+
+    /// Copy tile `t`'s extent of the frame's host slices (the part inside the frame, rows
+    /// packed tightly) and the frame's output bound into the mapped staging buffer, unmap it
+    /// and record its copies into the input buffers and the stats.
+    fn upload_tile(&self, host: &HostIo, frame: &FrameInputs, t: &TileAt, bound: f32, encoder: &mut wgpu::CommandEncoder) -> Result<()> {
+        self.map_upload(host)?;
+        let (vw, vh) = (t.valid.0 as usize, t.valid.1 as usize);
+        let width = self.width as usize;
+        {
+            let mut view = host.upload.get_mapped_range_mut(..).map_err(|e| Error::Gpu(format!("staging buffer: {e:?}")))?;
+            for ((b, _), &off) in host.inputs.iter().zip(&host.offsets) {
+                let c = b.channels();
+                let src = frame.get(*b).expect("validated");
+                let row = vw * c;
+                for y in 0..vh {
+                    let at = ((t.y0 as usize + y) * width + t.x0 as usize) * c;
+                    let to = off as usize + y * row * 4;
+                    view.slice(to..to + row * 4).copy_from_slice(bytemuck::cast_slice(&src[at..at + row]));
+                }
+            }
+            let at = host.stats_at as usize;
+            view.slice(at..at + 16).copy_from_slice(bytemuck::bytes_of(&[bound.to_bits(), 0, 0, 0]));
+        }
+        host.upload.unmap();
+        host.upload_mapped.store(false, Ordering::Relaxed);
+        for ((b, buf), &off) in host.inputs.iter().zip(&host.offsets) {
+            encoder.copy_buffer_to_buffer(&host.upload, off, buf, 0, (vw * vh * b.channels() * 4) as u64);
+        }
+        encoder.copy_buffer_to_buffer(&host.upload, host.stats_at, &self.stats, 0, 16);
+        Ok(())
+    }
+
+    /// Map the staging buffer if a failed frame left it unmapped (a frame ends with it mapped).
+    fn map_upload(&self, host: &HostIo) -> Result<()> {
         if !host.upload_mapped.load(Ordering::Relaxed) {
-            // Only after a failed frame: map it again (a frame normally ends with it mapped).
             let (tx, rx) = std::sync::mpsc::channel();
             host.upload.map_async(wgpu::MapMode::Write, .., move |r| {
                 let _ = tx.send(r);
@@ -96,6 +193,13 @@ impl Denoiser {
             rx.recv().map_err(|e| Error::Gpu(e.to_string()))?.map_err(|e| Error::Gpu(e.to_string()))?;
             host.upload_mapped.store(true, Ordering::Relaxed);
         }
+        Ok(())
+    }
+
+    /// Copy the frame's host slices into the mapped staging buffer, unmap it and record its
+    /// copies into the input buffers.
+    fn upload(&self, host: &HostIo, frame: &FrameInputs, encoder: &mut wgpu::CommandEncoder) -> Result<()> {
+        self.map_upload(host)?;
         {
             let mut view = host.upload.get_mapped_range_mut(..).map_err(|e| Error::Gpu(format!("staging buffer: {e:?}")))?;
             for ((b, buf), &off) in host.inputs.iter().zip(&host.offsets) {
@@ -136,6 +240,9 @@ impl Denoiser {
     pub fn denoise_profiled(&mut self, frame: &FrameInputs, out: &mut [f32]) -> Result<Vec<(String, f64)>> {
         if !self.device.features().contains(wgpu::Features::TIMESTAMP_QUERY_INSIDE_PASSES) {
             return Err(Error::Gpu("the device has no TIMESTAMP_QUERY_INSIDE_PASSES: no per-stage times".into()));
+        }
+        if self.tiles.is_some() {
+            return Err(Error::Tiled("per-stage times are taken on whole frames"));
         }
         self.validate(frame)?;
         self.ensure_host_io()?;
@@ -193,7 +300,14 @@ impl Denoiser {
     }
 
     fn make_host_io(&self) -> Result<HostIo> {
-        let pixels = self.width as u64 * self.height as u64;
+        // A frame's buffers, or a tile's: its extent's inputs and its interior's output.
+        let (pixels, out_pixels) = match &self.tiles {
+            None => (self.width as u64 * self.height as u64, self.width as u64 * self.height as u64),
+            Some(t) => {
+                let (iw, ih) = t.plan.max_interior();
+                (self.pwidth as u64 * self.pheight as u64, iw as u64 * ih as u64)
+            }
+        };
         let buffer = |label, size, usage| {
             self.device.create_buffer(&wgpu::BufferDescriptor { label: Some(label), size, usage, mapped_at_creation: false })
         };
@@ -209,6 +323,10 @@ impl Denoiser {
             offsets.push(staged);
             staged += b.size().next_multiple_of(wgpu::COPY_BUFFER_ALIGNMENT);
         }
+        // A tiled frame's output bound (the largest prepared color of the whole frame), which
+        // each tile's prep then only raises: the same bound as the frame run whole.
+        let stats_at = staged;
+        staged += 16;
         let motion = self.motion.as_ref().map(|_| {
             let at = staged;
             staged += pixels * 8;
@@ -220,10 +338,10 @@ impl Denoiser {
             usage: wgpu::BufferUsages::MAP_WRITE | wgpu::BufferUsages::COPY_SRC,
             mapped_at_creation: true,
         });
-        let output = buffer("output", pixels * 12, wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC);
-        let readback = buffer("readback", pixels * 12, wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST);
+        let output = buffer("output", out_pixels * 12, wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC);
+        let readback = buffer("readback", out_pixels * 12, wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST);
         let get = |b: InputBuffer| inputs.iter().find(|(x, _)| *x == b).map(|(_, buf)| buf);
-        let binding = self.bind_io(&GpuFrameIo {
+        let io = GpuFrameIo {
             color: get(InputBuffer::Color).expect("color is always an input"),
             albedo: get(InputBuffer::Albedo),
             normal: get(InputBuffer::Normal),
@@ -231,8 +349,27 @@ impl Denoiser {
             roughness: get(InputBuffer::Roughness),
             motion: motion.as_ref().map(|(b, _)| b),
             output: &output,
-        })?;
-        Ok(HostIo { inputs, offsets, motion, upload, upload_mapped: std::sync::atomic::AtomicBool::new(true), output, readback, binding })
+        };
+        let (binding, tile_groups) = match &self.tiles {
+            None => (self.bind_io(&io)?, Vec::new()),
+            Some(t) => {
+                let groups: Vec<_> = t.prep_params.iter().zip(&t.output_params).map(|(p, o)| self.io_groups(&io, p, o)).collect();
+                let (prep, output) = groups[0].clone();
+                (IoBinding { owner: self.id, prep, output, motion: None }, groups)
+            }
+        };
+        Ok(HostIo {
+            inputs,
+            offsets,
+            stats_at,
+            motion,
+            upload,
+            upload_mapped: std::sync::atomic::AtomicBool::new(true),
+            output,
+            readback,
+            binding,
+            tile_groups,
+        })
     }
 
     /// The packed network input of the last frame, channel-major (`channels x ph x pw`), for
@@ -283,6 +420,12 @@ impl Denoiser {
 /// After a host-path frame's submit: map the staging buffer for the next frame's writes and the
 /// readback for this frame's output in one poll, then copy the output into `out`.
 pub(super) fn finish_host_frame(device: &wgpu::Device, host: &HostIo, out: &mut [f32]) -> Result<()> {
+    let n = out.len();
+    finish_host_io(device, host, |data| out.copy_from_slice(&data[..n]))
+}
+
+/// Map the staging buffer for the next upload and the readback for `deliver`, in one poll.
+fn finish_host_io(device: &wgpu::Device, host: &HostIo, deliver: impl FnOnce(&[f32])) -> Result<()> {
     // Each callback says which buffer it is, so the staging buffer's flag is right even when
     // the readback fails (a lost device): the next frame then maps it only if it is unmapped.
     let (tx, rx) = std::sync::mpsc::channel();
@@ -312,7 +455,7 @@ pub(super) fn finish_host_frame(device: &wgpu::Device, host: &HostIo, out: &mut 
     }
     {
         let view = host.readback.get_mapped_range(..).map_err(|e| Error::Gpu(format!("{e:?}")))?;
-        out.copy_from_slice(&bytemuck::cast_slice::<u8, f32>(&view)[..out.len()]);
+        deliver(bytemuck::cast_slice::<u8, f32>(&view));
     }
     host.readback.unmap();
     Ok(())

@@ -43,6 +43,7 @@ mod build;
 mod host;
 mod motion;
 mod record;
+mod tiles;
 mod tuning;
 
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -63,6 +64,8 @@ pub use host::*;
 use motion::Motion;
 pub use motion::motion_bytes;
 pub use record::*;
+pub use tiles::{FrameTiles, MemoryPlan, Span, TILE_OVERLAP, TilePlan};
+use tiles::{TileAt, Tiles};
 pub use tuning::*;
 
 /// How a [`Denoiser`] stores activations, reads weights and tiles its convolutions.
@@ -93,6 +96,13 @@ pub struct Options {
     /// resolution and a third more below; [`Denoiser::gpu_bytes`] counts it). A frame without
     /// motion runs as without this.
     pub motion: bool,
+    /// A cap on the bytes the denoiser holds ([`Denoiser::gpu_bytes`], the host path's
+    /// transfer buffers included). A frame whose whole plan exceeds it runs in tiles, the
+    /// largest that fit ([`MemoryPlan`]); a cap below the smallest tiles' cost is
+    /// [`Error::MemoryCap`]. `None`: frames run whole unless they exceed the device's limits.
+    pub max_memory: Option<u64>,
+    /// Tiles fixed by the caller, whatever the cap (tests, benchmarks, measurements).
+    pub frame_tiles: Option<FrameTiles>,
 }
 
 /// Runs one model at one frame size, frame after frame, keeping the hidden state on the GPU.
@@ -134,6 +144,8 @@ pub struct Denoiser {
     profiler: Option<Profiler>,
     /// The reprojection's resources ([`Options::motion`]).
     motion: Option<Motion>,
+    /// The frame's tiles and the state kept between them, where the frame runs in tiles.
+    tiles: Option<Tiles>,
     /// Each conv's tuning finalists, fastest first (empty where not tuned).
     tuning: Vec<Vec<Finalist>>,
     parity: usize,
@@ -248,6 +260,11 @@ impl Denoiser {
             [first, rest @ ..] if rest.iter().all(|s| s == first) => first.name(),
             _ => "mixed",
         }
+    }
+
+    /// The frame's tiles, where it runs in tiles ([`Options::max_memory`]).
+    pub fn tile_plan(&self) -> Option<&TilePlan> {
+        self.tiles.as_ref().map(|t| &t.plan)
     }
 
     /// Textures held (for memory reports and tests).

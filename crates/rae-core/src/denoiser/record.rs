@@ -40,16 +40,20 @@ impl GpuFrameIo<'_> {
 /// Bind groups that connect a set of caller buffers to one [`Denoiser`]; make it once per set
 /// of buffers with [`Denoiser::bind_io`] and reuse it every frame.
 pub struct IoBinding {
-    owner: u64,
-    prep: wgpu::BindGroup,
-    output: wgpu::BindGroup,
+    pub(super) owner: u64,
+    pub(super) prep: wgpu::BindGroup,
+    pub(super) output: wgpu::BindGroup,
     /// motion.wgsl's `motion_in` over the caller's motion buffer, if it has one.
-    motion: Option<wgpu::BindGroup>,
+    pub(super) motion: Option<wgpu::BindGroup>,
 }
 
 impl Denoiser {
-    /// Connect caller buffers (see [`GpuFrameIo`]); checks presence, sizes and usages.
+    /// Connect caller buffers (see [`GpuFrameIo`]); checks presence, sizes and usages. A
+    /// denoiser whose frames run in tiles takes host frames only ([`Error::Tiled`]).
     pub fn bind_io(&self, io: &GpuFrameIo) -> Result<IoBinding> {
+        if self.tiles.is_some() {
+            return Err(Error::Tiled("the frame runs in tiles, which take host frames (denoise_into), not GPU buffers"));
+        }
         let pixels = self.width as u64 * self.height as u64;
         let needed = self.arch.required_buffers();
         let check = |name: &'static str, buf: &wgpu::Buffer, channels: u64| -> Result<()> {
@@ -68,6 +72,7 @@ impl Denoiser {
             check(b.name(), buf, b.channels() as u64)?;
         }
         check("output", io.output, 3)?;
+        let (prep, output) = self.io_groups(io, &self.prep_params, &self.output_params);
         let input = self
             .input_texture
             .create_view(&wgpu::TextureViewDescriptor { dimension: Some(wgpu::TextureViewDimension::D2Array), ..Default::default() });
@@ -90,12 +95,26 @@ impl Denoiser {
                 }))
             }
         };
+        Ok(IoBinding { owner: self.id, prep, output, motion })
+    }
+
+    /// The prep and output bind groups over `io`'s buffers with these uniforms.
+    pub(super) fn io_groups(
+        &self,
+        io: &GpuFrameIo,
+        prep_params: &wgpu::Buffer,
+        output_params: &wgpu::Buffer,
+    ) -> (wgpu::BindGroup, wgpu::BindGroup) {
+        let needed = self.arch.required_buffers();
+        let input = self
+            .input_texture
+            .create_view(&wgpu::TextureViewDescriptor { dimension: Some(wgpu::TextureViewDimension::D2Array), ..Default::default() });
         let pick = |b: InputBuffer| if needed.contains(&b) { io.get(b).expect("checked") } else { &self.dummy };
         let prep = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("prep"),
             layout: &self.kernels.prep_layout,
             entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: self.prep_params.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 0, resource: prep_params.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 1, resource: pick(InputBuffer::Color).as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 2, resource: pick(InputBuffer::Albedo).as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 3, resource: pick(InputBuffer::Normal).as_entire_binding() },
@@ -109,14 +128,14 @@ impl Denoiser {
             label: Some("output"),
             layout: &self.kernels.output_layout,
             entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: self.output_params.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 0, resource: output_params.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&self.output_view) },
                 wgpu::BindGroupEntry { binding: 2, resource: pick(InputBuffer::Albedo).as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 3, resource: io.output.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 4, resource: self.stats.as_entire_binding() },
             ],
         });
-        Ok(IoBinding { owner: self.id, prep, output, motion })
+        (prep, output)
     }
 
     /// Record one frame into the caller's encoder: read the buffers bound in `io`, write its
@@ -124,6 +143,9 @@ impl Denoiser {
     /// Frames must be submitted in the order they are recorded (the hidden state advances at
     /// record time).
     pub fn record(&mut self, encoder: &mut wgpu::CommandEncoder, io: &IoBinding) -> Result<()> {
+        if self.tiles.is_some() {
+            return Err(Error::Tiled("the frame runs in tiles, which take host frames (denoise_into), not GPU buffers"));
+        }
         let warp = io.motion.is_some();
         self.record_with(encoder, io, None, warp)
     }
@@ -148,6 +170,26 @@ impl Denoiser {
             _ => None,
         };
         encoder.clear_buffer(&self.stats, 0, None);
+        self.record_passes(encoder, &io.prep, &io.output, (self.width, self.height), queries, motion, parity, reset);
+        self.parity ^= 1;
+        self.reset_pending = false;
+        Ok(())
+    }
+
+    /// The frame's passes (prep, reprojection, convs and pools, output) with these bind groups,
+    /// the output kernel over `out_size`, on hidden-state parity `parity`; changes no state.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn record_passes(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        prep: &wgpu::BindGroup,
+        output: &wgpu::BindGroup,
+        out_size: (u32, u32),
+        queries: Option<&wgpu::QuerySet>,
+        motion: Option<(&Motion, &wgpu::BindGroup)>,
+        parity: usize,
+        reset: bool,
+    ) {
         let stamp = |pass: &mut wgpu::ComputePass, i: u32| {
             if let Some(q) = queries {
                 pass.write_timestamp(q, i);
@@ -170,7 +212,7 @@ impl Denoiser {
                     write_opening_timestamp(&mut pass, q, 0, self.graph.nodes.len() as u32 + 3);
                 }
                 pass.set_pipeline(&self.prep);
-                pass.set_bind_group(0, &io.prep, &[]);
+                pass.set_bind_group(0, prep, &[]);
                 pass.dispatch_workgroups(self.pwidth.div_ceil(WORKGROUP), self.pheight.div_ceil(WORKGROUP), 1);
                 if let Some((m, g)) = motion {
                     m.record(&mut pass, self.kernels.motion_kernels().expect("made with the denoiser's motion"), g, parity);
@@ -214,14 +256,11 @@ impl Denoiser {
                 continue;
             }
             pass.set_pipeline(&self.kernels.output);
-            pass.set_bind_group(0, &io.output, &[]);
-            pass.dispatch_workgroups(self.width.div_ceil(WORKGROUP), self.height.div_ceil(WORKGROUP), 1);
+            pass.set_bind_group(0, output, &[]);
+            pass.dispatch_workgroups(out_size.0.div_ceil(WORKGROUP), out_size.1.div_ceil(WORKGROUP), 1);
             stamp(&mut pass, 2 + self.graph.nodes.len() as u32);
             break;
         }
-        self.parity ^= 1;
-        self.reset_pending = false;
-        Ok(())
     }
 
     /// Dispatch every pipeline of a frame once, last stage first, with one workgroup each, and

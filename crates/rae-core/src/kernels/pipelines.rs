@@ -93,22 +93,27 @@ impl PrepLayout {
     }
 }
 
-/// Uniform block of output.wgsl.
+/// Uniform block of output.wgsl: the rectangle of the network's output written (the frame, or
+/// a frame tile's interior), and how the albedo buffer is laid out.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable)]
 pub struct OutputParams {
-    /// Frame width.
+    /// First column read from the network output.
+    pub x0: u32,
+    /// First row read from the network output.
+    pub y0: u32,
+    /// Width written (the output buffer's row length).
     pub width: u32,
-    /// Frame height.
+    /// Height written.
     pub height: u32,
+    /// Row length of the albedo buffer, whose pixel `(x, y)` is the network's `(x, y)`.
+    pub in_stride: u32,
     /// 1: remodulate.
     pub demodulate: u32,
     /// 0: none, 1: log1p.
     pub transfer: u32,
     /// Demodulation epsilon.
     pub albedo_eps: f32,
-    /// Padding to 32 bytes.
-    pub _pad: [u32; 3],
 }
 
 /// Uniform block of motion.wgsl.
