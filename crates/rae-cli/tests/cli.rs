@@ -306,7 +306,7 @@ fn a_memory_cap_runs_the_frames_in_tiles_and_too_small_a_cap_names_the_smallest(
     let whole = plan(None).unwrap().total();
     let tiled = plan(Some(rae_core::denoiser::FrameTiles { tile: 192, overlap: 64 })).unwrap().total();
     assert!(tiled < whole);
-    let cap = ((whole + tiled) / 2 >> 20).to_string();
+    let cap = (((whole + tiled) / 2) >> 20).to_string();
     let (ok, stdout, stderr) = denoise(&dir, &["--max-memory", &cap, "-o", tmp.path().join("tiled").to_str().unwrap()]);
     assert!(ok, "{stderr}");
     assert!(stdout.contains("tiles of") && stdout.contains(&format!("under a cap of {cap} MiB")), "{stdout}");
