@@ -429,7 +429,7 @@ fn info(path: &Path, sizes: &[(u32, u32)], max_memory: Option<u64>) -> Result<()
     for &(w, h) in sizes {
         let s = format!("{w}x{h}");
         let (pw, ph) = (w.next_multiple_of(m), h.next_multiple_of(m));
-        let mib = |p: Precision| rae_core::denoiser::activation_bytes(&graph, pw, ph, p) as f64 / (1u64 << 20) as f64;
+        let mib = |p: Precision| rae_core::denoiser::activation_bytes(&graph, pw, ph, p, false) as f64 / (1u64 << 20) as f64;
         println!(
             "memory {s}:  activations and hidden state {:.1} MiB f32, {:.1} MiB f16 (padded to {pw}x{ph}; weights {:.1} MiB more)",
             mib(Precision::F32),
@@ -437,10 +437,13 @@ fn info(path: &Path, sizes: &[(u32, u32)], max_memory: Option<u64>) -> Result<()
             (a.parameter_count() * 4) as f64 / (1u64 << 20) as f64,
         );
         let guided = a.inputs.iter().any(|b| matches!(b, rae_core::InputBuffer::Normal | rae_core::InputBuffer::Depth));
+        let second_state = rae_core::denoiser::activation_bytes(&graph, pw, ph, Precision::F32, true)
+            - rae_core::denoiser::activation_bytes(&graph, pw, ph, Precision::F32, false);
         println!(
-            "motion {s}:  the reprojection's motion pyramid{} {:.1} MiB more (frames with motion, Options::motion)",
+            "motion {s}:  the reprojection's motion pyramid{} {:.1} MiB more, and a second copy of the hidden state {:.1} MiB f32 (frames with motion, Options::motion)",
             if guided { " and previous normal and depth" } else { "" },
-            rae_core::denoiser::motion_bytes(pw, ph, a.levels(), guided) as f64 / (1u64 << 20) as f64
+            rae_core::denoiser::motion_bytes(pw, ph, a.levels(), guided) as f64 / (1u64 << 20) as f64,
+            second_state as f64 / (1u64 << 20) as f64
         );
         if let Some(cap) = max_memory {
             for p in [Precision::F32, Precision::F16] {

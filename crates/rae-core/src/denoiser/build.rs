@@ -48,7 +48,12 @@ pub(super) struct Activations {
 }
 
 impl Activations {
-    fn new(device: &wgpu::Device, graph: &Graph, pwidth: u32, pheight: u32, precision: Precision) -> Self {
+    /// The textures at `pwidth` x `pheight`; the hidden state double-buffered only where
+    /// `motion` (the warp gathers last frame's state into the texture this frame's is written
+    /// to). Without motion each block's one texture holds last frame's state until its
+    /// recurrent conv (`l2.0`) has read it, and its last conv (`l2.2`) writes the new state
+    /// over it.
+    fn new(device: &wgpu::Device, graph: &Graph, pwidth: u32, pheight: u32, precision: Precision, motion: bool) -> Self {
         let mut textures = Vec::new();
         let mut bytes = 0u64;
         let mut make = |label: &str, level: usize, channels: usize| {
@@ -59,8 +64,15 @@ impl Activations {
             (t, v)
         };
         let (input_texture, input_view) = make("input", 0, graph.in_channels);
-        let pairs: Vec<[(wgpu::Texture, wgpu::TextureView); 2]> =
-            graph.hidden.iter().map(|&(c, level)| [make("hidden", level, c), make("hidden", level, c)]).collect();
+        let pairs: Vec<[(wgpu::Texture, wgpu::TextureView); 2]> = graph
+            .hidden
+            .iter()
+            .map(|&(c, level)| {
+                let first = make("hidden", level, c);
+                let second = if motion { make("hidden", level, c) } else { first.clone() };
+                [first, second]
+            })
+            .collect();
         let (assign, slot_sizes) = graph.allocate_temps();
         let slots = slot_sizes.iter().map(|&(level, c)| make("temp", level, c)).collect();
         let pooled = graph.pools.iter().map(|p| make("pooled", p.level, p.channels).1).collect();
@@ -323,7 +335,7 @@ impl Denoiser {
         // The padded levels halve exactly, so the convs may read their zero padding from
         // outside the textures where the device reads zero there (before tuning makes any).
         kernels.pad_from_bounds();
-        let acts = Activations::new(device, &graph, pwidth, pheight, precision);
+        let acts = Activations::new(device, &graph, pwidth, pheight, precision, motion);
         let specs = conv_specs(&graph, weights, &arch, pwidth, pheight);
         let choices = choose(device, queue, &mut kernels, &graph, &acts, &specs, &options, memory)?;
         // On CPU drivers the F(4x4) convs write their outputs into a buffer that the frame copies
@@ -333,7 +345,7 @@ impl Denoiser {
             kernels.stage_outputs();
         }
         let convs = ConvPlan::with_choices(device, queue, &mut kernels, &specs, &choices.tiles, &choices.sources, &choices.memories)?;
-        debug_assert_eq!(acts.bytes, activation_bytes(&graph, pwidth, pheight, precision));
+        debug_assert_eq!(acts.bytes, activation_bytes(&graph, pwidth, pheight, precision, motion));
         let tiles = memory_plan.tiles.map(|plan| Tiles::new(device, plan, &graph, &arch, precision));
         let layout = prep_layout(&arch, &graph);
         let guide = Guide::of(&layout);
@@ -397,15 +409,17 @@ impl Denoiser {
 }
 
 /// Bytes of the activation and hidden-state textures a [`Denoiser`] allocates for `graph` at
-/// the padded size `pwidth` x `pheight`: the input, two textures per recurrent block, the
-/// temporaries as shared by liveness, and the pooled copies of the encoder blocks' outputs. Weights and uniforms are not included. Needs no device,
-/// so memory at any size can be reported (`rae-cli info --size`).
-pub fn activation_bytes(graph: &Graph, pwidth: u32, pheight: u32, precision: Precision) -> u64 {
+/// the padded size `pwidth` x `pheight`: the input, one texture per recurrent block (two with
+/// `motion`), the temporaries as shared by liveness, and the pooled copies of the encoder
+/// blocks' outputs. Weights and uniforms are not included. Needs no device, so memory at any
+/// size can be reported (`rae-cli info --size`).
+pub fn activation_bytes(graph: &Graph, pwidth: u32, pheight: u32, precision: Precision, motion: bool) -> u64 {
     let tex = |level: usize, channels: usize| {
         (pwidth >> level) as u64 * (pheight >> level) as u64 * blocks(channels) as u64 * precision.texel_bytes()
     };
     let input = tex(0, graph.in_channels);
-    let hidden: u64 = graph.hidden.iter().map(|&(c, level)| 2 * tex(level, c)).sum();
+    let copies = if motion { 2 } else { 1 };
+    let hidden: u64 = graph.hidden.iter().map(|&(c, level)| copies * tex(level, c)).sum();
     let temps: u64 = graph.allocate_temps().1.iter().map(|&(level, c)| tex(level, c)).sum();
     let pooled: u64 = graph.pools.iter().map(|p| tex(p.level, p.channels)).sum();
     input + hidden + temps + pooled

@@ -5,11 +5,14 @@
 //! - **Input** (packed network input) and **temporaries** live for one frame. Temporaries are
 //!   texture arrays shared by lifetime ([`Graph::allocate_temps`]): two values whose live
 //!   ranges do not overlap at a resolution use the same texture.
-//! - **Hidden state**: each recurrent block owns two textures, `hidden[k][0]` and
-//!   `hidden[k][1]`, and they ping-pong. On a frame of parity `p`, block `k` reads last frame's
-//!   state from `hidden[k][p]` and writes the new one (its output) into `hidden[k][1 - p]`; the
-//!   next frame has parity `1 - p`. Nothing is copied. Bind groups for both parities are built
-//!   up front (the pool pass's too: it reads the state written this frame).
+//! - **Hidden state**: each recurrent block owns one texture. Block `k` reads last frame's state
+//!   in its recurrent conv (`d{k}.l2.0`), the only reader of the old state, and its last conv
+//!   (`d{k}.l2.2`) writes the new state (its output) over it. A denoiser built for motion
+//!   ([`Options::motion`]) gives each block two textures, `hidden[k][0]` and `hidden[k][1]`,
+//!   that ping-pong: the warp gathers last frame's state from `hidden[k][p]` into
+//!   `hidden[k][1 - p]`, which the block then writes its new state into; the next frame has
+//!   parity `1 - p`. Nothing is copied. Bind groups for both parities are built up front (the
+//!   pool pass's too: it reads the state written this frame); with one texture they are alike.
 //! - **Pooled copies**: right after block `k` writes its state, a pool pass writes it max-pooled
 //!   into a texture of its own at the next level ([`crate::graph::Pool`]), which the next block
 //!   and the decoder's skip read; it lives for the rest of the frame.
@@ -136,7 +139,7 @@ pub struct Denoiser {
     /// cleared at the start of every frame.
     stats: wgpu::Buffer,
     textures: Vec<wgpu::Texture>,
-    /// `[block][0|1]`, as in the module docs.
+    /// `[block][0|1]`, as in the module docs (the same texture twice without motion).
     hidden_textures: Vec<[wgpu::Texture; 2]>,
     precision: Precision,
     bytes: u64,

@@ -244,7 +244,7 @@ impl MemoryPlan {
         let (pw, ph) = (width.next_multiple_of(multiple), height.next_multiple_of(multiple));
         MemoryPlan {
             tiles: None,
-            activations: activation_bytes(graph, pw, ph, precision),
+            activations: activation_bytes(graph, pw, ph, precision, motion),
             state: 0,
             convs: conv_bytes_bound(arch, pw, ph),
             io: io_bytes(arch, width as u64 * height as u64, width as u64 * height as u64),
@@ -268,7 +268,7 @@ impl MemoryPlan {
             })
             .sum();
         MemoryPlan {
-            activations: activation_bytes(graph, ew, eh, precision),
+            activations: activation_bytes(graph, ew, eh, precision, false),
             state,
             convs: conv_bytes_bound(arch, ew, eh),
             io: io_bytes(arch, ew as u64 * eh as u64, iw as u64 * ih as u64),
