@@ -18,7 +18,7 @@ fn tile_plans_cover_the_frame_and_reach_one_neighbour_at_most() {
     for &(w, h, tile, overlap) in
         &[(448, 320, 192, 64), (3840, 2160, 1024, 64), (7680, 4320, 640, 64), (1000, 37, 256, 32), (129, 4000, 160, 32)]
     {
-        let p = TilePlan::new(w, h, 32, FrameTiles { tile, overlap }).unwrap();
+        let p = TilePlan::new(w, h, 32, FrameTiles { tile, overlap, host_state: false }).unwrap();
         let (ew, eh) = p.extent;
         for (spans, padded, extent) in [(&p.columns, p.pwidth, ew), (&p.rows, p.pheight, eh)] {
             assert_eq!(spans[0].start, 0);
@@ -42,7 +42,7 @@ fn tile_plans_cover_the_frame_and_reach_one_neighbour_at_most() {
         }
     }
     // An interior smaller than twice the overlap is refused.
-    assert!(matches!(TilePlan::new(512, 512, 32, FrameTiles { tile: 128, overlap: 64 }), Err(Error::FrameSize { .. })));
+    assert!(matches!(TilePlan::new(512, 512, 32, FrameTiles { tile: 128, overlap: 64, host_state: false }), Err(Error::FrameSize { .. })));
 }
 
 #[test]
@@ -59,12 +59,15 @@ fn four_k_plans_under_a_gibibyte_and_a_cap_too_small_names_the_smallest() {
     assert!(whole.tiles.is_none());
     let capped = MemoryPlan::new(&arch, 1920, 1080, Precision::F32, Some(whole.total() - 1), None, false, &limits).unwrap();
     assert!(capped.tiles.is_some() && capped.total() < whole.total());
-    // 8K's state alone is more than 2 GiB in f16: the error names what the smallest tiles need.
-    let Err(Error::MemoryCap { smallest, .. }) = MemoryPlan::new(&arch, 7680, 4320, Precision::F16, Some(2048 * mib), None, false, &limits)
+    // 8K's state alone is more than 2 GiB in f16: it is kept in host memory.
+    let plan = MemoryPlan::new(&arch, 7680, 4320, Precision::F16, Some(2048 * mib), None, false, &limits).unwrap();
+    assert!(plan.total() <= 2048 * mib && plan.host_state > 2048 * mib, "{plan:?}");
+    // Too small a cap names the smallest that works.
+    let Err(Error::MemoryCap { smallest, .. }) = MemoryPlan::new(&arch, 3840, 2160, Precision::F32, Some(16 * mib), None, false, &limits)
     else {
-        panic!("the 8K state does not fit 2 GiB");
+        panic!("16 MiB is too small for 4K");
     };
-    let at_smallest = MemoryPlan::new(&arch, 7680, 4320, Precision::F16, Some(smallest), None, false, &limits).unwrap();
+    let at_smallest = MemoryPlan::new(&arch, 3840, 2160, Precision::F32, Some(smallest), None, false, &limits).unwrap();
     assert!(at_smallest.total() <= smallest && at_smallest.tiles.is_some());
 }
 
@@ -155,23 +158,30 @@ fn tiles_whose_overlap_covers_the_reach_give_the_whole_frames_bit_for_bit() {
     let weights = random_weights(json, 7);
     let g = gpu();
     let (w, h) = (450, 318);
-    let frames = big_frames(w, h, 4);
+    let frames = big_frames(w, h, 3);
     // One kernel for every level and size, so that both runs round alike.
     let fixed = TileChoice::Fixed(Tile::cpu(&g.device));
     let mut whole = Denoiser::with_options(&g.device, &g.queue, &weights, w, h, Options { tiles: fixed, ..Default::default() }).unwrap();
-    let options = Options { tiles: fixed, frame_tiles: Some(FrameTiles { tile: 160, overlap: 64 }), ..Default::default() };
-    let mut tiled = Denoiser::with_options(&g.device, &g.queue, &weights, w, h, options).unwrap();
-    let plan = tiled.tile_plan().unwrap();
-    assert!(plan.columns.len() >= 3 && plan.rows.len() >= 2, "{plan:?}");
-    let (a, b) = (run(&mut whole, &frames), run(&mut tiled, &frames));
-    for (i, (a, b)) in a.iter().zip(&b).enumerate() {
-        let differ = a.iter().zip(b).filter(|(x, y)| x.to_bits() != y.to_bits()).count();
-        assert_eq!(differ, 0, "frame {i}: {differ} values differ from the whole run");
-    }
-    // After a reset the tiles start again from a zero state, as the whole run does.
+    let a = run(&mut whole, &frames);
     whole.reset();
-    tiled.reset();
-    assert_eq!(run(&mut whole, &frames[2..3]), run(&mut tiled, &frames[2..3]));
+    let after_reset = run(&mut whole, &frames[2..3]);
+    // The state kept on the GPU, and in host memory (staged through buffers per tile).
+    for host_state in [false, true] {
+        let frame_tiles = Some(FrameTiles { tile: 160, overlap: 64, host_state });
+        let options = Options { tiles: fixed, frame_tiles, ..Default::default() };
+        let mut tiled = Denoiser::with_options(&g.device, &g.queue, &weights, w, h, options).unwrap();
+        assert_eq!(tiled.state_on_host(), host_state);
+        let plan = tiled.tile_plan().unwrap();
+        assert!(plan.columns.len() >= 3 && plan.rows.len() >= 2, "{plan:?}");
+        let b = run(&mut tiled, &frames);
+        for (i, (a, b)) in a.iter().zip(&b).enumerate() {
+            let differ = a.iter().zip(b).filter(|(x, y)| x.to_bits() != y.to_bits()).count();
+            assert_eq!(differ, 0, "state on the host {host_state}, frame {i}: {differ} values differ from the whole run");
+        }
+        // After a reset the tiles start again from a zero state, as the whole run does.
+        tiled.reset();
+        assert_eq!(after_reset, run(&mut tiled, &frames[2..3]), "state on the host {host_state}, after a reset");
+    }
 }
 
 #[test]
@@ -183,9 +193,9 @@ fn a_tiled_sequence_of_the_full_depth_stays_within_its_tolerance_of_the_whole_ru
     let weights = Weights::load(fixture("../../models/rae-default.safetensors")).unwrap();
     let g = gpu();
     let (w, h) = (448, 320);
-    let frames = big_frames(w, h, 4);
+    let frames = big_frames(w, h, 3);
     let mut whole = Denoiser::with_options(&g.device, &g.queue, &weights, w, h, Options::default()).unwrap();
-    let options = Options { frame_tiles: Some(FrameTiles { tile: 192, overlap: 64 }), ..Default::default() };
+    let options = Options { frame_tiles: Some(FrameTiles { tile: 192, overlap: 64, host_state: false }), ..Default::default() };
     let mut tiled = Denoiser::with_options(&g.device, &g.queue, &weights, w, h, options).unwrap();
     assert!(tiled.tile_plan().unwrap().count() >= 4);
     let (a, b) = (run(&mut whole, &frames), run(&mut tiled, &frames));
@@ -202,14 +212,14 @@ fn a_tiled_sequence_of_the_full_depth_stays_within_its_tolerance_of_the_whole_ru
 fn a_capped_denoiser_holds_no_more_than_its_cap() {
     let weights = Weights::load(fixture("weights_full.safetensors")).unwrap();
     let g = gpu();
-    let (w, h) = (640, 384);
+    let (w, h) = (448, 320);
     let limits = g.device.limits();
     // A cap that tiles of 192 pixels fit, below the whole frame's cost.
-    let tiles = Some(FrameTiles { tile: 192, overlap: 64 });
-    let cap = MemoryPlan::new(&weights.arch, w, h, Precision::F16, None, tiles, false, &limits).unwrap().total();
-    let whole = MemoryPlan::new(&weights.arch, w, h, Precision::F16, None, None, false, &limits).unwrap();
+    let tiles = Some(FrameTiles { tile: 192, overlap: 64, host_state: false });
+    let cap = MemoryPlan::new(&weights.arch, w, h, Precision::F32, None, tiles, false, &limits).unwrap().total();
+    let whole = MemoryPlan::new(&weights.arch, w, h, Precision::F32, None, None, false, &limits).unwrap();
     assert!(whole.total() > cap);
-    let options = Options { precision: Precision::F16, max_memory: Some(cap), ..Default::default() };
+    let options = Options { max_memory: Some(cap), ..Default::default() };
     let mut d = Denoiser::with_options(&g.device, &g.queue, &weights, w, h, options).unwrap();
     assert!(d.tile_plan().is_some(), "a cap below the whole frame's cost tiles it");
     let frames = big_frames(w, h, 1);

@@ -168,21 +168,22 @@ fn csv_text(reports: &[FrameReport]) -> String {
 }
 
 /// The storage precision and the memory plan: the one asked for, else f32, or f16 where the
-/// cap is too small for f32 tiles.
+/// cap is too small for f32 tiles with the frame's state on the GPU (and large enough for f16
+/// ones); f32 with the state in host memory only where neither fits.
 fn memory_plan(o: &Options, weights: &Weights, seq: &Sequence, gpu: &Gpu, motion: bool) -> Result<(Precision, MemoryPlan)> {
     let limits = gpu.device.limits();
     let plan = |p: Precision| MemoryPlan::new(&weights.arch, seq.width, seq.height, p, o.max_memory, None, motion, &limits);
-    match (o.precision, plan(o.precision.unwrap_or(Precision::F32))) {
-        (None, Err(rae_core::Error::MemoryCap { .. })) => {
-            let f16 = plan(Precision::F16).context("--max-memory: too small for f32 or f16 activations")?;
-            Ok((Precision::F16, f16))
-        }
-        (Some(Precision::F32), Err(e @ rae_core::Error::MemoryCap { .. })) => {
-            let hint = plan(Precision::F16).map_or(String::new(), |_| " (f16 activations fit: --precision f16)".into());
-            Err(anyhow::Error::from(e).context(format!("--max-memory{hint}")))
-        }
-        (p, plan) => Ok((p.unwrap_or(Precision::F32), plan.context("--max-memory")?)),
+    if let Some(p) = o.precision {
+        let hint = if p == Precision::F32 && plan(Precision::F16).is_ok() { " (f16 activations fit: --precision f16)" } else { "" };
+        return Ok((p, plan(p).with_context(|| format!("--max-memory{hint}"))?));
     }
+    let (f32, f16) = (plan(Precision::F32), plan(Precision::F16));
+    Ok(match (f32, f16) {
+        (Ok(p), _) if p.host_state == 0 => (Precision::F32, p),
+        (_, Ok(p)) if p.host_state == 0 => (Precision::F16, p),
+        (Ok(p), _) => (Precision::F32, p),
+        (Err(_), f16) => (Precision::F16, f16.context("--max-memory: too small for f32 or f16 activations")?),
+    })
 }
 
 /// Run `denoise`.
@@ -274,14 +275,15 @@ pub fn run(o: &Options) -> Result<()> {
     match d.tile_plan() {
         None => println!("memory:  {} MiB, {} activations, the frame whole{cap}", mib(plan.total()), precision.name()),
         Some(t) => println!(
-            "memory:  {} MiB, {} activations{cap}: {} tiles of {}x{} ({} pixels of overlap; {:.2}x the whole frame's pixels)",
+            "memory:  {} MiB, {} activations{cap}: {} tiles of {}x{} ({} pixels of overlap; {:.2}x the whole frame's pixels){}",
             mib(plan.total()),
             precision.name(),
             t.count(),
             t.extent.0,
             t.extent.1,
             t.overlap,
-            t.work_ratio()
+            t.work_ratio(),
+            if d.state_on_host() { format!("; the frame's state in host memory, {} MiB", mib(plan.host_state)) } else { String::new() }
         ),
     }
     println!("output:  {}", out_dir.display());

@@ -461,11 +461,15 @@ fn plan_text(arch: &rae_core::Arch, w: u32, h: u32, precision: Precision, cap: u
     match rae_core::denoiser::MemoryPlan::new(arch, w, h, precision, Some(cap), None, false, &limits) {
         Err(e) => format!("{e}"),
         Ok(p) => {
+            let state = if p.host_state > 0 {
+                format!("staging of a tile's state {:.0} (the frame's state in host memory: {:.0} MiB)", mib(p.state), mib(p.host_state))
+            } else {
+                format!("state between tiles {:.0}", mib(p.state))
+            };
             let parts = format!(
-                "{:.0} MiB at most: activations {:.0}, state between tiles {:.0}, convs {:.0}, transfer buffers {:.0}",
+                "{:.0} MiB at most: activations {:.0}, {state}, convs {:.0}, transfer buffers {:.0}",
                 mib(p.total()),
                 mib(p.activations),
-                mib(p.state),
                 mib(p.convs),
                 mib(p.io)
             );

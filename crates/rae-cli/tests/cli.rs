@@ -304,7 +304,7 @@ fn a_memory_cap_runs_the_frames_in_tiles_and_too_small_a_cap_names_the_smallest(
     let plan =
         |tiles| rae_core::denoiser::MemoryPlan::new(&arch, w as u32, h as u32, rae_core::Precision::F32, None, tiles, false, &limits);
     let whole = plan(None).unwrap().total();
-    let tiled = plan(Some(rae_core::denoiser::FrameTiles { tile: 192, overlap: 64 })).unwrap().total();
+    let tiled = plan(Some(rae_core::denoiser::FrameTiles { tile: 192, overlap: 64, host_state: false })).unwrap().total();
     assert!(tiled < whole);
     let cap = (((whole + tiled) / 2) >> 20).to_string();
     let (ok, stdout, stderr) = denoise(&dir, &["--max-memory", &cap, "-o", tmp.path().join("tiled").to_str().unwrap()]);

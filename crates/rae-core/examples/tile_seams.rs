@@ -36,7 +36,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     println!("| overlap | frame | max abs diff / mean | mean abs diff / mean |");
     println!("|---|---|---|---|");
     for &overlap in &overlaps {
-        let tiled = run(Options { frame_tiles: Some(FrameTiles { tile, overlap }), ..Default::default() })?;
+        let tiled = run(Options { frame_tiles: Some(FrameTiles { tile, overlap, host_state: false }), ..Default::default() })?;
         for (i, (a, b)) in whole.iter().zip(&tiled).enumerate() {
             let mean = a.iter().map(|v| v.abs() as f64).sum::<f64>() / a.len() as f64;
             let max = a.iter().zip(b).map(|(x, y)| (x - y).abs() as f64).fold(0.0, f64::max);

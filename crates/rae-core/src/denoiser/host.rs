@@ -96,29 +96,28 @@ impl Denoiser {
     fn denoise_tiles(&mut self, frame: &FrameInputs, out: &mut [f32]) -> Result<FrameTimings> {
         let mut timings = FrameTimings::default();
         let host = self.host.take().expect("made by denoise_into");
-        let tiles = self.tiles.take().expect("a tiled denoiser");
+        let mut tiles = self.tiles.take().expect("a tiled denoiser");
         let bound = crate::cpu::prepared_color_max(&self.arch, frame);
         let reset = self.reset_pending;
         let mut result = Ok(());
         // The network's state textures: it reads parity 0 and writes parity 1 on every tile.
         let prev: Vec<&wgpu::Texture> = self.hidden_textures.iter().map(|p| &p[0]).collect();
         let new: Vec<&wgpu::Texture> = self.hidden_textures.iter().map(|p| &p[1]).collect();
-        for (i, t) in tiles.plan.tiles().enumerate() {
+        for i in 0..tiles.at.len() {
+            let t = tiles.at[i];
             let t0 = Instant::now();
             let mut encoder = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("rae tile") });
             if let Err(e) = self.upload_tile(&host, frame, &t, bound, &mut encoder) {
                 result = Err(e);
                 break;
             }
-            if !reset {
-                tiles.copy_in(&mut encoder, &self.graph, &t, &prev);
+            if !reset && let Err(e) = tiles.copy_in(&self.device, &mut encoder, &self.graph, &t, &prev) {
+                result = Err(e);
+                break;
             }
             let (prep, output) = &host.tile_groups[i];
             self.record_passes(&mut encoder, prep, output, t.interior, None, None, 0, reset);
-            if !reset {
-                tiles.save_bands(&mut encoder, &self.graph, &t);
-            }
-            tiles.write_back(&mut encoder, &self.graph, &t, &new);
+            tiles.record_write_back(&mut encoder, &self.graph, &t, &new, !reset);
             let bytes = t.interior.0 as u64 * t.interior.1 as u64 * 12;
             encoder.copy_buffer_to_buffer(&host.output, 0, &host.readback, 0, bytes);
             let t1 = Instant::now();
@@ -133,8 +132,11 @@ impl Denoiser {
                     out[at..at + iw * 3].copy_from_slice(&data[y * iw * 3..(y + 1) * iw * 3]);
                 }
             };
-            let finished =
-                waited.map(|_| ()).map_err(|e| Error::Gpu(e.to_string())).and_then(|_| finish_host_io(&self.device, &host, deliver));
+            let finished = waited
+                .map(|_| ())
+                .map_err(|e| Error::Gpu(e.to_string()))
+                .and_then(|_| finish_host_io(&self.device, &host, deliver))
+                .and_then(|_| tiles.finish_tile(&self.device, &self.graph, &t, !reset));
             let t3 = Instant::now();
             timings.upload += t1 - t0;
             timings.gpu += t2 - t1;

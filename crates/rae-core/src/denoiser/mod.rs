@@ -270,6 +270,12 @@ impl Denoiser {
         self.tiles.as_ref().map(|t| &t.plan)
     }
 
+    /// Whether a tiled denoiser keeps the frame's hidden state in host memory (where the cap
+    /// leaves no room for it on the GPU; [`MemoryPlan::host_state`]).
+    pub fn state_on_host(&self) -> bool {
+        self.tiles.as_ref().is_some_and(Tiles::state_on_host)
+    }
+
     /// Textures held (for memory reports and tests).
     pub fn texture_count(&self) -> usize {
         self.textures.len()

@@ -21,6 +21,11 @@
 //! row (`above`, two that alternate), and the next tile's left margin before each write-back
 //! (`left`). Copy-ins read the bands over the global state where they apply. Nothing is
 //! allocated per frame or per tile.
+//!
+//! Where the state of the whole frame does not fit the cap beside the smallest tiles (8K in
+//! f16 is 3.1 GiB of it), it is kept in host memory instead: a tile's old state is gathered on
+//! the host into a staging buffer and copied into the network before it runs, and its
+//! interior's new state copied back and scattered after, with the same bands.
 
 use super::*;
 
@@ -37,6 +42,8 @@ pub struct FrameTiles {
     pub tile: u32,
     /// Pixels of context around each interior (fewer at the frame's edges).
     pub overlap: u32,
+    /// Keep the frame's state in host memory (staged per tile) rather than on the GPU.
+    pub host_state: bool,
 }
 
 /// One tile's place along one axis of the padded frame.
@@ -150,8 +157,12 @@ pub struct MemoryPlan {
     pub tiles: Option<TilePlan>,
     /// Activation textures of the network (at the padded frame, or at a tile's extent).
     pub activations: u64,
-    /// The hidden state kept for the whole frame between tiles, with its bands (0 untiled).
+    /// The hidden state kept for the whole frame between tiles on the GPU, with its bands (0
+    /// untiled); or, with the state in host memory, the buffers that stage a tile's state.
     pub state: u64,
+    /// The hidden state kept in host memory between tiles, with its bands: where the state on
+    /// the GPU would not fit the cap (0 otherwise). Not counted by [`Self::total`].
+    pub host_state: u64,
     /// Weights, parameters and split-K or staging buffers: a bound (their packing depends on
     /// the kernels the device gets).
     pub convs: u64,
@@ -192,7 +203,7 @@ impl MemoryPlan {
         let multiple = 1u32 << arch.levels();
         let cap = max_memory.unwrap_or(u64::MAX);
         if let Some(t) = tiles {
-            let plan = Self::tiled(arch, &graph, TilePlan::new(width, height, multiple, t)?, precision);
+            let plan = Self::tiled(arch, &graph, TilePlan::new(width, height, multiple, t)?, precision, t.host_state);
             return plan.check_side(max_side);
         }
         let whole = Self::whole(arch, &graph, width, height, precision, motion);
@@ -205,17 +216,20 @@ impl MemoryPlan {
         let smallest = 2 * overlap + 2 * multiple;
         let largest = (max_side.saturating_sub(2 * overlap) / multiple * multiple).min(width.max(height).next_multiple_of(multiple));
         let candidates = (smallest / multiple..=largest / multiple).rev().map(|k| k * multiple);
+        // The state on the GPU where some tiles fit with it, else in host memory.
         let mut last = None;
-        for tile in candidates {
-            let plan = Self::tiled(arch, &graph, TilePlan::new(width, height, multiple, FrameTiles { tile, overlap })?, precision);
-            let fits = plan
-                .tiles
-                .as_ref()
-                .is_some_and(|t| t.extent.0 <= max_side && t.extent.1 <= max_side && t.extent.0 as u64 * t.extent.1 as u64 <= max_pixels);
-            if fits && plan.total() <= cap {
-                return Ok(plan);
+        for host in [false, true] {
+            for tile in candidates.clone() {
+                let tiles = TilePlan::new(width, height, multiple, FrameTiles { tile, overlap, host_state: host })?;
+                let plan = Self::tiled(arch, &graph, tiles, precision, host);
+                let fits = plan.tiles.as_ref().is_some_and(|t| {
+                    t.extent.0 <= max_side && t.extent.1 <= max_side && t.extent.0 as u64 * t.extent.1 as u64 <= max_pixels
+                });
+                if fits && plan.total() <= cap {
+                    return Ok(plan);
+                }
+                last = Some(plan);
             }
-            last = Some(plan);
         }
         match last {
             Some(p) if p.tiles.as_ref().is_some_and(|t| t.extent.0 <= max_side && t.extent.1 <= max_side) => {
@@ -246,17 +260,18 @@ impl MemoryPlan {
             tiles: None,
             activations: activation_bytes(graph, pw, ph, precision, motion),
             state: 0,
+            host_state: 0,
             convs: conv_bytes_bound(arch, pw, ph),
             io: io_bytes(arch, width as u64 * height as u64, width as u64 * height as u64),
             motion: if motion { motion_bytes(pw, ph, arch.levels(), true) } else { 0 },
         }
     }
 
-    fn tiled(arch: &Arch, graph: &Graph, plan: TilePlan, precision: Precision) -> Self {
+    fn tiled(arch: &Arch, graph: &Graph, plan: TilePlan, precision: Precision, host: bool) -> Self {
         let (ew, eh) = plan.extent;
         let (iw, ih) = plan.max_interior();
         let (mx, my) = plan.margins();
-        let state: u64 = graph
+        let kept: u64 = graph
             .hidden
             .iter()
             .map(|&(c, level)| {
@@ -267,15 +282,56 @@ impl MemoryPlan {
                 at(plan.pwidth, plan.pheight) + above + left
             })
             .sum();
+        let (state, host_state) = if host { (staged_state_bytes(graph, &plan, precision), kept) } else { (kept, 0) };
         MemoryPlan {
             activations: activation_bytes(graph, ew, eh, precision, false),
             state,
+            host_state,
             convs: conv_bytes_bound(arch, ew, eh),
             io: io_bytes(arch, ew as u64 * eh as u64, iw as u64 * ih as u64),
             motion: 0,
             tiles: Some(plan),
         }
     }
+}
+
+/// Bytes of the buffers that stage a tile's state to and from host memory: each block's state
+/// under the extent (up) and under the largest interior (down), rows padded to a copy's pitch.
+fn staged_state_bytes(graph: &Graph, plan: &TilePlan, precision: Precision) -> u64 {
+    let (ew, eh) = plan.extent;
+    let (iw, ih) = plan.max_interior();
+    let layout = |w: u32, h: u32| state_layout(graph, w, h, precision).last().map_or(0, |r| r.offset + r.bytes());
+    layout(ew, eh) + layout(iw, ih)
+}
+
+/// Where each block's state of a `w` x `h` rectangle (level 0 pixels) lies in a staging buffer.
+#[derive(Debug, Clone, Copy)]
+struct StagedRegion {
+    offset: u64,
+    /// Bytes per row, padded to `COPY_BYTES_PER_ROW_ALIGNMENT`.
+    pitch: u32,
+    rows: u32,
+    layers: u32,
+}
+
+impl StagedRegion {
+    fn bytes(&self) -> u64 {
+        self.pitch as u64 * self.rows as u64 * self.layers as u64
+    }
+}
+
+fn state_layout(graph: &Graph, w: u32, h: u32, precision: Precision) -> Vec<StagedRegion> {
+    let mut offset = 0u64;
+    graph
+        .hidden
+        .iter()
+        .map(|&(c, level)| {
+            let pitch = ((w >> level) * precision.texel_bytes() as u32).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
+            let r = StagedRegion { offset, pitch, rows: h >> level, layers: blocks(c) };
+            offset += r.bytes();
+            r
+        })
+        .collect()
 }
 
 /// A bound on the conv plan's buffers ([`ConvPlan::bytes`]) at a network size: the weights
@@ -299,16 +355,80 @@ fn io_bytes(arch: &Arch, inputs: u64, outputs: u64) -> u64 {
 /// The recurrent state of a tiled [`Denoiser`] between its tiles, and each tile's uniforms.
 pub(super) struct Tiles {
     pub(super) plan: TilePlan,
-    /// `[block]`: the state of the whole padded frame.
-    global: Vec<wgpu::Texture>,
-    /// `[row parity][block]`: the old state of the band above a row's interiors.
-    above: [Vec<wgpu::Texture>; 2],
-    /// `[block]`: the old state of the next tile's left margin.
-    left: Vec<wgpu::Texture>,
+    /// Every tile, row by row.
+    pub(super) at: Vec<TileAt>,
+    /// Where the frame's state and its bands are kept.
+    store: Store,
     /// Each tile's prep and output uniforms, row by row.
     pub(super) prep_params: Vec<wgpu::Buffer>,
     pub(super) output_params: Vec<wgpu::Buffer>,
+    /// GPU bytes held (the state on the GPU, or its staging buffers).
     pub(super) bytes: u64,
+}
+
+/// The frame's state, each `[block]`: the whole padded frame (`global`), the old state of the
+/// band above a row's interiors (`above`, by row parity) and of the next tile's left margin
+/// (`left`).
+enum Store {
+    /// On the GPU, copied texture to texture.
+    Gpu { global: Vec<wgpu::Texture>, above: [Vec<wgpu::Texture>; 2], left: Vec<wgpu::Texture> },
+    /// In host memory, a tile's state staged up before it runs and back after.
+    Host {
+        global: Vec<HostImage>,
+        above: [Vec<HostImage>; 2],
+        left: Vec<HostImage>,
+        /// Each block's state under the extent (written by the host, copied into the network).
+        upload: wgpu::Buffer,
+        up: Vec<StagedRegion>,
+        /// Each block's new state under the interior (copied from the network, read by the host).
+        readback: wgpu::Buffer,
+        down: Vec<StagedRegion>,
+    },
+}
+
+/// One block's state in host memory: `layers` x `height` x `width` texels of `texel` bytes.
+struct HostImage {
+    data: Vec<u8>,
+    width: u32,
+    height: u32,
+    texel: usize,
+}
+
+impl HostImage {
+    fn new(width: u32, height: u32, layers: u32, texel: usize) -> Self {
+        HostImage { data: vec![0; width as usize * height as usize * layers as usize * texel], width, height, texel }
+    }
+
+    /// Byte range of `w` texels of row `y` of layer `z` from column `x`.
+    fn row(&self, z: u32, y: u32, x: u32, w: u32) -> std::ops::Range<usize> {
+        let start = ((z as usize * self.height as usize + y as usize) * self.width as usize + x as usize) * self.texel;
+        start..start + w as usize * self.texel
+    }
+
+    fn layers(&self) -> u32 {
+        (self.data.len() / (self.width as usize * self.height as usize * self.texel).max(1)) as u32
+    }
+}
+
+/// A place the state is copied from or to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Place {
+    Global,
+    Above(usize),
+    Left,
+    /// The network's state textures (its previous state, or the new one).
+    Network,
+}
+
+/// A copy of a rectangle of every block's state, in level-0 pixels (each block's level scales
+/// it).
+#[derive(Debug, Clone, Copy)]
+struct Move {
+    from: Place,
+    at: (u32, u32),
+    to: Place,
+    to_at: (u32, u32),
+    size: (u32, u32),
 }
 
 /// One tile in a frame: its place and the rectangles it reads and writes, in frame pixels.
@@ -346,24 +466,58 @@ impl TilePlan {
 }
 
 impl Tiles {
-    pub(super) fn new(device: &wgpu::Device, plan: TilePlan, graph: &Graph, arch: &Arch, precision: Precision) -> Self {
-        let mut bytes = 0u64;
-        let mut make = |label: &str, w: u32, h: u32, c: usize| {
-            bytes += w as u64 * h as u64 * blocks(c) as u64 * precision.texel_bytes();
-            build::texture(device, label, w.max(1), h.max(1), blocks(c), precision.format()).0
-        };
+    pub(super) fn new(device: &wgpu::Device, plan: TilePlan, graph: &Graph, arch: &Arch, precision: Precision, host: bool) -> Self {
         let (_, ih) = plan.max_interior();
         let (mx, my) = plan.margins();
-        let global = graph.hidden.iter().map(|&(c, l)| make("frame state", plan.pwidth >> l, plan.pheight >> l, c)).collect();
-        let band = |make: &mut dyn FnMut(&str, u32, u32, usize) -> wgpu::Texture, w: u32, h: u32, used: bool| -> Vec<wgpu::Texture> {
-            if !used {
-                return Vec::new();
+        let (rows, columns) = (plan.rows.len() > 1, plan.columns.len() > 1);
+        let mut bytes = 0u64;
+        let store = if host {
+            let texel = precision.texel_bytes() as usize;
+            let image = |w: u32, h: u32, used: bool| -> Vec<HostImage> {
+                if !used {
+                    return Vec::new();
+                }
+                graph.hidden.iter().map(|&(c, l)| HostImage::new(w >> l, h >> l, blocks(c), texel)).collect()
+            };
+            let (ew, eh) = plan.extent;
+            let (iw, ih) = plan.max_interior();
+            let up = state_layout(graph, ew, eh, precision);
+            let down = state_layout(graph, iw, ih, precision);
+            let size = |r: &[StagedRegion]| r.last().map_or(4, |r| r.offset + r.bytes());
+            let buffer = |label, size, usage, mapped_at_creation| {
+                device.create_buffer(&wgpu::BufferDescriptor { label: Some(label), size, usage, mapped_at_creation })
+            };
+            bytes += size(&up) + size(&down);
+            Store::Host {
+                global: image(plan.pwidth, plan.pheight, true),
+                above: [image(plan.pwidth, my, rows), image(plan.pwidth, my, rows)],
+                left: image(mx, ih, columns),
+                upload: buffer("state upload", size(&up), wgpu::BufferUsages::MAP_WRITE | wgpu::BufferUsages::COPY_SRC, false),
+                up,
+                readback: buffer("state readback", size(&down), wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST, false),
+                down,
             }
-            graph.hidden.iter().map(|&(c, l)| make("state band", w >> l, h >> l, c)).collect()
+        } else {
+            let mut make = |w: u32, h: u32, used: bool| -> Vec<wgpu::Texture> {
+                if !used {
+                    return Vec::new();
+                }
+                graph
+                    .hidden
+                    .iter()
+                    .map(|&(c, l)| {
+                        let (w, h) = ((w >> l).max(1), (h >> l).max(1));
+                        bytes += w as u64 * h as u64 * blocks(c) as u64 * precision.texel_bytes();
+                        build::texture(device, "frame state", w, h, blocks(c), precision.format()).0
+                    })
+                    .collect()
+            };
+            Store::Gpu {
+                global: make(plan.pwidth, plan.pheight, true),
+                above: [make(plan.pwidth, my, rows), make(plan.pwidth, my, rows)],
+                left: make(mx, ih, columns),
+            }
         };
-        let rows = plan.rows.len() > 1;
-        let above = [band(&mut make, plan.pwidth, my, rows), band(&mut make, plan.pwidth, my, rows)];
-        let left = band(&mut make, mx, ih, plan.columns.len() > 1);
         let transfer = match arch.transfer {
             Transfer::None => 0,
             Transfer::Log1p => 1,
@@ -383,63 +537,246 @@ impl Tiles {
                 transfer,
                 albedo_eps: arch.albedo_eps,
             };
-            prep_params.push(build::create_init(device, "tile prep params", bytemuck::bytes_of(&prep), wgpu::BufferUsages::UNIFORM));
-            output_params.push(build::create_init(device, "tile output params", bytemuck::bytes_of(&output), wgpu::BufferUsages::UNIFORM));
+            let uniform = |label, bytes: &[u8]| build::create_init(device, label, bytes, wgpu::BufferUsages::UNIFORM);
+            prep_params.push(uniform("tile prep params", bytemuck::bytes_of(&prep)));
+            output_params.push(uniform("tile output params", bytemuck::bytes_of(&output)));
         }
-        Tiles { plan, global, above, left, prep_params, output_params, bytes }
+        Tiles { at: plan.tiles().collect(), plan, store, prep_params, output_params, bytes }
     }
 
-    /// Record the copy of the old state under tile `t`'s extent into `prev` (the network's
-    /// previous-state textures), the bands over the global state where tiles before it have
-    /// written the new one.
-    pub(super) fn copy_in(&self, encoder: &mut wgpu::CommandEncoder, graph: &Graph, t: &TileAt, prev: &[&wgpu::Texture]) {
+    /// Whether the frame's state is kept in host memory.
+    pub(super) fn state_on_host(&self) -> bool {
+        matches!(self.store, Store::Host { .. })
+    }
+
+    /// The copies of the old state under tile `t`'s extent into the network: the global state,
+    /// then the bands where tiles before it have written the new one (the row above's, saved
+    /// before it wrote; the left tile's, in the interior's rows).
+    fn copy_in_moves(&self, t: &TileAt) -> Vec<Move> {
         let (ew, eh) = self.plan.extent;
-        for (k, &(_, l)) in graph.hidden.iter().enumerate() {
-            let s = |v: u32| v >> l;
-            copy(encoder, &self.global[k], (s(t.x0), s(t.y0)), prev[k], (0, 0), (s(ew), s(eh)));
-            if t.row > 0 {
-                // Rows above the interior: the row above's, saved before it wrote.
-                copy(encoder, &self.above[t.row % 2][k], (s(t.x0), 0), prev[k], (0, 0), (s(ew), s(t.iy0 - t.y0)));
-            }
-            if t.column > 0 {
-                // Columns left of the interior, in the interior's rows: the left tile's.
-                let rows = self.plan.rows[t.row].end - self.plan.rows[t.row].start;
-                copy(encoder, &self.left[k], (0, 0), prev[k], (0, s(t.iy0 - t.y0)), (s(t.ix0 - t.x0), s(rows)));
-            }
+        let mut moves = vec![Move { from: Place::Global, at: (t.x0, t.y0), to: Place::Network, to_at: (0, 0), size: (ew, eh) }];
+        if t.row > 0 {
+            let size = (ew, t.iy0 - t.y0);
+            moves.push(Move { from: Place::Above(t.row % 2), at: (t.x0, 0), to: Place::Network, to_at: (0, 0), size });
         }
+        if t.column > 0 {
+            let r = self.plan.rows[t.row];
+            let size = (t.ix0 - t.x0, r.end - r.start);
+            moves.push(Move { from: Place::Left, at: (0, 0), to: Place::Network, to_at: (0, t.iy0 - t.y0), size });
+        }
+        moves
     }
 
-    /// Record, before tile `t` writes its new state back, the saves of the old state its
-    /// successors will read: at a row's first tile the next row's top margin, and before each
-    /// tile the next tile's left margin.
-    pub(super) fn save_bands(&self, encoder: &mut wgpu::CommandEncoder, graph: &Graph, t: &TileAt) {
+    /// The saves of the old state tile `t`'s successors read, before `t` writes its new state
+    /// back: at a row's first tile the next row's top margin, and the next tile's left margin.
+    fn band_moves(&self, t: &TileAt) -> Vec<Move> {
         let plan = &self.plan;
-        for (k, &(_, l)) in graph.hidden.iter().enumerate() {
-            let s = |v: u32| v >> l;
-            if t.column == 0
-                && let Some(next) = plan.rows.get(t.row + 1)
-            {
-                let band = &self.above[(t.row + 1) % 2][k];
-                copy(encoder, &self.global[k], (0, s(next.extent_start)), band, (0, 0), (s(plan.pwidth), s(next.margin())));
+        let mut moves = Vec::new();
+        if t.column == 0
+            && let Some(next) = plan.rows.get(t.row + 1)
+        {
+            let size = (plan.pwidth, next.margin());
+            moves.push(Move { from: Place::Global, at: (0, next.extent_start), to: Place::Above((t.row + 1) % 2), to_at: (0, 0), size });
+        }
+        if let Some(next) = plan.columns.get(t.column + 1) {
+            let r = plan.rows[t.row];
+            let size = (next.margin(), r.end - r.start);
+            moves.push(Move { from: Place::Global, at: (next.extent_start, r.start), to: Place::Left, to_at: (0, 0), size });
+        }
+        moves
+    }
+
+    /// The write-back of tile `t`'s new state: its interior, from the network into the global
+    /// state.
+    fn write_back_move(&self, t: &TileAt) -> Move {
+        let (c, r) = (self.plan.columns[t.column], self.plan.rows[t.row]);
+        let size = (c.end - c.start, r.end - r.start);
+        Move { from: Place::Network, at: (c.margin(), r.margin()), to: Place::Global, to_at: (c.start, r.start), size }
+    }
+
+    /// Before tile `t` runs: its old state into `prev` (the network's previous-state textures),
+    /// recorded into `encoder`; with the state in host memory, staged through the upload buffer
+    /// (mapped here, which waits for the GPU).
+    pub(super) fn copy_in(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        graph: &Graph,
+        t: &TileAt,
+        prev: &[&wgpu::Texture],
+    ) -> Result<()> {
+        let moves = self.copy_in_moves(t);
+        match &self.store {
+            Store::Gpu { .. } => {
+                for m in moves {
+                    self.record_move(encoder, graph, &m, prev);
+                }
             }
-            if let Some(next) = plan.columns.get(t.column + 1) {
-                let r = plan.rows[t.row];
-                let at = (s(next.extent_start), s(r.start));
-                copy(encoder, &self.global[k], at, &self.left[k], (0, 0), (s(next.margin()), s(r.end - r.start)));
+            Store::Host { global, above, left, upload, up, .. } => {
+                map(device, upload, wgpu::MapMode::Write)?;
+                {
+                    let mut view = upload.get_mapped_range_mut(..).map_err(|e| Error::Gpu(format!("state staging: {e:?}")))?;
+                    for m in &moves {
+                        for (k, &(_, l)) in graph.hidden.iter().enumerate() {
+                            let src = match m.from {
+                                Place::Global => &global[k],
+                                Place::Above(i) => &above[i][k],
+                                Place::Left => &left[k],
+                                Place::Network => unreachable!("copy-ins read the kept state"),
+                            };
+                            let r = up[k];
+                            let s = |v: u32| v >> l;
+                            for z in 0..r.layers {
+                                for y in 0..s(m.size.1) {
+                                    let at = r.offset as usize
+                                        + ((z * r.rows + s(m.to_at.1) + y) * r.pitch) as usize
+                                        + s(m.to_at.0) as usize * src.texel;
+                                    let row = src.row(z, s(m.at.1) + y, s(m.at.0), s(m.size.0));
+                                    view.slice(at..at + row.len()).copy_from_slice(&src.data[row]);
+                                }
+                            }
+                        }
+                    }
+                }
+                upload.unmap();
+                let (ew, eh) = self.plan.extent;
+                for (k, &(_, l)) in graph.hidden.iter().enumerate() {
+                    let r = up[k];
+                    encoder.copy_buffer_to_texture(
+                        wgpu::TexelCopyBufferInfo {
+                            buffer: upload,
+                            layout: wgpu::TexelCopyBufferLayout {
+                                offset: r.offset,
+                                bytes_per_row: Some(r.pitch),
+                                rows_per_image: Some(r.rows),
+                            },
+                        },
+                        texel_copy(prev[k], (0, 0)),
+                        wgpu::Extent3d { width: ew >> l, height: eh >> l, depth_or_array_layers: r.layers },
+                    );
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// After tile `t` ran, recorded into the same encoder: on the GPU the band saves and the
+    /// write-back of its interior from `new` (the network's new-state textures); with the state
+    /// in host memory the copy of the interior into the readback buffer ([`Self::finish_tile`]
+    /// saves the bands and writes it back). `history`: whether this frame reads old state (not a
+    /// reset frame), which the bands serve.
+    pub(super) fn record_write_back(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        graph: &Graph,
+        t: &TileAt,
+        new: &[&wgpu::Texture],
+        history: bool,
+    ) {
+        let back = self.write_back_move(t);
+        match &self.store {
+            Store::Gpu { .. } => {
+                if history {
+                    for m in self.band_moves(t) {
+                        self.record_move(encoder, graph, &m, new);
+                    }
+                }
+                self.record_move(encoder, graph, &back, new);
+            }
+            Store::Host { readback, down, .. } => {
+                for (k, &(_, l)) in graph.hidden.iter().enumerate() {
+                    let r = down[k];
+                    encoder.copy_texture_to_buffer(
+                        texel_copy(new[k], (back.at.0 >> l, back.at.1 >> l)),
+                        wgpu::TexelCopyBufferInfo {
+                            buffer: readback,
+                            layout: wgpu::TexelCopyBufferLayout {
+                                offset: r.offset,
+                                bytes_per_row: Some(r.pitch),
+                                rows_per_image: Some(r.rows),
+                            },
+                        },
+                        wgpu::Extent3d { width: back.size.0 >> l, height: back.size.1 >> l, depth_or_array_layers: r.layers },
+                    );
+                }
             }
         }
     }
 
-    /// Record the write-back of tile `t`'s new state (its interior of `new`) into the global
-    /// state.
-    pub(super) fn write_back(&self, encoder: &mut wgpu::CommandEncoder, graph: &Graph, t: &TileAt, new: &[&wgpu::Texture]) {
-        let (c, r) = (self.plan.columns[t.column], self.plan.rows[t.row]);
+    /// After tile `t`'s submit has finished, with the state in host memory: save the bands
+    /// (where `history`) and write the interior's new state back from the readback buffer.
+    pub(super) fn finish_tile(&mut self, device: &wgpu::Device, graph: &Graph, t: &TileAt, history: bool) -> Result<()> {
+        let bands = if history { self.band_moves(t) } else { Vec::new() };
+        let back = self.write_back_move(t);
+        let Store::Host { global, above, left, readback, down, .. } = &mut self.store else { return Ok(()) };
+        for m in bands {
+            for (k, &(_, l)) in graph.hidden.iter().enumerate() {
+                let dst = match m.to {
+                    Place::Above(i) => &mut above[i][k],
+                    Place::Left => &mut left[k],
+                    _ => unreachable!("bands are saved from the global state"),
+                };
+                let src = &global[k];
+                let s = |v: u32| v >> l;
+                for z in 0..src.layers() {
+                    for y in 0..s(m.size.1) {
+                        let from = src.row(z, s(m.at.1) + y, s(m.at.0), s(m.size.0));
+                        let to = dst.row(z, s(m.to_at.1) + y, s(m.to_at.0), s(m.size.0));
+                        dst.data[to].copy_from_slice(&src.data[from]);
+                    }
+                }
+            }
+        }
+        map(device, readback, wgpu::MapMode::Read)?;
+        {
+            let view = readback.get_mapped_range(..).map_err(|e| Error::Gpu(format!("state readback: {e:?}")))?;
+            for (k, &(_, l)) in graph.hidden.iter().enumerate() {
+                let (r, dst) = (down[k], &mut global[k]);
+                let s = |v: u32| v >> l;
+                for z in 0..r.layers {
+                    for y in 0..s(back.size.1) {
+                        let to = dst.row(z, s(back.to_at.1) + y, s(back.to_at.0), s(back.size.0));
+                        let at = r.offset as usize + ((z * r.rows + y) * r.pitch) as usize;
+                        let n = to.len();
+                        dst.data[to].copy_from_slice(&view[at..at + n]);
+                    }
+                }
+            }
+        }
+        readback.unmap();
+        Ok(())
+    }
+
+    /// Record a move between GPU textures, every block (`network`: the network's textures).
+    fn record_move(&self, encoder: &mut wgpu::CommandEncoder, graph: &Graph, m: &Move, network: &[&wgpu::Texture]) {
+        let Store::Gpu { global, above, left } = &self.store else { unreachable!("GPU moves on the GPU store") };
+        let texture = |p: Place, k: usize| -> &wgpu::Texture {
+            match p {
+                Place::Global => &global[k],
+                Place::Above(i) => &above[i][k],
+                Place::Left => &left[k],
+                Place::Network => network[k],
+            }
+        };
         for (k, &(_, l)) in graph.hidden.iter().enumerate() {
-            let s = |v: u32| v >> l;
-            let from = (s(c.start - c.extent_start), s(r.start - r.extent_start));
-            copy(encoder, new[k], from, &self.global[k], (s(c.start), s(r.start)), (s(c.end - c.start), s(r.end - r.start)));
+            let s = |(x, y): (u32, u32)| (x >> l, y >> l);
+            copy(encoder, texture(m.from, k), s(m.at), texture(m.to, k), s(m.to_at), s(m.size));
         }
     }
+}
+
+/// Map `buffer` and wait for it.
+fn map(device: &wgpu::Device, buffer: &wgpu::Buffer, mode: wgpu::MapMode) -> Result<()> {
+    let (tx, rx) = std::sync::mpsc::channel();
+    buffer.map_async(mode, .., move |r| {
+        let _ = tx.send(r);
+    });
+    device.poll(wgpu::PollType::wait_indefinitely()).map_err(|e| Error::Gpu(e.to_string()))?;
+    rx.recv().map_err(|e| Error::Gpu(e.to_string()))?.map_err(|e| Error::Gpu(e.to_string()))
+}
+
+fn texel_copy(texture: &wgpu::Texture, (x, y): (u32, u32)) -> wgpu::TexelCopyTextureInfo<'_> {
+    wgpu::TexelCopyTextureInfo { texture, mip_level: 0, origin: wgpu::Origin3d { x, y, z: 0 }, aspect: wgpu::TextureAspect::All }
 }
 
 /// Copy a `size` rectangle of every layer from `src` at `from` to `dst` at `to`.
