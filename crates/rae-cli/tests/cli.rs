@@ -286,9 +286,9 @@ fn a_cold_first_frame_gets_a_compile_helper_and_the_same_frames() {
 
 #[test]
 fn a_memory_cap_runs_the_frames_in_tiles_and_too_small_a_cap_names_the_smallest() {
-    // 448x320 frames: the whole plan of the full network exceeds the cap halfway between it and
-    // the tiles' plan, so the frames run in tiles, close to the whole run.
-    let (w, h) = (448, 320);
+    // 640x448 frames: the whole plan of the full network exceeds a cap that tiles of 320
+    // pixels fit, so the frames run in tiles, close to the whole run.
+    let (w, h) = (640, 448);
     let tmp = tempfile::tempdir().unwrap();
     let dir = seq_dir(&tmp);
     for f in 0..2 {
@@ -304,9 +304,10 @@ fn a_memory_cap_runs_the_frames_in_tiles_and_too_small_a_cap_names_the_smallest(
     let plan =
         |tiles| rae_core::denoiser::MemoryPlan::new(&arch, w as u32, h as u32, rae_core::Precision::F32, None, tiles, false, &limits);
     let whole = plan(None).unwrap().total();
-    let tiled = plan(Some(rae_core::denoiser::FrameTiles { tile: 192, overlap: 64, host_state: false })).unwrap().total();
-    assert!(tiled < whole);
-    let cap = (((whole + tiled) / 2) >> 20).to_string();
+    let tiled = plan(Some(rae_core::denoiser::FrameTiles { tile: 320, overlap: 64, host_state: false })).unwrap().total();
+    let cap = tiled.div_ceil(1 << 20);
+    assert!(cap << 20 < whole);
+    let cap = cap.to_string();
     let (ok, stdout, stderr) = denoise(&dir, &["--max-memory", &cap, "-o", tmp.path().join("tiled").to_str().unwrap()]);
     assert!(ok, "{stderr}");
     assert!(stdout.contains("tiles of") && stdout.contains(&format!("under a cap of {cap} MiB")), "{stdout}");
