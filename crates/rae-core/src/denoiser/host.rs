@@ -101,8 +101,8 @@ impl Denoiser {
         let reset = self.reset_pending;
         let mut result = Ok(());
         // The network's state textures: it reads parity 0 and writes parity 1 on every tile.
-        let prev: Vec<&wgpu::Texture> = self.hidden_textures.iter().map(|p| &p[0]).collect();
-        let new: Vec<&wgpu::Texture> = self.hidden_textures.iter().map(|p| &p[1]).collect();
+        let prev = Network { textures: &self.hidden_textures, side: 0 };
+        let new = Network { textures: &self.hidden_textures, side: 1 };
         for i in 0..tiles.at.len() {
             let t = tiles.at[i];
             let t0 = Instant::now();
@@ -148,9 +148,10 @@ impl Denoiser {
         }
         self.tiles = Some(tiles);
         self.host = Some(host);
-        result?;
-        self.reset_pending = false;
-        Ok(timings)
+        // A frame that fails part way leaves the frame's state part old, part new: the next
+        // frame starts a sequence.
+        self.reset_pending = result.is_err();
+        result.map(|_| timings)
     }
 
     /// Copy tile `t`'s extent of the frame's host slices (the part inside the frame, rows

@@ -68,7 +68,7 @@ use motion::Motion;
 pub use motion::motion_bytes;
 pub use record::*;
 pub use tiles::{FrameTiles, MemoryPlan, Span, TILE_OVERLAP, TilePlan};
-use tiles::{TileAt, Tiles};
+use tiles::{Network, TileAt, Tiles};
 pub use tuning::*;
 
 /// How a [`Denoiser`] stores activations, reads weights and tiles its convolutions.

@@ -552,38 +552,35 @@ impl Tiles {
     /// The copies of the old state under tile `t`'s extent into the network: the global state,
     /// then the bands where tiles before it have written the new one (the row above's, saved
     /// before it wrote; the left tile's, in the interior's rows).
-    fn copy_in_moves(&self, t: &TileAt) -> Vec<Move> {
+    fn copy_in_moves(&self, t: &TileAt) -> [Option<Move>; 3] {
         let (ew, eh) = self.plan.extent;
-        let mut moves = vec![Move { from: Place::Global, at: (t.x0, t.y0), to: Place::Network, to_at: (0, 0), size: (ew, eh) }];
-        if t.row > 0 {
+        let global = Move { from: Place::Global, at: (t.x0, t.y0), to: Place::Network, to_at: (0, 0), size: (ew, eh) };
+        let above = (t.row > 0).then(|| {
             let size = (ew, t.iy0 - t.y0);
-            moves.push(Move { from: Place::Above(t.row % 2), at: (t.x0, 0), to: Place::Network, to_at: (0, 0), size });
-        }
-        if t.column > 0 {
+            Move { from: Place::Above(t.row % 2), at: (t.x0, 0), to: Place::Network, to_at: (0, 0), size }
+        });
+        let left = (t.column > 0).then(|| {
             let r = self.plan.rows[t.row];
             let size = (t.ix0 - t.x0, r.end - r.start);
-            moves.push(Move { from: Place::Left, at: (0, 0), to: Place::Network, to_at: (0, t.iy0 - t.y0), size });
-        }
-        moves
+            Move { from: Place::Left, at: (0, 0), to: Place::Network, to_at: (0, t.iy0 - t.y0), size }
+        });
+        [Some(global), above, left]
     }
 
     /// The saves of the old state tile `t`'s successors read, before `t` writes its new state
     /// back: at a row's first tile the next row's top margin, and the next tile's left margin.
-    fn band_moves(&self, t: &TileAt) -> Vec<Move> {
+    fn band_moves(&self, t: &TileAt) -> [Option<Move>; 2] {
         let plan = &self.plan;
-        let mut moves = Vec::new();
-        if t.column == 0
-            && let Some(next) = plan.rows.get(t.row + 1)
-        {
+        let above = plan.rows.get(t.row + 1).filter(|_| t.column == 0).map(|next| {
             let size = (plan.pwidth, next.margin());
-            moves.push(Move { from: Place::Global, at: (0, next.extent_start), to: Place::Above((t.row + 1) % 2), to_at: (0, 0), size });
-        }
-        if let Some(next) = plan.columns.get(t.column + 1) {
+            Move { from: Place::Global, at: (0, next.extent_start), to: Place::Above((t.row + 1) % 2), to_at: (0, 0), size }
+        });
+        let left = plan.columns.get(t.column + 1).map(|next| {
             let r = plan.rows[t.row];
             let size = (next.margin(), r.end - r.start);
-            moves.push(Move { from: Place::Global, at: (next.extent_start, r.start), to: Place::Left, to_at: (0, 0), size });
-        }
-        moves
+            Move { from: Place::Global, at: (next.extent_start, r.start), to: Place::Left, to_at: (0, 0), size }
+        });
+        [above, left]
     }
 
     /// The write-back of tile `t`'s new state: its interior, from the network into the global
@@ -603,20 +600,20 @@ impl Tiles {
         encoder: &mut wgpu::CommandEncoder,
         graph: &Graph,
         t: &TileAt,
-        prev: &[&wgpu::Texture],
+        prev: &Network,
     ) -> Result<()> {
         let moves = self.copy_in_moves(t);
         match &self.store {
             Store::Gpu { .. } => {
-                for m in moves {
-                    self.record_move(encoder, graph, &m, prev);
+                for m in moves.iter().flatten() {
+                    self.record_move(encoder, graph, m, prev);
                 }
             }
             Store::Host { global, above, left, upload, up, .. } => {
                 map(device, upload, wgpu::MapMode::Write)?;
                 {
                     let mut view = upload.get_mapped_range_mut(..).map_err(|e| Error::Gpu(format!("state staging: {e:?}")))?;
-                    for m in &moves {
+                    for m in moves.iter().flatten() {
                         for (k, &(_, l)) in graph.hidden.iter().enumerate() {
                             let src = match m.from {
                                 Place::Global => &global[k],
@@ -651,7 +648,7 @@ impl Tiles {
                                 rows_per_image: Some(r.rows),
                             },
                         },
-                        texel_copy(prev[k], (0, 0)),
+                        texel_copy(prev.texture(k), (0, 0)),
                         wgpu::Extent3d { width: ew >> l, height: eh >> l, depth_or_array_layers: r.layers },
                     );
                 }
@@ -665,20 +662,13 @@ impl Tiles {
     /// in host memory the copy of the interior into the readback buffer ([`Self::finish_tile`]
     /// saves the bands and writes it back). `history`: whether this frame reads old state (not a
     /// reset frame), which the bands serve.
-    pub(super) fn record_write_back(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        graph: &Graph,
-        t: &TileAt,
-        new: &[&wgpu::Texture],
-        history: bool,
-    ) {
+    pub(super) fn record_write_back(&self, encoder: &mut wgpu::CommandEncoder, graph: &Graph, t: &TileAt, new: &Network, history: bool) {
         let back = self.write_back_move(t);
         match &self.store {
             Store::Gpu { .. } => {
                 if history {
-                    for m in self.band_moves(t) {
-                        self.record_move(encoder, graph, &m, new);
+                    for m in self.band_moves(t).iter().flatten() {
+                        self.record_move(encoder, graph, m, new);
                     }
                 }
                 self.record_move(encoder, graph, &back, new);
@@ -687,7 +677,7 @@ impl Tiles {
                 for (k, &(_, l)) in graph.hidden.iter().enumerate() {
                     let r = down[k];
                     encoder.copy_texture_to_buffer(
-                        texel_copy(new[k], (back.at.0 >> l, back.at.1 >> l)),
+                        texel_copy(new.texture(k), (back.at.0 >> l, back.at.1 >> l)),
                         wgpu::TexelCopyBufferInfo {
                             buffer: readback,
                             layout: wgpu::TexelCopyBufferLayout {
@@ -706,10 +696,10 @@ impl Tiles {
     /// After tile `t`'s submit has finished, with the state in host memory: save the bands
     /// (where `history`) and write the interior's new state back from the readback buffer.
     pub(super) fn finish_tile(&mut self, device: &wgpu::Device, graph: &Graph, t: &TileAt, history: bool) -> Result<()> {
-        let bands = if history { self.band_moves(t) } else { Vec::new() };
+        let bands = if history { self.band_moves(t) } else { [None, None] };
         let back = self.write_back_move(t);
         let Store::Host { global, above, left, readback, down, .. } = &mut self.store else { return Ok(()) };
-        for m in bands {
+        for m in bands.into_iter().flatten() {
             for (k, &(_, l)) in graph.hidden.iter().enumerate() {
                 let dst = match m.to {
                     Place::Above(i) => &mut above[i][k],
@@ -748,20 +738,33 @@ impl Tiles {
     }
 
     /// Record a move between GPU textures, every block (`network`: the network's textures).
-    fn record_move(&self, encoder: &mut wgpu::CommandEncoder, graph: &Graph, m: &Move, network: &[&wgpu::Texture]) {
+    fn record_move(&self, encoder: &mut wgpu::CommandEncoder, graph: &Graph, m: &Move, network: &Network) {
         let Store::Gpu { global, above, left } = &self.store else { unreachable!("GPU moves on the GPU store") };
         let texture = |p: Place, k: usize| -> &wgpu::Texture {
             match p {
                 Place::Global => &global[k],
                 Place::Above(i) => &above[i][k],
                 Place::Left => &left[k],
-                Place::Network => network[k],
+                Place::Network => network.texture(k),
             }
         };
         for (k, &(_, l)) in graph.hidden.iter().enumerate() {
             let s = |(x, y): (u32, u32)| (x >> l, y >> l);
             copy(encoder, texture(m.from, k), s(m.at), texture(m.to, k), s(m.to_at), s(m.size));
         }
+    }
+}
+
+/// One side of the network's state textures (`[block][0|1]`): the previous state (0) or the
+/// new one (1); without motion both are the same texture.
+pub(super) struct Network<'a> {
+    pub(super) textures: &'a [[wgpu::Texture; 2]],
+    pub(super) side: usize,
+}
+
+impl Network<'_> {
+    fn texture(&self, block: usize) -> &wgpu::Texture {
+        &self.textures[block][self.side]
     }
 }
 
