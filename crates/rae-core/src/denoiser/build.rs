@@ -347,7 +347,7 @@ impl Denoiser {
         let convs = ConvPlan::with_choices(device, queue, &mut kernels, &specs, &choices.tiles, &choices.sources, &choices.memories)?;
         debug_assert_eq!(acts.bytes, activation_bytes(&graph, pwidth, pheight, precision, motion));
         let host_state = memory_plan.host_state > 0;
-        let tiles = memory_plan.tiles.map(|plan| Tiles::new(device, plan, &graph, &arch, precision, host_state));
+        let tiles = memory_plan.tiles.map(|plan| Tiles::new(device, plan, &graph, &arch, precision, host_state)).transpose()?;
         let layout = prep_layout(&arch, &graph);
         let guide = Guide::of(&layout);
         let motion = motion.then(|| Motion::new(device, &mut kernels, &graph, &acts, &convs, guide, (width, height, pwidth, pheight)));

@@ -395,8 +395,17 @@ struct HostImage {
 }
 
 impl HostImage {
-    fn new(width: u32, height: u32, layers: u32, texel: usize) -> Self {
-        HostImage { data: vec![0; width as usize * height as usize * layers as usize * texel], width, height, texel }
+    /// Zeroed; host memory that cannot be had is an error, not an abort.
+    fn new(width: u32, height: u32, layers: u32, texel: usize) -> Result<Self> {
+        let bytes = width as usize * height as usize * layers as usize * texel;
+        let mut data = Vec::new();
+        data.try_reserve_exact(bytes).map_err(|e| Error::FrameSize {
+            width,
+            height,
+            reason: format!("{} MiB of host memory for the frame's state: {e}", bytes >> 20),
+        })?;
+        data.resize(bytes, 0);
+        Ok(HostImage { data, width, height, texel })
     }
 
     /// Byte range of `w` texels of row `y` of layer `z` from column `x`.
@@ -466,16 +475,17 @@ impl TilePlan {
 }
 
 impl Tiles {
-    pub(super) fn new(device: &wgpu::Device, plan: TilePlan, graph: &Graph, arch: &Arch, precision: Precision, host: bool) -> Self {
+    /// The state of the whole frame (on the GPU or in host memory) and each tile's uniforms.
+    pub(super) fn new(device: &wgpu::Device, plan: TilePlan, graph: &Graph, arch: &Arch, precision: Precision, host: bool) -> Result<Self> {
         let (_, ih) = plan.max_interior();
         let (mx, my) = plan.margins();
         let (rows, columns) = (plan.rows.len() > 1, plan.columns.len() > 1);
         let mut bytes = 0u64;
         let store = if host {
             let texel = precision.texel_bytes() as usize;
-            let image = |w: u32, h: u32, used: bool| -> Vec<HostImage> {
+            let image = |w: u32, h: u32, used: bool| -> Result<Vec<HostImage>> {
                 if !used {
-                    return Vec::new();
+                    return Ok(Vec::new());
                 }
                 graph.hidden.iter().map(|&(c, l)| HostImage::new(w >> l, h >> l, blocks(c), texel)).collect()
             };
@@ -489,9 +499,9 @@ impl Tiles {
             };
             bytes += size(&up) + size(&down);
             Store::Host {
-                global: image(plan.pwidth, plan.pheight, true),
-                above: [image(plan.pwidth, my, rows), image(plan.pwidth, my, rows)],
-                left: image(mx, ih, columns),
+                global: image(plan.pwidth, plan.pheight, true)?,
+                above: [image(plan.pwidth, my, rows)?, image(plan.pwidth, my, rows)?],
+                left: image(mx, ih, columns)?,
                 upload: buffer("state upload", size(&up), wgpu::BufferUsages::MAP_WRITE | wgpu::BufferUsages::COPY_SRC, false),
                 up,
                 readback: buffer("state readback", size(&down), wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST, false),
@@ -541,7 +551,7 @@ impl Tiles {
             prep_params.push(uniform("tile prep params", bytemuck::bytes_of(&prep)));
             output_params.push(uniform("tile output params", bytemuck::bytes_of(&output)));
         }
-        Tiles { at: plan.tiles().collect(), plan, store, prep_params, output_params, bytes }
+        Ok(Tiles { at: plan.tiles().collect(), plan, store, prep_params, output_params, bytes })
     }
 
     /// Whether the frame's state is kept in host memory.
