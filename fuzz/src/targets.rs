@@ -244,7 +244,7 @@ pub fn all(root: &Path, work: &Path) -> Result<Vec<Target>> {
     let lines: [&[&str]; 8] = [
         &["denoise", "seq", "--frames", "2..5", "--reset-at", "3,7", "--tile", "auto", "--precision", "f16"],
         &["denoise", "seq", "-o", "out", "--frames", "..4", "--motion-convention", "optix", "--no-motion"],
-        &["info", "model.safetensors", "--size", "1920x1080,64x64"],
+        &["info", "model.safetensors", "--size", "1920x1080,64x64", "--max-memory", "1024"],
         &[
             "bench",
             "w.safetensors",
@@ -255,7 +255,7 @@ pub fn all(root: &Path, work: &Path) -> Result<Vec<Target>> {
             "--weights-memory",
             "uniform,auto",
         ],
-        &["bench", "w.safetensors", "--sources", "sampled,storage", "--motion", "off,on", "--frames", "3", "--warmup", "0"],
+        &["bench", "w.safetensors", "--sources", "sampled,storage", "--motion", "off,on", "--frames", "3", "--max-memory", "none,512"],
         &["verify", "a.safetensors", "b.safetensors", "--tile", "mma32x3"],
         &["denoise", "seq", "--frames", "7"],
         &["devices"],
@@ -282,6 +282,8 @@ pub fn all(root: &Path, work: &Path) -> Result<Vec<Target>> {
         "k",
         "w",
         "--precision",
+        "--max-memory",
+        "none",
         "=",
         "--",
     ]);
@@ -381,10 +383,21 @@ fn run_args(case: &[u8]) -> std::result::Result<(), String> {
     let outcome: Result<()> = (|| {
         let cli = rae_cli::args::Cli::try_parse_from(args)?;
         cli.command.check()?;
-        if let rae_cli::args::Command::Info { size, .. } = &cli.command
-            && size.iter().any(|&(w, h)| w == 0 || h == 0)
-        {
-            bail!("a zero size passed the parser");
+        if let rae_cli::args::Command::Info { size, max_memory, .. } = &cli.command {
+            if size.iter().any(|&(w, h)| w == 0 || h == 0) {
+                bail!("a zero size passed the parser");
+            }
+            // The plan under the cap, as `info` makes it: a panic here is a finding.
+            if let Some(cap) = max_memory {
+                let arch = rae_core::Arch::reference();
+                let limits = wgpu::Limits::default();
+                for &(w, h) in size {
+                    for p in [rae_core::Precision::F32, rae_core::Precision::F16] {
+                        let cap = Some(cap.saturating_mul(1 << 20));
+                        let _ = rae_core::denoiser::MemoryPlan::new(&arch, w, h, p, cap, None, false, &limits);
+                    }
+                }
+            }
         }
         Ok(())
     })();
