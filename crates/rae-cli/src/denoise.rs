@@ -273,9 +273,9 @@ pub fn run(o: &Options) -> Result<()> {
     let mib = |b: u64| b.div_ceil(1 << 20);
     let cap = o.max_memory.map_or(String::new(), |c| format!(" under a cap of {} MiB", mib(c)));
     match d.tile_plan() {
-        None => println!("memory:  {} MiB, {} activations, the frame whole{cap}", mib(plan.total()), precision.name()),
+        None => println!("memory:  at most {} MiB, {} activations, the frame whole{cap}", mib(plan.total()), precision.name()),
         Some(t) => println!(
-            "memory:  {} MiB, {} activations{cap}: {} tiles of {}x{} ({} pixels of overlap; {:.2}x the whole frame's pixels){}",
+            "memory:  at most {} MiB, {} activations{cap}: {} tiles of {}x{} ({} pixels of overlap; {:.2}x the whole frame's pixels){}",
             mib(plan.total()),
             precision.name(),
             t.count(),
