@@ -5,7 +5,7 @@
 
 use std::collections::HashMap;
 
-use rae_core::denoiser::{FrameTiles, MemoryPlan, TilePlan};
+use rae_core::denoiser::{FrameTiles, MemoryPlan, TILE_OVERLAP, TilePlan};
 use rae_core::io::Sequence;
 use rae_core::{Arch, Denoiser, Error, FrameInputs, Options, Precision, Tile, TileChoice, Weights};
 use safetensors::Dtype;
@@ -188,14 +188,15 @@ fn tiles_whose_overlap_covers_the_reach_give_the_whole_frames_bit_for_bit() {
 fn a_tiled_sequence_of_the_full_depth_stays_within_its_tolerance_of_the_whole_run() {
     // Five levels reach further than the overlap: seams differ slightly from the whole run,
     // by the same amount every frame (the state carried does not drift). Tolerance, from
-    // `tile_seams` with the shipped model (docs/PERF.md; 2-6e-5 and 0.7-2.5% here): the mean
-    // difference below 2e-4 of the mean value, the largest below 5% of it.
+    // `tile_seams` with the shipped model and the default overlap (docs/PERF.md; 1.1-1.8e-4 and
+    // up to 0.7 there, 2.5e-4 and 3% here): the mean difference below 5e-4 of the mean value,
+    // the largest below 10% of it.
     let weights = Weights::load(fixture("../../models/rae-default.safetensors")).unwrap();
     let g = gpu();
     let (w, h) = (448, 320);
     let frames = big_frames(w, h, 3);
     let mut whole = Denoiser::with_options(&g.device, &g.queue, &weights, w, h, Options::default()).unwrap();
-    let options = Options { frame_tiles: Some(FrameTiles { tile: 192, overlap: 64, host_state: false }), ..Default::default() };
+    let options = Options { frame_tiles: Some(FrameTiles { tile: 192, overlap: TILE_OVERLAP, host_state: false }), ..Default::default() };
     let mut tiled = Denoiser::with_options(&g.device, &g.queue, &weights, w, h, options).unwrap();
     assert!(tiled.tile_plan().unwrap().count() >= 4);
     let (a, b) = (run(&mut whole, &frames), run(&mut tiled, &frames));
@@ -203,7 +204,7 @@ fn a_tiled_sequence_of_the_full_depth_stays_within_its_tolerance_of_the_whole_ru
         let mean = a.iter().map(|v| v.abs() as f64).sum::<f64>() / a.len() as f64;
         let worst = a.iter().zip(b).map(|(x, y)| (x - y).abs() as f64).fold(0.0, f64::max) / mean;
         let avg = a.iter().zip(b).map(|(x, y)| (x - y).abs() as f64).sum::<f64>() / a.len() as f64 / mean;
-        assert!(avg < 2e-4 && worst < 0.05, "frame {i}: mean difference {avg:.2e}, largest {worst:.2e} of the mean value");
+        assert!(avg < 5e-4 && worst < 0.1, "frame {i}: mean difference {avg:.2e}, largest {worst:.2e} of the mean value");
         assert!(b.iter().all(|v| v.is_finite()));
     }
 }
@@ -215,7 +216,7 @@ fn a_capped_denoiser_holds_no_more_than_its_cap() {
     let (w, h) = (448, 320);
     let limits = g.device.limits();
     // A cap that tiles of 192 pixels fit, below the whole frame's cost.
-    let tiles = Some(FrameTiles { tile: 192, overlap: 64, host_state: false });
+    let tiles = Some(FrameTiles { tile: 192, overlap: TILE_OVERLAP, host_state: false });
     let cap = MemoryPlan::new(&weights.arch, w, h, Precision::F32, None, tiles, false, &limits).unwrap().total();
     let whole = MemoryPlan::new(&weights.arch, w, h, Precision::F32, None, None, false, &limits).unwrap();
     assert!(whole.total() > cap);

@@ -304,7 +304,9 @@ fn a_memory_cap_runs_the_frames_in_tiles_and_too_small_a_cap_names_the_smallest(
     let plan =
         |tiles| rae_core::denoiser::MemoryPlan::new(&arch, w as u32, h as u32, rae_core::Precision::F32, None, tiles, false, &limits);
     let whole = plan(None).unwrap().total();
-    let tiled = plan(Some(rae_core::denoiser::FrameTiles { tile: 320, overlap: 64, host_state: false })).unwrap().total();
+    let tiled = plan(Some(rae_core::denoiser::FrameTiles { tile: 320, overlap: rae_core::denoiser::TILE_OVERLAP, host_state: false }))
+        .unwrap()
+        .total();
     let cap = tiled.div_ceil(1 << 20);
     assert!(cap << 20 < whole);
     let cap = cap.to_string();
