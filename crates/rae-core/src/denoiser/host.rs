@@ -188,12 +188,7 @@ impl Denoiser {
     /// Map the staging buffer if a failed frame left it unmapped (a frame ends with it mapped).
     fn map_upload(&self, host: &HostIo) -> Result<()> {
         if !host.upload_mapped.load(Ordering::Relaxed) {
-            let (tx, rx) = std::sync::mpsc::channel();
-            host.upload.map_async(wgpu::MapMode::Write, .., move |r| {
-                let _ = tx.send(r);
-            });
-            self.device.poll(wgpu::PollType::wait_indefinitely()).map_err(|e| Error::Gpu(e.to_string()))?;
-            rx.recv().map_err(|e| Error::Gpu(e.to_string()))?.map_err(|e| Error::Gpu(e.to_string()))?;
+            map_and_wait(&self.device, &host.upload, wgpu::MapMode::Write)?;
             host.upload_mapped.store(true, Ordering::Relaxed);
         }
         Ok(())
@@ -464,14 +459,19 @@ fn finish_host_io(device: &wgpu::Device, host: &HostIo, deliver: impl FnOnce(&[f
     Ok(())
 }
 
-/// Map a MAP_READ buffer and copy its f32s into `out`.
-pub(super) fn read_buffer(device: &wgpu::Device, buffer: &wgpu::Buffer, out: &mut [f32]) -> Result<()> {
+/// Map all of `buffer` and wait for the GPU until it is mapped.
+pub(super) fn map_and_wait(device: &wgpu::Device, buffer: &wgpu::Buffer, mode: wgpu::MapMode) -> Result<()> {
     let (tx, rx) = std::sync::mpsc::channel();
-    buffer.map_async(wgpu::MapMode::Read, .., move |r| {
+    buffer.map_async(mode, .., move |r| {
         let _ = tx.send(r);
     });
     device.poll(wgpu::PollType::wait_indefinitely()).map_err(|e| Error::Gpu(e.to_string()))?;
-    rx.recv().map_err(|e| Error::Gpu(e.to_string()))?.map_err(|e| Error::Gpu(e.to_string()))?;
+    rx.recv().map_err(|e| Error::Gpu(e.to_string()))?.map_err(|e| Error::Gpu(e.to_string()))
+}
+
+/// Map a MAP_READ buffer and copy its f32s into `out`.
+pub(super) fn read_buffer(device: &wgpu::Device, buffer: &wgpu::Buffer, out: &mut [f32]) -> Result<()> {
+    map_and_wait(device, buffer, wgpu::MapMode::Read)?;
     {
         let view = buffer.get_mapped_range(..).map_err(|e| Error::Gpu(format!("{e:?}")))?;
         out.copy_from_slice(&bytemuck::cast_slice::<u8, f32>(&view)[..out.len()]);

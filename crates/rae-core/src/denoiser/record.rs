@@ -37,6 +37,9 @@ impl GpuFrameIo<'_> {
     }
 }
 
+/// Why a tiled denoiser refuses the caller's GPU buffers: each tile stages its own inputs.
+const HOST_FRAMES_ONLY: &str = "the frame runs in tiles, which take host frames (denoise_into), not GPU buffers";
+
 /// Bind groups that connect a set of caller buffers to one [`Denoiser`]; make it once per set
 /// of buffers with [`Denoiser::bind_io`] and reuse it every frame.
 pub struct IoBinding {
@@ -52,7 +55,7 @@ impl Denoiser {
     /// denoiser whose frames run in tiles takes host frames only ([`Error::Tiled`]).
     pub fn bind_io(&self, io: &GpuFrameIo) -> Result<IoBinding> {
         if self.tiles.is_some() {
-            return Err(Error::Tiled("the frame runs in tiles, which take host frames (denoise_into), not GPU buffers"));
+            return Err(Error::Tiled(HOST_FRAMES_ONLY));
         }
         let pixels = self.width as u64 * self.height as u64;
         let needed = self.arch.required_buffers();
@@ -144,7 +147,7 @@ impl Denoiser {
     /// record time).
     pub fn record(&mut self, encoder: &mut wgpu::CommandEncoder, io: &IoBinding) -> Result<()> {
         if self.tiles.is_some() {
-            return Err(Error::Tiled("the frame runs in tiles, which take host frames (denoise_into), not GPU buffers"));
+            return Err(Error::Tiled(HOST_FRAMES_ONLY));
         }
         let warp = io.motion.is_some();
         self.record_with(encoder, io, None, warp)

@@ -266,7 +266,7 @@ impl Tiles {
                 }
             }
             Store::Host { global, above, left, upload, up, .. } => {
-                map(device, upload, wgpu::MapMode::Write)?;
+                host::map_and_wait(device, upload, wgpu::MapMode::Write)?;
                 {
                     let mut view = upload.get_mapped_range_mut(..).map_err(|e| Error::Gpu(format!("state staging: {e:?}")))?;
                     for m in moves.iter().flatten() {
@@ -373,7 +373,7 @@ impl Tiles {
                 }
             }
         }
-        map(device, readback, wgpu::MapMode::Read)?;
+        host::map_and_wait(device, readback, wgpu::MapMode::Read)?;
         {
             let view = readback.get_mapped_range(..).map_err(|e| Error::Gpu(format!("state readback: {e:?}")))?;
             for (k, &(_, l)) in graph.hidden.iter().enumerate() {
@@ -422,16 +422,6 @@ impl Network<'_> {
     fn texture(&self, block: usize) -> &wgpu::Texture {
         &self.textures[block][self.side]
     }
-}
-
-/// Map `buffer` and wait for it.
-fn map(device: &wgpu::Device, buffer: &wgpu::Buffer, mode: wgpu::MapMode) -> Result<()> {
-    let (tx, rx) = std::sync::mpsc::channel();
-    buffer.map_async(mode, .., move |r| {
-        let _ = tx.send(r);
-    });
-    device.poll(wgpu::PollType::wait_indefinitely()).map_err(|e| Error::Gpu(e.to_string()))?;
-    rx.recv().map_err(|e| Error::Gpu(e.to_string()))?.map_err(|e| Error::Gpu(e.to_string()))
 }
 
 fn texel_copy(texture: &wgpu::Texture, (x, y): (u32, u32)) -> wgpu::TexelCopyTextureInfo<'_> {
