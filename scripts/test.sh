@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # All of rae's tests, on a fresh machine: installs what is missing (lavapipe, the Python
-# packages with PyTorch), then checks the Rust formatting (rustfmt.toml) and runs the Rust tests
-# on lavapipe and the weights-tool tests.
+# packages with PyTorch; for the page, the wasm-bindgen CLI, Chromium and Playwright), then
+# checks the Rust formatting (rustfmt.toml) and runs the Rust tests on lavapipe, the page in a
+# headless browser and the weights-tool tests.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -24,16 +25,18 @@ cargo fmt --all --check
 cargo fmt --manifest-path scripts/spirv-val/Cargo.toml --check
 
 # Metal and DX12: the workspace compiles for macOS and Windows (cargo check does not link, so
-# neither platform's SDK is needed; running there is not tested here); rae-core compiles for
-# the browser (wasm32, wgpu's WebGPU backend).
-echo "== other targets: cargo check for aarch64-apple-darwin (Metal), x86_64-pc-windows-msvc (DX12), rae-core on wasm32-unknown-unknown (WebGPU)"
-rustup target add aarch64-apple-darwin x86_64-pc-windows-msvc wasm32-unknown-unknown >/dev/null
+# neither platform's SDK is needed; running there is not tested here). The browser (wasm32,
+# wgpu's WebGPU backend) is built and run by scripts/web-test.sh below.
+echo "== other targets: cargo check for aarch64-apple-darwin (Metal), x86_64-pc-windows-msvc (DX12)"
+rustup target add aarch64-apple-darwin x86_64-pc-windows-msvc >/dev/null
 cargo check --locked -q --workspace --target aarch64-apple-darwin
 cargo check --locked -q --workspace --target x86_64-pc-windows-msvc
-cargo check --locked -q -p rae-core --target wasm32-unknown-unknown
 
 echo "== Rust tests (workspace)"
 cargo test --workspace --locked
+
+echo "== the page in headless Chromium against PyTorch and native rae-core (scripts/web-test.sh)"
+bash scripts/web-test.sh
 
 echo "== fuzzing the readers, weights loader and command line (60 s; scripts/fuzz.sh)"
 bash scripts/fuzz.sh 60

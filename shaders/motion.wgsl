@@ -149,8 +149,8 @@ fn warp(@builtin(global_invocation_id) gid: vec3<u32>) {
     let q = p + vec2<i32>(1);
     let last = size - vec2<i32>(1);
     // Per axis: the lower and upper tap's weight (zero outside the level) and where they load.
-    let lo_in = select(vec2<f32>(0.0), vec2<f32>(1.0), p >= vec2<i32>(0) & p <= last);
-    let hi_in = select(vec2<f32>(0.0), vec2<f32>(1.0), q >= vec2<i32>(0) & q <= last);
+    let lo_in = select(vec2<f32>(0.0), vec2<f32>(1.0), (p >= vec2<i32>(0)) & (p <= last));
+    let hi_in = select(vec2<f32>(0.0), vec2<f32>(1.0), (q >= vec2<i32>(0)) & (q <= last));
     let lo = clamp(p, vec2<i32>(0), last);
     let hi = clamp(q, vec2<i32>(0), last);
     let wx = vec2<f32>((1.0 - f.x) * lo_in.x, f.x * hi_in.x);

@@ -3,7 +3,7 @@
 //!
 //! Regenerate the fixtures: cd weights-tool && python -m rae_weights golden --out ../tests/fixtures
 
-use rae_core::{Denoiser, Options, Precision, Tile, TileChoice, WeightMemory, Weights};
+use rae_core::{Denoiser, Options, Precision, SourceAccess, Tile, TileChoice, WeightMemory, Weights};
 
 use crate::{Tolerance, fixture, gpu};
 
@@ -119,4 +119,30 @@ fn split_mma_tiles_match_pytorch_in_f32() {
     // frames, the direct CPU tile 0.017-0.063), where the plain mma32 misses it 15-35x.
     let tiles = TileChoice::Fixed(Tile::mma_split(32).unwrap());
     check_with("golden_full_64x64.safetensors", Options { tiles, ..Default::default() });
+}
+
+#[test]
+fn webgpu_default_limits_read_sampled_sources_and_match_pytorch() {
+    // A device with WebGPU's default limits (what every browser gives: 4 storage textures a
+    // stage) has too few for storage sources, which CPU drivers otherwise take: it reads its
+    // sources sampled, every conv layout fits, and frames with motion still match PyTorch.
+    let g = gpu();
+    let (device, queue) = pollster::block_on(g.adapter.request_device(&wgpu::DeviceDescriptor {
+        label: Some("WebGPU's default limits"),
+        required_limits: wgpu::Limits::default(),
+        ..Default::default()
+    }))
+    .unwrap();
+    assert_eq!(device.limits().max_storage_textures_per_shader_stage, 4);
+    assert_eq!(SourceAccess::for_device(&device), SourceAccess::Sampled);
+    assert_eq!(SourceAccess::for_device(&g.device), SourceAccess::for_device_type(g.device.adapter_info().device_type));
+    let golden = crate::golden("golden_full_motion_64x64.safetensors");
+    let weights = Weights::load(fixture(&golden.weights)).unwrap();
+    let options = Options { motion: true, ..Default::default() };
+    let mut d = Denoiser::with_options(&device, &queue, &weights, golden.width, golden.height, options).unwrap();
+    assert!(d.conv_sources().iter().all(|&s| s == SourceAccess::Sampled));
+    for i in 0..golden.frames.len() {
+        let out = d.denoise(&golden.inputs(i)).unwrap();
+        crate::assert_close(Tolerance::GOLDEN, &format!("default limits, frame {i}"), &out, &golden.frames[i]["output"]);
+    }
 }

@@ -1,10 +1,11 @@
 //! Sequence reading: motion from per-buffer files as written, and from Blender's Vector pass
-//! converted to rae's convention.
+//! converted to rae's convention; files held in memory (a browser's) read as from disk.
 
 use std::path::PathBuf;
 
 use exr::prelude::*;
-use rae_core::io::{MotionSource, Sequence};
+use rae_core::InputBuffer;
+use rae_core::io::{self, MotionSource, Sequence, Slot};
 
 /// A fresh folder under the system's temporary one.
 fn folder(name: &str) -> PathBuf {
@@ -110,4 +111,31 @@ fn blender_vector_pass_warps_the_previous_frame_onto_the_current() {
         let other = error(sx, sy);
         assert!(rae < 0.6 * other, "rae's reading {rae} against the sign choice ({sx}, {sy}) {other}");
     }
+}
+
+#[test]
+fn files_in_memory_read_as_their_folder_does() {
+    // A browser hands over files without a folder: the same values as the disk's reader, the
+    // buffer and frame number from the name, and errors that name the file.
+    let dir = folder("bytes");
+    let size = (5, 3);
+    write(dir.join("color_0007.exr"), size, &[("R", 0.25), ("G", 0.5), ("B", 2.0)]);
+    write(dir.join("motion_0007.exr"), size, &[("R", 1.5), ("G", -0.5)]);
+    let seq = Sequence::scan(&dir).unwrap();
+    let frame = seq.load(0).unwrap();
+    for (name, slot) in [("color_0007.exr", Slot::Input(InputBuffer::Color)), ("motion_0007.exr", Slot::Motion)] {
+        assert_eq!(io::per_buffer_name(name), Some((slot, 7)));
+        let bytes = std::fs::read(dir.join(name)).unwrap();
+        let (read_size, values) = io::read_buffer_bytes(name, &bytes, slot).unwrap();
+        assert_eq!(read_size, (5, 3));
+        assert_eq!(values.as_slice(), frame.buffers[&slot].as_slice(), "{name}: as Sequence::load reads it");
+    }
+    for name in ["color.exr", "shot_0001.exr", "color_0001.txt", "0001.exr"] {
+        assert_eq!(io::per_buffer_name(name), None, "{name} names no buffer");
+    }
+    let err = io::read_buffer_bytes("albedo_0003.exr", b"not an EXR", Slot::Input(InputBuffer::Albedo)).unwrap_err().to_string();
+    assert!(err.contains("albedo_0003.exr") && err.contains("not a readable EXR"), "{err}");
+    let err = io::read_buffer_bytes("albedo_0003.png", b"\x89PNG broken", Slot::Input(InputBuffer::Albedo)).unwrap_err().to_string();
+    assert!(err.contains("albedo_0003.png"), "{err}");
+    std::fs::remove_dir_all(dir).unwrap();
 }

@@ -221,6 +221,10 @@ pub const MAX_SAMPLES: u64 = 1 << 30;
 /// [`MAX_SAMPLES`].
 fn exr_meta(path: &Path) -> Result<exr::meta::MetaData> {
     let meta = exr::meta::MetaData::read_from_file(path, false).map_err(|e| input_err(path, format!("not a readable EXR file: {e}")))?;
+    check_exr_meta(path, meta)
+}
+
+fn check_exr_meta(path: &Path, meta: exr::meta::MetaData) -> Result<exr::meta::MetaData> {
     let mut samples = 0u64;
     for h in meta.headers.iter() {
         let (w, h_) = (h.layer_size.width() as u64, h.layer_size.height() as u64);
@@ -556,6 +560,11 @@ fn pick_channels(path: &Path, slot: Slot, chans: &[(String, Vec<f32>)], n: usize
 fn read_exr_groups(path: &Path) -> Result<GroupPixels> {
     exr_meta(path)?;
     let image = exr::prelude::read_all_flat_layers_from_file(path).map_err(|e| input_err(path, format!("cannot read EXR: {e}")))?;
+    Ok(image_groups(&image))
+}
+
+/// The channel groups of a decoded EXR image.
+fn image_groups(image: &exr::image::FlatImage) -> GroupPixels {
     let mut groups = GroupPixels::new();
     for layer in &image.layer_data {
         let lname = layer.attributes.layer_name.as_ref().map(|t| t.to_string());
@@ -568,7 +577,7 @@ fn read_exr_groups(path: &Path) -> Result<GroupPixels> {
             groups.entry(g).or_default().push((ch, c.sample_data.values_as_f32().collect()));
         }
     }
-    Ok(groups)
+    groups
 }
 
 fn read_buffer_file(path: &Path, slot: Slot, w: usize, h: usize) -> Result<Vec<f32>> {
@@ -578,12 +587,71 @@ fn read_buffer_file(path: &Path, slot: Slot, w: usize, h: usize) -> Result<Vec<f
         return pick_channels(path, slot, chans, w * h);
     }
     let img = image::open(path).map_err(|e| input_err(path, format!("cannot read image: {e}")))?.to_rgb32f();
-    let px = img.as_raw();
-    Ok(match slot.input() {
+    Ok(ldr_values(img.as_raw(), slot))
+}
+
+/// An 8-bit image's RGB values as a slot's: normals from [0, 1] to [-1, 1], depth and roughness
+/// from the red channel, the rest from sRGB to linear.
+fn ldr_values(px: &[f32], slot: Slot) -> Vec<f32> {
+    match slot.input() {
         Some(InputBuffer::Normal) => px.iter().map(|v| v * 2.0 - 1.0).collect(),
         Some(InputBuffer::Depth | InputBuffer::Roughness) => px.chunks_exact(3).map(|c| c[0]).collect(),
         _ => px.iter().map(|v| srgb_to_linear(*v)).collect(),
-    })
+    }
+}
+
+/// The buffer and frame number a per-buffer file's name gives (`albedo_0012.exr`: albedo,
+/// 12), for files that come without a folder (a browser's file picker); `None` for names that
+/// are not an EXR, PNG or JPEG file named after a buffer.
+pub fn per_buffer_name(file_name: &str) -> Option<(Slot, u32)> {
+    let path = Path::new(file_name);
+    if !matches!(extension(path).as_deref(), Some("exr" | "png" | "jpg" | "jpeg")) {
+        return None;
+    }
+    let stem = path.file_stem()?.to_string_lossy();
+    let (name, n) = split_number(&stem)?;
+    if name.is_empty() {
+        return None;
+    }
+    Some((Slot::from_name(name)?, n))
+}
+
+/// Read one buffer of a per-buffer file held in memory (a fetched or picked file), as
+/// [`Sequence::load`] reads it from disk: `file_name` gives the format (by extension) and
+/// names the file in errors. Returns the image's size and the slot's values, interleaved.
+/// An EXR's headers are checked against [`MAX_SIDE`] and [`MAX_SAMPLES`] before its pixels
+/// are read; the pixels are decoded on this thread (a browser has no other).
+pub fn read_buffer_bytes(file_name: &str, bytes: &[u8], slot: Slot) -> Result<((u32, u32), Vec<f32>)> {
+    use exr::prelude::{ReadChannels, ReadLayers};
+    let path = Path::new(file_name);
+    if extension(path).as_deref() == Some("exr") {
+        let meta = exr::meta::MetaData::read_from_buffered(std::io::Cursor::new(bytes), false)
+            .map_err(|e| input_err(path, format!("not a readable EXR file: {e}")))?;
+        let meta = check_exr_meta(path, meta)?;
+        let mut sizes = meta.headers.iter().map(|h| (h.layer_size.width() as u32, h.layer_size.height() as u32));
+        let size = sizes.next().ok_or_else(|| input_err(path, "no layers"))?;
+        if sizes.any(|s| s != size) {
+            return Err(input_err(path, "layers of different sizes"));
+        }
+        let image = exr::prelude::read()
+            .no_deep_data()
+            .largest_resolution_level()
+            .all_channels()
+            .all_layers()
+            .all_attributes()
+            .non_parallel()
+            .from_buffered(std::io::Cursor::new(bytes))
+            .map_err(|e| input_err(path, format!("cannot read EXR: {e}")))?;
+        let groups = image_groups(&image);
+        let chans = groups.get("").or_else(|| groups.values().next()).ok_or_else(|| input_err(path, "no channels"))?;
+        let values = pick_channels(path, slot, chans, size.0 as usize * size.1 as usize)?;
+        return Ok((size, values));
+    }
+    let img = image::load_from_memory(bytes).map_err(|e| input_err(path, format!("cannot read image: {e}")))?.to_rgb32f();
+    if img.width() > MAX_SIDE || img.height() > MAX_SIDE {
+        return Err(input_err(path, format!("{}x{} is larger than rae reads ({MAX_SIDE} pixels a side)", img.width(), img.height())));
+    }
+    Ok(((img.width(), img.height()), ldr_values(img.as_raw(), slot)))
 }
 
 /// Whether a multi-layer EXR's motion group is Blender's `Vector` pass (`ViewLayer.Vector`).

@@ -215,7 +215,7 @@ fn choose(
             // Tuning times both source kinds unless the caller fixed one.
             let other = if default_sources == SourceAccess::Sampled { SourceAccess::Storage } else { SourceAccess::Sampled };
             let both = [default_sources, other];
-            let accesses = if options.sources.is_some() { &both[..1] } else { &both[..] };
+            let accesses = if options.sources.is_some() || !SourceAccess::storage_fits(device) { &both[..1] } else { &both[..] };
             // Sources, destination and pooled value of every conv at parity 0.
             let views: Vec<NodeViews> = graph
                 .nodes
@@ -331,7 +331,7 @@ impl Denoiser {
         // Mma tiles read storage weights: a fixed one picks them where the caller left it open.
         let fixed_mma = matches!(tiles, TileChoice::Fixed(t) if t.method.is_mma());
         let memory = chosen_memory.unwrap_or(if fixed_mma { WeightMemory::Storage } else { WeightMemory::for_device_type(device_type) });
-        let mut kernels = Kernels::with_sources(device, precision, memory, sources.unwrap_or(SourceAccess::for_device_type(device_type)));
+        let mut kernels = Kernels::with_sources(device, precision, memory, sources.unwrap_or(SourceAccess::for_device(device)));
         // The padded levels halve exactly, so the convs may read their zero padding from
         // outside the textures where the device reads zero there (before tuning makes any).
         kernels.pad_from_bounds();
@@ -434,6 +434,7 @@ pub(super) fn create_init(device: &wgpu::Device, label: &str, contents: &[u8], u
 /// Runs `f` with wgpu's validation and out-of-memory errors caught in error scopes on this
 /// thread, instead of going to the device's uncaptured-error handler (which panics by default):
 /// a buffer past the device's limits, or GPU memory that runs out, becomes [`Error::Gpu`].
+#[cfg(not(target_arch = "wasm32"))]
 pub(crate) fn catching_gpu_errors<T>(device: &wgpu::Device, what: &str, f: impl FnOnce() -> Result<T>) -> Result<T> {
     let oom = device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
     let validation = device.push_error_scope(wgpu::ErrorFilter::Validation);
@@ -445,4 +446,12 @@ pub(crate) fn catching_gpu_errors<T>(device: &wgpu::Device, what: &str, f: impl 
         (None, Some(e)) => Err(Error::Gpu(format!("{what}: {e}"))),
         (None, None) => result,
     }
+}
+
+/// In a browser an error scope's verdict comes only when the page's event loop runs, so `f`
+/// runs without scopes: the caller pushes its own around the call and awaits them
+/// (`crates/rae-web` does), or errors reach the device's uncaptured-error handler.
+#[cfg(target_arch = "wasm32")]
+pub(crate) fn catching_gpu_errors<T>(_device: &wgpu::Device, _what: &str, f: impl FnOnce() -> Result<T>) -> Result<T> {
+    f()
 }

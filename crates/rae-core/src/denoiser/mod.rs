@@ -87,7 +87,7 @@ pub struct Options {
     /// How the convs read their sources. `None`: where tiles are tuned, each conv the faster
     /// of both kinds as timed with its tile (on the H100 storage-texture sources took 0.88x the
     /// time of sampled ones in one direct conv and were slower in the matrix-unit tiles,
-    /// `docs/perf/h100-2026-11-24-s15.log`); elsewhere by adapter type ([`SourceAccess::for_device_type`]).
+    /// `docs/perf/h100-2026-11-24-s15.log`); elsewhere by adapter type and limits ([`SourceAccess::for_device`]).
     pub sources: Option<SourceAccess>,
     /// Whether the F(4x4) convs write their outputs into a buffer that the frame copies into
     /// their textures ([`Kernels::stage_outputs`]). `None`: on CPU drivers, where a buffer store

@@ -129,6 +129,10 @@ impl WeightMemory {
     }
 }
 
+/// Storage textures a conv binds with storage sources: its two sources, the lanes tiles'
+/// weight texture, its output and its pooled output (with sampled sources, the last two).
+pub const STORAGE_SOURCE_TEXTURES: u32 = 5;
+
 /// How the conv reads its two sources (the activations it convolves).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum SourceAccess {
@@ -145,6 +149,22 @@ impl SourceAccess {
     /// The kind that suits an adapter: storage textures on CPU drivers, sampled elsewhere.
     pub fn for_device_type(t: wgpu::DeviceType) -> Self {
         if t == wgpu::DeviceType::Cpu { SourceAccess::Storage } else { SourceAccess::Sampled }
+    }
+
+    /// The kind that suits a device: [`Self::for_device_type`], but sampled where the device
+    /// binds fewer storage textures to a stage than storage sources take
+    /// ([`STORAGE_SOURCE_TEXTURES`]): WebGPU's default limit is 4, and a browser's software
+    /// adapter (SwiftShader) reports itself a CPU.
+    pub fn for_device(device: &wgpu::Device) -> Self {
+        match Self::for_device_type(device.adapter_info().device_type) {
+            SourceAccess::Storage if !Self::storage_fits(device) => SourceAccess::Sampled,
+            kind => kind,
+        }
+    }
+
+    /// Whether a device binds enough storage textures to a stage for storage sources.
+    pub fn storage_fits(device: &wgpu::Device) -> bool {
+        device.limits().max_storage_textures_per_shader_stage >= STORAGE_SOURCE_TEXTURES
     }
 
     /// Name for tables and command lines.

@@ -449,6 +449,10 @@ pub struct Kernels {
     pub(super) staging: bool,
     /// The device reads zero outside a texture ([`out_of_bounds_reads_zero`]).
     reads_zero: bool,
+    /// What a conv that does not pool binds at its pooled output (binding 6), where the device
+    /// refuses one texture bound twice as a writable storage texture in a dispatch (a browser's
+    /// WebGPU): a 1 x 1 texture it never writes ([`Kernels::pool_binding`]).
+    pool_sink: Option<wgpu::TextureView>,
     /// The conv pipelines read their zero padding from outside the textures
     /// ([`Kernels::pad_from_bounds`]).
     oob_zero: bool,
@@ -472,7 +476,7 @@ impl Kernels {
     /// sources the conv's `Source` alias and `load` ([`STORAGE_SOURCES`]); everything else (the
     /// clamp to the f16 range) is an override.
     pub fn new(device: &wgpu::Device, precision: Precision, memory: WeightMemory) -> Self {
-        Self::with_sources(device, precision, memory, SourceAccess::for_device_type(device.adapter_info().device_type))
+        Self::with_sources(device, precision, memory, SourceAccess::for_device(device))
     }
 
     /// [`Kernels::new`] with the conv's sources read as `sources` says (rewritten by
@@ -482,6 +486,10 @@ impl Kernels {
             device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some(label), entries })
         };
         let conv_layout = |access: SourceAccess, memory: WeightMemory| {
+            // Every slot's layout is made here; where the device binds too few storage textures
+            // for storage sources (SourceAccess::storage_fits), their slots get the sampled
+            // layout, which no plan picks storage sources to use there.
+            let access = if SourceAccess::storage_fits(device) { access } else { SourceAccess::Sampled };
             layout(
                 "conv3x3",
                 &[
@@ -566,6 +574,20 @@ impl Kernels {
             sources,
             staging: false,
             reads_zero: out_of_bounds_reads_zero(device),
+            pool_sink: (device.adapter_info().backend == wgpu::Backend::BrowserWebGpu).then(|| {
+                let desc = wgpu::TextureDescriptor {
+                    label: Some("pool sink"),
+                    size: wgpu::Extent3d { width: 1, height: 1, depth_or_array_layers: 1 },
+                    mip_level_count: 1,
+                    sample_count: 1,
+                    dimension: wgpu::TextureDimension::D2,
+                    format: precision.format(),
+                    usage: wgpu::TextureUsages::STORAGE_BINDING,
+                    view_formats: &[],
+                };
+                let view = wgpu::TextureViewDescriptor { dimension: Some(wgpu::TextureViewDimension::D2Array), ..Default::default() };
+                device.create_texture(&desc).create_view(&view)
+            }),
             oob_zero: false,
             wide_stores: wide_staged_stores(device),
             gathers8: narrow_gathers(device),
@@ -586,6 +608,15 @@ impl Kernels {
     pub fn stage_in_32_bit_words(&mut self) {
         assert!(self.conv.is_empty(), "stage_in_32_bit_words after conv pipelines were made");
         self.wide_stores = false;
+    }
+
+    /// What a conv that does not pool binds at its pooled output: its own output, so that its
+    /// pipeline's textures have the static state of a pooling conv's (lavapipe compiles one
+    /// pipeline for both, [`ConvVariant::pool`]), or where the device refuses a texture bound
+    /// twice as a writable storage texture in one dispatch (a browser's WebGPU), a 1 x 1
+    /// texture of its own that it never writes.
+    pub fn pool_binding<'a>(&'a self, output: &'a wgpu::TextureView) -> &'a wgpu::TextureView {
+        self.pool_sink.as_ref().unwrap_or(output)
     }
 
     /// Have the conv pipelines read their zero padding from outside the source textures,

@@ -624,12 +624,12 @@ impl ConvPlan {
         pooled: Option<&wgpu::TextureView>,
     ) -> wgpu::BindGroup {
         // A conv that does not pool binds its output at binding 6 too (never written there: its
-        // `pools` is false), so its pipeline's textures have the static state of a pooling
-        // conv's and lavapipe compiles the pipeline once for both ([`ConvVariant::pool`]).
+        // `pools` is false), or a texture of its own where the device wants one
+        // ([`Kernels::pool_binding`]).
         let pooled = if self.pools(i) {
             pooled.unwrap_or_else(|| panic!("conv {i} pools its output: its bind group needs the pooled value"))
         } else {
-            dst
+            kernels.pool_binding(dst)
         };
         let buffer =
             |buffer, size| wgpu::BindingResource::Buffer(wgpu::BufferBinding { buffer, offset: 0, size: wgpu::BufferSize::new(size) });

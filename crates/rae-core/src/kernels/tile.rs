@@ -181,10 +181,24 @@ impl Tile {
     /// golden tolerance.
     pub const CPU_WINOGRAD4: Tile = Tile { rows: 4, blocks: 4, cols: 4, group_x: WORKGROUP, method: Method::Winograd4Lanes, split: 1 };
 
+    /// The tile of a browser's software WebGPU adapter (Chromium's SwiftShader): 4 rows x 1
+    /// block. SwiftShader compiles the unrolled conv bodies slowly: on this project's 2-core
+    /// machine the shipped models' frame builds in seconds with 4 x 1, did not build in 200 s
+    /// with 8 x 1, and with [`Tile::CPU`] its GPU process exits after two minutes
+    /// (`scripts/web-test.sh`).
+    pub const BROWSER_CPU: Tile = Tile { rows: 4, blocks: 1, cols: 1, group_x: WORKGROUP, method: Method::Direct, split: 1 };
+
     /// The tile of CPU drivers on `device`: [`Tile::CPU_LANES`] where the device has subgroups
-    /// of 8 or more lanes ([`lanes_supported`]), else [`Tile::CPU`].
+    /// of 8 or more lanes ([`lanes_supported`]), [`Tile::BROWSER_CPU`] on a browser's WebGPU,
+    /// else [`Tile::CPU`].
     pub fn cpu(device: &wgpu::Device) -> Tile {
-        if lanes_supported(device) { Tile::CPU_LANES } else { Tile::CPU }
+        if lanes_supported(device) {
+            Tile::CPU_LANES
+        } else if device.adapter_info().backend == wgpu::Backend::BrowserWebGpu {
+            Tile::BROWSER_CPU
+        } else {
+            Tile::CPU
+        }
     }
 
     /// The tile of CPU drivers for a conv reading `in_blocks` input blocks on a `width` x
