@@ -184,8 +184,9 @@ impl Tile {
     /// The tile of a browser's software WebGPU adapter (Chromium's SwiftShader): 4 rows x 1
     /// block. SwiftShader compiles the unrolled conv bodies slowly: on this project's 2-core
     /// machine the shipped models' frame builds in seconds with 4 x 1, did not build in 200 s
-    /// with 8 x 1, and with [`Tile::CPU`] its GPU process exits after two minutes
-    /// (`scripts/web-test.sh`).
+    /// with 8 x 1, and with [`Tile::CPU`] its GPU process exits after two minutes. Of the tiles
+    /// that build it runs fastest: the sample's 128x128 frame in 0.65x the time of 4 x 2 and
+    /// 0.6x that of 2 x 1 (`docs/perf/chromium-swiftshader-2026-12-03-s38.log`).
     pub const BROWSER_CPU: Tile = Tile { rows: 4, blocks: 1, cols: 1, group_x: WORKGROUP, method: Method::Direct, split: 1 };
 
     /// The tile of CPU drivers on `device`: [`Tile::CPU_LANES`] where the device has subgroups
