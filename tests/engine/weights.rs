@@ -65,6 +65,23 @@ fn graph_names_match_pytorch_and_temps_share_buffers() {
 }
 
 #[test]
+fn the_least_live_memory_is_d1s_recurrent_conv_at_full_resolution() {
+    // While d1.l2.0 runs, its two 32-channel sources (d1.l1.0's output and the old state) and
+    // its output are live at full resolution beside every deeper block's state: the floor that
+    // no sharing of textures by liveness goes below, and below what the denoiser allocates.
+    let arch = Arch::reference();
+    let g = Graph::new(&arch);
+    let (w, h) = (1920u32, 1088u32);
+    let (least, at) = g.least_live_bytes(w, h, 16);
+    assert_eq!(g.nodes[at].name, "d1.l2.0");
+    let level = |l: u32, channels: u64| (w >> l) as u64 * (h >> l) as u64 * channels.div_ceil(4) * 16;
+    let deeper: u64 = g.hidden.iter().skip(1).map(|&(c, l)| level(l as u32, c as u64)).sum();
+    assert_eq!(least, 3 * level(0, 32) + deeper);
+    assert!(least < rae_core::denoiser::activation_bytes(&g, w, h, rae_core::Precision::F32, false));
+    assert_eq!(g.least_live_bytes(w, h, 8).0 * 2, least, "f16 halves it");
+}
+
+#[test]
 fn truncated_file_is_an_error() {
     let bytes = std::fs::read(fixture(TINY)).unwrap();
     for cut in [0, 7, 100, bytes.len() / 2, bytes.len() - 1] {

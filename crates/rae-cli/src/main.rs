@@ -436,6 +436,13 @@ fn info(path: &Path, sizes: &[(u32, u32)], max_memory: Option<u64>) -> Result<()
             mib(Precision::F16),
             (a.parameter_count() * 4) as f64 / (1u64 << 20) as f64,
         );
+        let (least, at) = graph.least_live_bytes(pw, ph, Precision::F32.texel_bytes());
+        println!(
+            "least {s}:   {:.1} MiB f32, {:.1} MiB f16 live at once while {} runs: the floor of any sharing of one texture per value",
+            least as f64 / (1u64 << 20) as f64,
+            graph.least_live_bytes(pw, ph, Precision::F16.texel_bytes()).0 as f64 / (1u64 << 20) as f64,
+            graph.nodes[at].name,
+        );
         let guided = a.inputs.iter().any(|b| matches!(b, rae_core::InputBuffer::Normal | rae_core::InputBuffer::Depth));
         let second_state = rae_core::denoiser::activation_bytes(&graph, pw, ph, Precision::F32, true)
             - rae_core::denoiser::activation_bytes(&graph, pw, ph, Precision::F32, false);

@@ -184,6 +184,34 @@ impl Graph {
         self.nodes.iter().map(|n| (9 * n.cin() * n.cout) as f64 / (1u64 << (2 * n.level)) as f64).sum()
     }
 
+    /// The most bytes of values live at once while any node runs, each value in a texture of
+    /// exactly its channel blocks at `texel_bytes` a texel, the frame padded to `pwidth` x
+    /// `pheight`, and the node where that peak is: the least that any allocation of one texture
+    /// per value can hold for the frame, however it shares textures. Live at node `i`: every
+    /// block's hidden state (one copy: the frame's state is kept between frames), the input
+    /// until its last reader, each temporary from its writer to its last reader, and each
+    /// pooled value from the node after which it is pooled to its last reader.
+    pub fn least_live_bytes(&self, pwidth: u32, pheight: u32, texel_bytes: u64) -> (u64, usize) {
+        let bytes = |level: usize, channels: usize| {
+            (pwidth >> level) as u64 * (pheight >> level) as u64 * channels.div_ceil(4) as u64 * texel_bytes
+        };
+        let reads = |n: &ConvNode, v: Value| n.a.value == v || n.b.is_some_and(|b| b.value == v);
+        let last_reader = |v: Value| self.nodes.iter().rposition(|n| reads(n, v)).unwrap_or(0);
+        let hidden: u64 = self.hidden.iter().map(|&(c, level)| bytes(level, c)).sum();
+        let input_until = last_reader(Value::Input);
+        let pooled: Vec<(usize, usize, u64)> =
+            self.pools.iter().enumerate().map(|(k, p)| (p.after, last_reader(Value::Pooled(k)), bytes(p.level, p.channels))).collect();
+        (0..self.nodes.len())
+            .map(|i| {
+                let input = if i <= input_until { bytes(0, self.in_channels) } else { 0 };
+                let temps: u64 = self.temps.iter().filter(|t| t.def <= i && i <= t.last_use).map(|t| bytes(t.level, t.channels)).sum();
+                let pools: u64 = pooled.iter().filter(|&&(from, to, _)| from <= i && i <= to).map(|&(_, _, b)| b).sum();
+                (hidden + input + temps + pools, i)
+            })
+            .max_by_key(|&(b, i)| (b, std::cmp::Reverse(i)))
+            .unwrap_or((hidden, 0))
+    }
+
     /// Map temporaries onto as few physical buffers as their lifetimes allow.
     ///
     /// Returns, per temporary, the index of its slot, and per slot its (level, channels). A slot
