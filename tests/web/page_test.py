@@ -9,7 +9,7 @@ headless Chromium (WebGPU through SwiftShader, with WebGPU's default limits), an
    tolerance (|wgpu - torch| <= 1e-4 * max(1, |torch|));
 3. the sample sequence, denoised in the page frame by frame with its hidden state carried and
    reprojected, matches native rae-core (rae-cli on this machine's device, EXRs in --native)
-   within the same tolerance.
+   within the same tolerance, and picked through the file picker gives the same errors.
 
 Writes a screenshot of the page after the sample (--screenshot) and prints, last, one line with
 the largest differences and the page's ms per frame.
@@ -100,6 +100,22 @@ def main() -> int:
 
         # 2 and 3. Golden fixtures and the sample (after the error: the page keeps working).
         result = page.evaluate("raeTest()")
+
+        # The sample again, picked as a user picks files: the same frames, the same errors.
+        sample = args.site / "samples" / "random2026"
+        page.set_input_files("#pick", files=sorted(str(f) for f in sample.iterdir()))
+        page.wait_for_function(
+            "document.getElementById('status').textContent.startsWith('56 files: 8 frames')"
+            " || !document.getElementById('message').hidden",
+            timeout=300_000,
+        )
+        if not page.is_hidden("#message"):
+            failures.append(f"the picked sample: {page.inner_text('#message')}")
+        rows = page.eval_on_selector_all("#frames tbody tr", "rows => rows.map(r => r.cells[3].textContent)")
+        want = [f"{f['psnrOut']:.2f}" for f in result["sample"]]
+        print(f"picked sample: PSNR out {', '.join(rows)}")
+        if rows != want:
+            failures.append(f"the picked sample's PSNR {rows} differs from the fetched one's {want}")
         page.screenshot(path=str(args.screenshot), full_page=True)
 
         # A browser without WebGPU: a message that says so.
