@@ -51,7 +51,7 @@ pub struct Session {
 }
 
 struct Inner {
-    /// Kept for the session's life: the browser loses the device once its instance is gone.
+    /// The instance the adapter and device came from, held with them.
     _instance: wgpu::Instance,
     adapter: wgpu::Adapter,
     device: wgpu::Device,
