@@ -310,11 +310,7 @@ impl Sequence {
         // Per-buffer files are named after a buffer.
         let mut per_buffer: BTreeMap<u32, BTreeMap<Slot, PathBuf>> = BTreeMap::new();
         for f in &files {
-            let stem = f.file_stem().unwrap_or_default().to_string_lossy().to_string();
-            if let Some((name, n)) = split_number(&stem)
-                && let Some(slot) = Slot::from_name(name)
-                && !name.is_empty()
-            {
+            if let Some((slot, n)) = per_buffer_name(&f.file_name().unwrap_or_default().to_string_lossy()) {
                 if let Some(prev) = per_buffer.entry(n).or_default().insert(slot, f.clone()) {
                     return Err(input_err(f, format!("frame {n} of `{}` is also in {}", slot.name(), prev.display())));
                 }
@@ -478,7 +474,7 @@ impl Sequence {
         match &self.files[i] {
             FrameFiles::PerBuffer(m) => {
                 for (slot, p) in m {
-                    buffers.insert(*slot, read_buffer_file(p, *slot, w, h)?);
+                    buffers.insert(*slot, read_buffer_file(p, *slot)?);
                 }
             }
             FrameFiles::MultiLayer(p) => {
@@ -580,14 +576,9 @@ fn image_groups(image: &exr::image::FlatImage) -> GroupPixels {
     groups
 }
 
-fn read_buffer_file(path: &Path, slot: Slot, w: usize, h: usize) -> Result<Vec<f32>> {
-    if extension(path).as_deref() == Some("exr") {
-        let groups = read_exr_groups(path)?;
-        let chans = groups.get("").or_else(|| groups.values().next()).ok_or_else(|| input_err(path, "no channels"))?;
-        return pick_channels(path, slot, chans, w * h);
-    }
-    let img = image::open(path).map_err(|e| input_err(path, format!("cannot read image: {e}")))?.to_rgb32f();
-    Ok(ldr_values(img.as_raw(), slot))
+fn read_buffer_file(path: &Path, slot: Slot) -> Result<Vec<f32>> {
+    let file = std::fs::File::open(path).map_err(|e| input_err(path, format!("cannot open: {e}")))?;
+    read_buffer(path, std::io::BufReader::new(file), slot).map(|(_, values)| values)
 }
 
 /// An 8-bit image's RGB values as a slot's: normals from [0, 1] to [-1, 1], depth and roughness
@@ -619,13 +610,18 @@ pub fn per_buffer_name(file_name: &str) -> Option<(Slot, u32)> {
 /// Read one buffer of a per-buffer file held in memory (a fetched or picked file), as
 /// [`Sequence::load`] reads it from disk: `file_name` gives the format (by extension) and
 /// names the file in errors. Returns the image's size and the slot's values, interleaved.
-/// An EXR's headers are checked against [`MAX_SIDE`] and [`MAX_SAMPLES`] before its pixels
-/// are read; the pixels are decoded on this thread (a browser has no other).
 pub fn read_buffer_bytes(file_name: &str, bytes: &[u8], slot: Slot) -> Result<((u32, u32), Vec<f32>)> {
+    read_buffer(Path::new(file_name), std::io::Cursor::new(bytes), slot)
+}
+
+/// One buffer of a per-buffer file from `source` (`path` gives the format and names it in
+/// errors): its size and the slot's values. An EXR's headers are checked against [`MAX_SIDE`]
+/// and [`MAX_SAMPLES`] before its pixels are read (decoded on every core, or on the one thread a
+/// browser has); an 8-bit image's size against [`MAX_SIDE`].
+fn read_buffer<R: std::io::BufRead + std::io::Seek>(path: &Path, mut source: R, slot: Slot) -> Result<((u32, u32), Vec<f32>)> {
     use exr::prelude::{ReadChannels, ReadLayers};
-    let path = Path::new(file_name);
     if extension(path).as_deref() == Some("exr") {
-        let meta = exr::meta::MetaData::read_from_buffered(std::io::Cursor::new(bytes), false)
+        let meta = exr::meta::MetaData::read_from_buffered(&mut source, false)
             .map_err(|e| input_err(path, format!("not a readable EXR file: {e}")))?;
         let meta = check_exr_meta(path, meta)?;
         let mut sizes = meta.headers.iter().map(|h| (h.layer_size.width() as u32, h.layer_size.height() as u32));
@@ -633,21 +629,22 @@ pub fn read_buffer_bytes(file_name: &str, bytes: &[u8], slot: Slot) -> Result<((
         if sizes.any(|s| s != size) {
             return Err(input_err(path, "layers of different sizes"));
         }
-        let image = exr::prelude::read()
-            .no_deep_data()
-            .largest_resolution_level()
-            .all_channels()
-            .all_layers()
-            .all_attributes()
-            .non_parallel()
-            .from_buffered(std::io::Cursor::new(bytes))
-            .map_err(|e| input_err(path, format!("cannot read EXR: {e}")))?;
+        source.seek(std::io::SeekFrom::Start(0)).map_err(|e| input_err(path, e.to_string()))?;
+        let reader = exr::prelude::read().no_deep_data().largest_resolution_level().all_channels().all_layers().all_attributes();
+        #[cfg(target_arch = "wasm32")]
+        let reader = reader.non_parallel();
+        let image = reader.from_buffered(source).map_err(|e| input_err(path, format!("cannot read EXR: {e}")))?;
         let groups = image_groups(&image);
         let chans = groups.get("").or_else(|| groups.values().next()).ok_or_else(|| input_err(path, "no channels"))?;
         let values = pick_channels(path, slot, chans, size.0 as usize * size.1 as usize)?;
         return Ok((size, values));
     }
-    let img = image::load_from_memory(bytes).map_err(|e| input_err(path, format!("cannot read image: {e}")))?.to_rgb32f();
+    let img = image::ImageReader::new(source)
+        .with_guessed_format()
+        .map_err(|e| input_err(path, format!("cannot read image: {e}")))?
+        .decode()
+        .map_err(|e| input_err(path, format!("cannot read image: {e}")))?
+        .to_rgb32f();
     if img.width() > MAX_SIDE || img.height() > MAX_SIDE {
         return Err(input_err(path, format!("{}x{} is larger than rae reads ({MAX_SIDE} pixels a side)", img.width(), img.height())));
     }
@@ -756,9 +753,14 @@ pub fn tonemap(v: f32) -> f32 {
     if t <= 0.0031308 { 12.92 * t } else { 1.055 * t.powf(1.0 / 2.4) - 0.055 }
 }
 
+/// [`tonemap`] to an 8-bit value, as previews show it.
+pub fn tonemap_u8(v: f32) -> u8 {
+    (tonemap(v) * 255.0 + 0.5) as u8
+}
+
 /// Write a tonemapped sRGB PNG preview, atomically.
 pub fn write_png(path: &Path, width: u32, height: u32, rgb: &[f32]) -> Result<()> {
-    let bytes: Vec<u8> = rgb.iter().map(|v| (tonemap(*v) * 255.0 + 0.5) as u8).collect();
+    let bytes: Vec<u8> = rgb.iter().map(|&v| tonemap_u8(v)).collect();
     atomic_write(path, |tmp| {
         image::save_buffer_with_format(tmp, &bytes, width, height, image::ExtendedColorType::Rgb8, image::ImageFormat::Png)
             .map_err(|e| Error::Output { path: path.into(), reason: e.to_string() })

@@ -31,9 +31,7 @@ use run::{GpuVerdict, Run, RunKey};
 
 /// RGB radiance tone mapped as rae's previews are ([`rae_core::io::tonemap`]) to RGBA bytes.
 pub(crate) fn rgba(rgb: &[f32]) -> Vec<u8> {
-    rgb.chunks_exact(3)
-        .flat_map(|c| [c[0], c[1], c[2]].map(|v| (rae_core::io::tonemap(v) * 255.0 + 0.5) as u8).into_iter().chain([255]))
-        .collect()
+    rgb.chunks_exact(3).flat_map(|c| [c[0], c[1], c[2]].map(rae_core::io::tonemap_u8).into_iter().chain([255])).collect()
 }
 
 /// Panics reach the browser's console with their message.
@@ -318,8 +316,6 @@ impl Session {
         let inputs = frame.inputs().map_err(js_err)?;
         let inner = &mut *inner;
         let weights = inner.weights.as_ref().ok_or_else(|| js_err("no model loaded"))?;
-        // Every buffer the model reads, at the frame's size.
-        inputs.validate(&weights.arch.required_buffers(), frame.width(), frame.height()).map_err(js_err)?;
         let key = RunKey { width: frame.width(), height: frame.height(), motion: inputs.motion.is_some() };
         let mut built = None;
         if inner.run.as_ref().is_none_or(|r| r.key != key) {

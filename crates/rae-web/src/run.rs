@@ -66,16 +66,7 @@ impl Run {
         let motion = key.motion.then(|| buffer("motion", 2, input));
         let output = buffer("output", 3, wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC);
         let readback = buffer("readback", 3, wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST);
-        let get = |b: InputBuffer| inputs.iter().find(|(x, _)| *x == b).map(|(_, buf)| buf);
-        let binding = denoiser.bind_io(&GpuFrameIo {
-            color: get(InputBuffer::Color).expect("color is always an input"),
-            albedo: get(InputBuffer::Albedo),
-            normal: get(InputBuffer::Normal),
-            depth: get(InputBuffer::Depth),
-            roughness: get(InputBuffer::Roughness),
-            motion: motion.as_ref(),
-            output: &output,
-        })?;
+        let binding = denoiser.bind_io(&GpuFrameIo::from_inputs(&inputs, motion.as_ref(), &output))?;
         Ok(Run { key, denoiser, inputs, motion, output, readback, binding })
     }
 

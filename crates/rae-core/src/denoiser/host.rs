@@ -338,16 +338,7 @@ impl Denoiser {
         });
         let output = buffer("output", out_pixels * 12, wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC);
         let readback = buffer("readback", out_pixels * 12, wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST);
-        let get = |b: InputBuffer| inputs.iter().find(|(x, _)| *x == b).map(|(_, buf)| buf);
-        let io = GpuFrameIo {
-            color: get(InputBuffer::Color).expect("color is always an input"),
-            albedo: get(InputBuffer::Albedo),
-            normal: get(InputBuffer::Normal),
-            depth: get(InputBuffer::Depth),
-            roughness: get(InputBuffer::Roughness),
-            motion: motion.as_ref().map(|(b, _)| b),
-            output: &output,
-        };
+        let io = GpuFrameIo::from_inputs(&inputs, motion.as_ref().map(|(b, _)| b), &output);
         let (binding, tile_groups) = match &self.tiles {
             None => (self.bind_io(&io)?, Vec::new()),
             Some(t) => {

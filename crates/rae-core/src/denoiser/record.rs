@@ -25,7 +25,22 @@ pub struct GpuFrameIo<'a> {
     pub output: &'a wgpu::Buffer,
 }
 
-impl GpuFrameIo<'_> {
+impl<'a> GpuFrameIo<'a> {
+    /// The caller's buffers given as one per input buffer (color among them), with motion
+    /// and the output.
+    pub fn from_inputs(inputs: &'a [(InputBuffer, wgpu::Buffer)], motion: Option<&'a wgpu::Buffer>, output: &'a wgpu::Buffer) -> Self {
+        let get = |b: InputBuffer| inputs.iter().find(|(x, _)| *x == b).map(|(_, buf)| buf);
+        GpuFrameIo {
+            color: get(InputBuffer::Color).expect("color is always an input"),
+            albedo: get(InputBuffer::Albedo),
+            normal: get(InputBuffer::Normal),
+            depth: get(InputBuffer::Depth),
+            roughness: get(InputBuffer::Roughness),
+            motion,
+            output,
+        }
+    }
+
     fn get(&self, b: InputBuffer) -> Option<&wgpu::Buffer> {
         match b {
             InputBuffer::Color => Some(self.color),
