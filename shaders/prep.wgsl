@@ -1,9 +1,9 @@
 // Input preparation: the renderer's buffers (tightly packed f32: RGB, or one value per pixel)
 // -> the network input, a texture array of channel blocks at the padded size.
 //
-// Every value is made finite and bounded first (the input policy, see rae-core `frame`); color is
-// divided by (albedo + eps) when the model demodulates and passed through log1p when it declares
-// that transfer; depth goes through log1p. Only the buffers the model declares are packed, at the
+// Every value is made finite and bounded first (the input policy, input_policy.wgsl, appended);
+// at a miss (`is_miss`) albedo is 1; color is divided by (albedo + eps) when the model
+// demodulates and passed through log1p when it declares that transfer; depth goes through log1p. Only the buffers the model declares are packed, at the
 // channel offsets the host computed from the model. Pixels past the frame (padding to a multiple
 // of 2^levels) replicate the nearest edge pixel.
 //
@@ -21,9 +21,6 @@
 // a frame that brightens in dispatch order, every subgroup does both).
 
 const NONE: u32 = 0xffffffffu;
-const RADIANCE_MAX: f32 = 1e8;
-const ALBEDO_MAX: f32 = 1e3;
-const DEPTH_MAX: f32 = 1e6;
 // Largest magnitude stored: f32::MAX for f32 activations, 65504 for f16.
 override STORE_MAX: f32 = 3.4028234e38;
 
@@ -57,32 +54,6 @@ struct Params {
 @group(0) @binding(6) var dst: texture_storage_2d_array<rgba32float, write>;
 // [0]: bits of the largest prepared color value of the frame.
 @group(0) @binding(7) var<storage, read_write> stats: array<atomic<u32>, 4>;
-
-// NaN -> 0, +Inf -> posinf, -Inf -> lo, then clamp to [lo, hi]. Decided on the bits, so no
-// compiler assumption about NaN can remove the test.
-fn sanitize(v: f32, lo: f32, hi: f32, posinf: f32) -> f32 {
-    let b = bitcast<u32>(v);
-    if (b & 0x7f800000u) == 0x7f800000u {
-        if (b & 0x007fffffu) != 0u {
-            return clamp(0.0, lo, hi);
-        }
-        if (b & 0x80000000u) != 0u {
-            return lo;
-        }
-        return clamp(posinf, lo, hi);
-    }
-    return clamp(v, lo, hi);
-}
-
-
-fn albedo_at(i: u32) -> vec3<f32> {
-    let a = vec3<f32>(albedo[3u * i], albedo[3u * i + 1u], albedo[3u * i + 2u]);
-    return vec3<f32>(
-        sanitize(a.x, 0.0, ALBEDO_MAX, 0.0),
-        sanitize(a.y, 0.0, ALBEDO_MAX, 0.0),
-        sanitize(a.z, 0.0, ALBEDO_MAX, 0.0),
-    );
-}
 
 // A pixel's prepared values, each buffer's (zero where the model does not read it).
 struct Pixel {
@@ -154,17 +125,22 @@ fn prepare(gid: vec2<u32>) -> u32 {
     var px = Pixel(vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), 0.0, 0.0);
     var color_max = 0.0;
 
+    // Normal and depth first: they tell a miss, where albedo is 1.
+    var d = DEPTH_MAX;
+    if OFF_NORMAL != NONE {
+        px.normal = sanitize_normal(vec3<f32>(normal[3u * i], normal[3u * i + 1u], normal[3u * i + 2u]));
+    }
+    if OFF_DEPTH != NONE {
+        d = sanitize_depth(depth[i]);
+        px.depth = log(1.0 + d);
+    }
     // Albedo is read once, for demodulation and as an input channel alike.
     if OFF_ALBEDO != NONE || (OFF_COLOR != NONE && DEMODULATE) {
-        px.albedo = albedo_at(i);
+        let a = sanitize_albedo(vec3<f32>(albedo[3u * i], albedo[3u * i + 1u], albedo[3u * i + 2u]));
+        px.albedo = select(a, vec3<f32>(1.0), is_miss(d, px.normal, OFF_DEPTH != NONE, OFF_NORMAL != NONE));
     }
     if OFF_COLOR != NONE {
-        let c = vec3<f32>(color[3u * i], color[3u * i + 1u], color[3u * i + 2u]);
-        var s = vec3<f32>(
-            sanitize(c.x, 0.0, RADIANCE_MAX, RADIANCE_MAX),
-            sanitize(c.y, 0.0, RADIANCE_MAX, RADIANCE_MAX),
-            sanitize(c.z, 0.0, RADIANCE_MAX, RADIANCE_MAX),
-        );
+        var s = sanitize_color(vec3<f32>(color[3u * i], color[3u * i + 1u], color[3u * i + 2u]));
         if DEMODULATE {
             s = s / (px.albedo + vec3<f32>(ALBEDO_EPS));
         }
@@ -173,16 +149,6 @@ fn prepare(gid: vec2<u32>) -> u32 {
         }
         color_max = max(s.x, max(s.y, s.z));
         px.color = s;
-    }
-    if OFF_NORMAL != NONE {
-        let n = vec3<f32>(normal[3u * i], normal[3u * i + 1u], normal[3u * i + 2u]);
-        px.normal = vec3<f32>(sanitize(n.x, -1.0, 1.0, 0.0), sanitize(n.y, -1.0, 1.0, 0.0), sanitize(n.z, -1.0, 1.0, 0.0));
-    }
-    if OFF_DEPTH != NONE {
-        // A miss is a miss whatever the renderer writes for it: +inf (rae-trace), 0 (Blender's
-        // Denoising Depth), NaN or a negative value all become DEPTH_MAX.
-        let d = sanitize(depth[i], 0.0, DEPTH_MAX, DEPTH_MAX);
-        px.depth = log(1.0 + select(DEPTH_MAX, d, d > 0.0));
     }
     if OFF_ROUGHNESS != NONE {
         px.roughness = sanitize(roughness[i], 0.0, 1.0, 0.0);

@@ -11,7 +11,8 @@ use crate::kernels::*;
 use crate::{Tolerance, fixture, gpu};
 
 /// A frame of `w x h` with every buffer, smooth values plus the extremes the input policy
-/// handles (NaN, +-Inf, negative, huge, albedo 0).
+/// handles (NaN, +-Inf, negative, huge, albedo 0) and misses: the depths that say so (NaN,
+/// +-Inf, negative, past 1e6, 0) and pixel 11's zero normal.
 fn wild_frame(w: usize, h: usize) -> [Vec<f32>; 5] {
     let n = w * h;
     let mut color: Vec<f32> = noise(3 * n, 50).iter().map(|v| (v * 3.0).exp()).collect();
@@ -28,6 +29,7 @@ fn wild_frame(w: usize, h: usize) -> [Vec<f32>; 5] {
         depth[k * 5] = s;
         rough[k * 5 + 1] = s;
     }
+    normal[33..36].fill(0.0);
     [color, albedo, normal, depth, rough]
 }
 
@@ -71,9 +73,11 @@ fn prep_matches_cpu_with_padding_and_extreme_values() {
 #[test]
 fn whole_pipeline_matches_cpu_on_odd_sizes() {
     // Prep, every conv, output and cropping, over three frames (hidden state carried), at
-    // sizes that need padding: 37x21 (to 40x24) and 50x35 (to 64x64).
+    // sizes that need padding: 37x21 (to 40x24), 50x35 (to 64x64) and 45x27 (to 64x32), with misses.
     let g = gpu();
-    for (name, w, h) in [("weights_paper_tiny.safetensors", 37, 21), ("weights_color_tiny.safetensors", 50, 35)] {
+    for (name, w, h) in
+        [("weights_paper_tiny.safetensors", 37, 21), ("weights_color_tiny.safetensors", 50, 35), ("weights_full.safetensors", 45, 27)]
+    {
         let weights = Weights::load(fixture(name)).unwrap();
         let mut d = Denoiser::new(&g.device, &g.queue, &weights, w as u32, h as u32).unwrap();
         let (pw, ph) = d.padded_size();
@@ -85,8 +89,17 @@ fn whole_pipeline_matches_cpu_on_odd_sizes() {
             assert_eq!(got.len(), w * h * 3, "output is cropped to the frame");
             let x = cpu::prepare(&weights.arch, &frame_of(&b), w, h, pw as usize, ph as usize);
             let y = cpu_net.forward(&x);
-            let want = cpu::finish(&weights.arch, &y, cpu::color_max(&x), Some(&b[1]), w, h);
+            let want = cpu::finish(&weights.arch, &y, cpu::color_max(&x), &frame_of(&b), w, h);
             crate::assert_close(Tolerance { rel: 1e-4 }, &format!("{name} frame {t}"), &got, &want);
+            // At a miss the output is the input color (sanitised), exactly.
+            let misses: Vec<usize> = (0..w * h).filter(|&i| cpu::is_miss(&weights.arch, &frame_of(&b), i)).collect();
+            let (by_depth, by_normal) = weights.arch.miss_by();
+            assert_eq!(misses.contains(&11), by_normal, "{name}: the zero normal is a miss where the model reads normals");
+            assert_eq!(misses.contains(&5), by_depth, "{name}: +inf depth is a miss where the model reads depth");
+            for i in misses {
+                let c: Vec<f32> = b[0][3 * i..3 * i + 3].iter().map(|&v| cpu::sanitize(v, 0.0, 1e8, 1e8)).collect();
+                assert_eq!(&got[3 * i..3 * i + 3], &c[..], "{name} frame {t}: miss {i} passes its color through");
+            }
         }
     }
 }

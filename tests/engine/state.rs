@@ -416,12 +416,14 @@ fn history_that_fails_the_test_is_dropped_as_on_a_first_frame() {
     let (w, h) = (golden.width, golden.height);
     let zero = vec![0.0f32; (w * h * 2) as usize];
     let build = || Denoiser::with_options(&g.device, &g.queue, &weights, w, h, Options { motion: true, ..Default::default() }).unwrap();
-    // Prepared depth is log1p(depth): scaling 1 + depth by e^d moves it by d.
-    let moved = |d: f32| -> Vec<f32> { golden.inputs(1).depth.unwrap().iter().map(|z| (1.0 + z) * d.exp() - 1.0).collect() };
+    // Prepared depth is log1p(depth): scaling 1 + depth by e^d moves it by d. The fixture's
+    // misses (depth +inf or 0) are given a surface at depth 50 first, so that every pixel moves.
+    let hits: Vec<f32> = golden.inputs(1).depth.unwrap().iter().map(|&z| if z.is_finite() && z > 0.0 { z } else { 50.0 }).collect();
+    let moved = |d: f32| -> Vec<f32> { hits.iter().map(|z| (1.0 + z) * d.exp() - 1.0).collect() };
     let run = |depth: &[f32], history: bool| {
         let mut den = build();
         if history {
-            den.denoise(&golden.inputs(1)).unwrap();
+            den.denoise(&FrameInputs { depth: Some(&hits), ..golden.inputs(1) }).unwrap();
         }
         den.denoise(&FrameInputs { depth: Some(depth), motion: Some(&zero), ..golden.inputs(1) }).unwrap()
     };

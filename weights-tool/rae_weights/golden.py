@@ -27,7 +27,7 @@ from .export import _publish, read_weights, write_weights
 from .model import RecurrentAE, finish_output, prepare_input
 
 #: Bump when the generator changes what it writes; stored in every golden file.
-GENERATOR_VERSION = 2
+GENERATOR_VERSION = 3
 COMMAND = "python -m rae_weights golden --out tests/fixtures"
 GOLDEN_KEY = "rae.golden"
 
@@ -110,6 +110,27 @@ def scene_depth(width: int, height: int, t: int) -> np.ndarray:
     depth = 4.0 + 0.02 * xx + 0.01 * yy
     depth[(xx - (width / 2 + 3 * t)) ** 2 + (yy - height / 2) ** 2 < (height / 4) ** 2] = 2.0
     return depth.astype(np.float32)
+
+
+def add_misses(frame: dict[str, np.ndarray], width: int, height: int, t: int) -> None:
+    """Puts a background into a frame where the camera ray hits nothing (a miss, model.is_miss):
+    a disk at the top right, moving left, written in several renderers' conventions at once:
+    depth +inf (rae-trace) on even rows and 0 (Cycles' Denoising Depth) on odd ones; normal 0
+    except on every fourth column, where only depth tells the miss; albedo 0 (rae-trace) on the
+    left half and the sky's colour (Cycles) on the right; color a smooth sky."""
+    yy, xx = np.meshgrid(np.arange(height), np.arange(width), indexing="ij")
+    disk = (xx - (0.8 * width - 2 * t)) ** 2 + yy**2 < (0.45 * height) ** 2
+    sky = np.stack([0.6 + 0.3 * np.sin(0.2 * xx), 0.8 + 0.1 * np.cos(0.3 * yy), 1.5 + 0.0 * xx], -1)
+    frame["color"] = np.where(disk[..., None], sky, frame["color"]).astype(np.float32)
+    if "albedo" in frame:
+        a = np.where((xx < 0.8 * width)[..., None], 0.0, sky)
+        frame["albedo"] = np.where(disk[..., None], a, frame["albedo"]).astype(np.float32)
+    if "normal" in frame:
+        zero = disk & (xx % 4 != 0)
+        frame["normal"] = np.where(zero[..., None], 0.0, frame["normal"]).astype(np.float32)
+    if "depth" in frame:
+        d = np.where(yy % 2 == 0, np.inf, 0.0)
+        frame["depth"] = np.where(disk, d, frame["depth"]).astype(np.float32)
 
 
 def random_state(arch: Arch, seed: int) -> dict[str, torch.Tensor]:
@@ -202,6 +223,8 @@ def generate(out_dir: Path) -> list[Path]:
                 frame["motion"] = motion_field(case.width, case.height, t)
                 if "depth" in frame:
                     frame["depth"] = scene_depth(case.width, case.height, t)
+        for t, frame in enumerate(frames):
+            add_misses(frame, case.width, case.height, t)
         outs = run_sequence(arch, state, frames)
         tensors: dict[str, np.ndarray] = {}
         for i, (frame, out) in enumerate(zip(frames, outs)):

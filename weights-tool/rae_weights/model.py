@@ -157,9 +157,36 @@ def sanitize_buffers(frame: dict[str, torch.Tensor]) -> dict[str, torch.Tensor]:
     return out
 
 
+def is_miss(arch: Arch, b: dict[str, torch.Tensor]) -> torch.Tensor | None:
+    """N1HW bool: pixels whose camera ray hit nothing, told from the sanitised buffers the model
+    reads: depth a miss (``DEPTH_MAX`` once sanitised, whatever the renderer wrote) or a normal of
+    zero (rae-trace and Cycles write 0 where the ray misses). None when the model reads neither."""
+    miss = None
+    if "depth" in arch.inputs and "depth" in b:
+        miss = b["depth"] >= DEPTH_MAX
+    if "normal" in arch.inputs and "normal" in b:
+        zero = (b["normal"] == 0.0).all(dim=1, keepdim=True)
+        miss = zero if miss is None else miss | zero
+    return miss
+
+
+def canonical_buffers(arch: Arch, frame: dict[str, torch.Tensor]) -> dict[str, torch.Tensor]:
+    """The input policy (``sanitize_buffers``) plus one convention for misses: albedo is 1 where
+    the ray hit nothing. Renderers write 0 there (rae-trace), the sky's colour (Cycles) or
+    anything else; demodulating by 0 + eps turns the background into 1000x its radiance, which
+    the network spreads into the geometry beside it. With albedo 1 the network sees the
+    background's own radiance whatever the renderer wrote."""
+    b = sanitize_buffers(frame)
+    if "albedo" in b:
+        miss = is_miss(arch, b)
+        if miss is not None:
+            b["albedo"] = torch.where(miss, torch.ones_like(b["albedo"]), b["albedo"])
+    return b
+
+
 def prepare_input(arch: Arch, frame: dict[str, torch.Tensor]) -> torch.Tensor:
     """Buffers (NCHW, raw renderer output) -> packed network input, as ``prep.wgsl`` does."""
-    b = sanitize_buffers(frame)
+    b = canonical_buffers(arch, frame)
     parts = []
     for name in arch.inputs:
         t = b[name]
@@ -174,12 +201,18 @@ def prepare_input(arch: Arch, frame: dict[str, torch.Tensor]) -> torch.Tensor:
     return torch.cat(parts, dim=1)
 
 
+def demodulation_albedo(arch: Arch, frame: dict[str, torch.Tensor]) -> torch.Tensor:
+    """What color is divided by before the network and multiplied by after: the canonical
+    albedo (``canonical_buffers``) + eps."""
+    keep = ("albedo", "normal", "depth")
+    return canonical_buffers(arch, {k: v for k, v in frame.items() if k in keep})["albedo"] + arch.albedo_eps
+
+
 def prepared_color(arch: Arch, frame: dict[str, torch.Tensor]) -> torch.Tensor:
     """Color as the network sees it (sanitised, demodulated, transfer applied), NCHW."""
-    b = sanitize_buffers({k: v for k, v in frame.items() if k in ("color", "albedo")})
-    t = b["color"]
+    t = sanitize_buffers({"color": frame["color"]})["color"]
     if arch.demodulate:
-        t = t / (b["albedo"] + arch.albedo_eps)
+        t = t / demodulation_albedo(arch, frame)
     return transfer.encode(arch.transfer, t)
 
 
@@ -189,13 +222,26 @@ def output_limit(arch: Arch, in_max: torch.Tensor) -> torch.Tensor:
     return transfer.limit(arch.transfer, in_max, OUT_GAIN, RADIANCE_MAX, OUT_LOG_MAX)
 
 
+def pass_misses(arch: Arch, y: torch.Tensor, frame: dict[str, torch.Tensor]) -> torch.Tensor:
+    """The network output (its own space) with the prepared input color at misses: where the ray
+    hit nothing the renderer's color is the background's radiance, looked up, not estimated, so
+    the output keeps it. Training composes its outputs so before the loss; ``finish_output``
+    does the same in radiance."""
+    miss = is_miss(arch, sanitize_buffers({k: v for k, v in frame.items() if k in ("normal", "depth")}))
+    if miss is None:
+        return y
+    return torch.where(miss, prepared_color(arch, frame).to(y.dtype), y)
+
+
 def finish_output(arch: Arch, y: torch.Tensor, frame: dict[str, torch.Tensor]) -> torch.Tensor:
     """Network output -> radiance, as ``output.wgsl`` does: clamp to [0, output_limit], inverse
-    transfer, remodulation."""
+    transfer, remodulation; at misses (``is_miss``) the sanitised input color itself."""
     in_max = prepared_color(arch, frame).to(y.dtype).amax(dim=(1, 2, 3), keepdim=True)
     y = torch.minimum(y.clamp(min=0.0), output_limit(arch, in_max))
     r = transfer.decode(arch.transfer, y)
     if arch.demodulate:
-        albedo = sanitize_buffers({"albedo": frame["albedo"]})["albedo"]
-        r = r * (albedo + arch.albedo_eps)
+        r = r * demodulation_albedo(arch, frame)
+    miss = is_miss(arch, sanitize_buffers({k: v for k, v in frame.items() if k in ("normal", "depth")}))
+    if miss is not None:
+        r = torch.where(miss, sanitize_buffers({"color": frame["color"]})["color"].to(r.dtype), r)
     return r

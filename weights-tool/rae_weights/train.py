@@ -27,18 +27,18 @@ from .arch import INPUT_CHANNELS, Arch
 from .data import Sequence, load_sequences, sample
 from .export import load_checkpoint, write_weights
 from .metrics import sequence_metrics
-from .model import RecurrentAE, finish_output, prepare_input, sanitize_buffers
+from .model import RecurrentAE, demodulation_albedo, finish_output, pass_misses, prepare_input, sanitize_buffers
 
 #: The paper's per-frame loss weights for 7-frame clips (later frames count more).
 PAPER_FRAME_WEIGHTS = (0.011, 0.044, 0.135, 0.325, 0.607, 0.882, 1.0)
 
 
 def target_space(arch: Arch, clip: dict[str, torch.Tensor]) -> torch.Tensor:
-    """The reference in the network's output space: log1p(reference / (albedo + eps))."""
-    b = sanitize_buffers({"color": clip["reference"], "albedo": clip["albedo"]})
-    r = b["color"]
+    """The reference in the network's output space: log1p(reference / (albedo + eps)), the
+    albedo canonical as the input's (``model.demodulation_albedo``)."""
+    r = sanitize_buffers({"color": clip["reference"]})["color"]
     if arch.demodulate:
-        r = r / (b["albedo"] + arch.albedo_eps)
+        r = r / demodulation_albedo(arch, clip)
     return transfer.encode(arch.transfer, r)
 
 
@@ -85,14 +85,15 @@ def loss_fn(
 
 def run_clip(model: RecurrentAE, arch: Arch, clip: dict[str, torch.Tensor]) -> list[torch.Tensor]:
     """Network outputs for each frame of a clip ([T, C, H, W] buffers), hidden state carried and
-    reprojected with the clip's motion where it has one."""
+    reprojected with the clip's motion where it has one, misses passed through (``pass_misses``)
+    as the output stage does."""
     model.reset()
     outs = []
     for i in range(clip["color"].shape[0]):
         frame = {k: v[i : i + 1] for k, v in clip.items() if k not in ("reference", "motion")}
         x = prepare_input(arch, frame).contiguous(memory_format=torch.channels_last)
         motion = clip["motion"][i : i + 1] if "motion" in clip else None
-        outs.append(model(x, motion))
+        outs.append(pass_misses(arch, model(x, motion), frame))
     return outs
 
 

@@ -83,3 +83,30 @@ def test_a_depth_miss_is_the_same_whatever_the_renderer_writes() -> None:
     miss = math.log1p(DEPTH_MAX)
     assert torch.allclose(d[:5], torch.full((5,), miss)), d
     assert torch.allclose(d[5:], torch.log1p(torch.tensor([3.0, 1e-3]))), d
+
+
+def test_a_miss_is_demodulated_by_one_and_passed_through() -> None:
+    # Pixels 0-2 are misses told by depth (+inf, 0) or by a zero normal, each with another
+    # renderer's albedo there (0, the sky's colour, 0); pixel 3 is a hit with albedo 0.5.
+    from rae_weights.model import is_miss, sanitize_buffers
+
+    arch = Arch(inputs=["color", "albedo", "normal", "depth"])
+    color = torch.tensor([2.0, 0.7, 5.0, 1.0]).view(1, 1, 1, 4).expand(1, 3, 1, 4)
+    albedo = torch.tensor([0.0, 0.7, 0.0, 0.5]).view(1, 1, 1, 4).expand(1, 3, 1, 4)
+    normal = torch.tensor([[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 1.0], [0.0, 0.0, 0.0, 0.0]]).view(1, 3, 1, 4)
+    depth = torch.tensor([math.inf, 0.0, 4.0, 3.0]).view(1, 1, 1, 4)
+    frame = {"color": color, "albedo": albedo, "normal": normal, "depth": depth}
+    miss = is_miss(arch, sanitize_buffers(frame))
+    assert miss is not None and miss[0, 0, 0].tolist() == [True, True, True, False]
+    x = prepare_input(arch, frame)
+    eps = arch.albedo_eps
+    want_color = torch.log1p(torch.tensor([2.0 / (1 + eps), 0.7 / (1 + eps), 5.0 / (1 + eps), 1.0 / (0.5 + eps)]))
+    assert torch.allclose(x[0, 0, 0], want_color), x[0, 0, 0]
+    assert torch.equal(x[0, 3, 0], torch.tensor([1.0, 1.0, 1.0, 0.5])), "the albedo channel is 1 at misses"
+    out = finish_output(arch, torch.full((1, 3, 1, 4), 0.3), frame)
+    assert torch.equal(out[0, :, 0, :3], color[0, :, 0, :3]), "misses keep the input color"
+    assert torch.allclose(out[0, :, 0, 3], torch.full((3,), math.expm1(0.3) * (0.5 + eps))), "hits are remodulated"
+    # A model that reads neither depth nor normal has no misses: albedo 0 stays 0.
+    plain = Arch(inputs=["color", "albedo"])
+    assert is_miss(plain, sanitize_buffers(frame)) is None
+    assert prepare_input(plain, frame)[0, 3, 0, 0] == 0.0

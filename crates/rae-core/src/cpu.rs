@@ -223,9 +223,32 @@ fn sanitize_albedo(v: f32) -> f32 {
     sanitize(v, 0.0, limits::ALBEDO_MAX, 0.0)
 }
 
+/// Whether pixel `i` of a frame is a miss, from the buffers `arch` reads ([`crate::Arch::miss_by`]):
+/// depth at [`limits::DEPTH_MAX`] once sanitised, or a zero normal.
+pub fn is_miss(arch: &crate::Arch, frame: &crate::FrameInputs, i: usize) -> bool {
+    let (by_depth, by_normal) = arch.miss_by();
+    let depth = || sanitize_depth(frame.depth.expect("validated")[i]) >= limits::DEPTH_MAX;
+    let normal = || (0..3).all(|k| sanitize(frame.normal.expect("validated")[3 * i + k], -1.0, 1.0, 0.0) == 0.0);
+    (by_depth && depth()) || (by_normal && normal())
+}
+
+/// Channel `k` of pixel `i`'s albedo as prep reads it: sanitised, 1 at a miss.
+fn albedo_at(arch: &crate::Arch, frame: &crate::FrameInputs, i: usize, k: usize) -> f32 {
+    if is_miss(arch, frame, i) { 1.0 } else { sanitize_albedo(frame.albedo.expect("validated")[3 * i + k]) }
+}
+
+/// Channel `k` of pixel `i`'s color as prep prepares it: sanitised, demodulated, transfer applied.
+fn prepared_color(arch: &crate::Arch, frame: &crate::FrameInputs, i: usize, k: usize) -> f32 {
+    let mut s = sanitize(frame.color[3 * i + k], 0.0, limits::RADIANCE_MAX, limits::RADIANCE_MAX);
+    if arch.demodulate {
+        s /= albedo_at(arch, frame, i, k) + arch.albedo_eps;
+    }
+    if arch.transfer == crate::model::Transfer::Log1p { (1.0 + s).ln() } else { s }
+}
+
 /// The prep kernel on the CPU: a frame (`w x h`) -> packed network input at `pw x ph`.
 pub fn prepare(arch: &crate::Arch, frame: &crate::FrameInputs, w: usize, h: usize, pw: usize, ph: usize) -> Chw {
-    use crate::model::{InputBuffer, Transfer};
+    use crate::model::InputBuffer;
     let mut o = Chw::zeros(arch.in_channels(), ph, pw);
     for y in 0..ph {
         for x in 0..pw {
@@ -234,16 +257,8 @@ pub fn prepare(arch: &crate::Arch, frame: &crate::FrameInputs, w: usize, h: usiz
             for &b in &arch.inputs {
                 let data = frame.get(b).expect("frame validated");
                 let vals: Vec<f32> = match b {
-                    InputBuffer::Color => (0..3)
-                        .map(|k| {
-                            let mut s = sanitize(data[3 * i + k], 0.0, limits::RADIANCE_MAX, limits::RADIANCE_MAX);
-                            if arch.demodulate {
-                                s /= sanitize_albedo(frame.albedo.expect("validated")[3 * i + k]) + arch.albedo_eps;
-                            }
-                            if arch.transfer == Transfer::Log1p { (1.0 + s).ln() } else { s }
-                        })
-                        .collect(),
-                    InputBuffer::Albedo => (0..3).map(|k| sanitize_albedo(data[3 * i + k])).collect(),
+                    InputBuffer::Color => (0..3).map(|k| prepared_color(arch, frame, i, k)).collect(),
+                    InputBuffer::Albedo => (0..3).map(|k| albedo_at(arch, frame, i, k)).collect(),
                     InputBuffer::Normal => (0..3).map(|k| sanitize(data[3 * i + k], -1.0, 1.0, 0.0)).collect(),
                     InputBuffer::Depth => vec![(1.0 + sanitize_depth(data[i])).ln()],
                     InputBuffer::Roughness => vec![sanitize(data[i], 0.0, 1.0, 0.0)],
@@ -262,38 +277,32 @@ pub fn prepare(arch: &crate::Arch, frame: &crate::FrameInputs, w: usize, h: usiz
 /// computes it per pixel: the output's bound ([`output_limit`]) for a frame run in tiles, where
 /// each tile's prep sees only its part.
 pub fn prepared_color_max(arch: &crate::Arch, frame: &crate::FrameInputs) -> f32 {
-    use crate::model::{InputBuffer, Transfer};
-    if !arch.inputs.contains(&InputBuffer::Color) {
+    if !arch.inputs.contains(&crate::model::InputBuffer::Color) {
         return 0.0;
     }
-    let mut m = 0f32;
-    for (i, c) in frame.color.iter().enumerate() {
-        let mut s = sanitize(*c, 0.0, limits::RADIANCE_MAX, limits::RADIANCE_MAX);
-        if arch.demodulate {
-            s /= sanitize_albedo(frame.albedo.expect("validated")[i]) + arch.albedo_eps;
-        }
-        m = m.max(s);
-    }
-    // The transfer is monotonic: applied once, to the largest value.
-    if arch.transfer == Transfer::Log1p { (1.0 + m).ln() } else { m }
+    (0..frame.color.len()).map(|c| prepared_color(arch, frame, c / 3, c % 3)).fold(0.0, f32::max)
 }
 
-/// The output kernel on the CPU: raw network output (padded) -> RGB radiance at `w x h`.
-pub fn finish(arch: &crate::Arch, y: &Chw, in_max: f32, albedo: Option<&[f32]>, w: usize, h: usize) -> Vec<f32> {
+/// The output kernel on the CPU: raw network output (padded) -> RGB radiance at `w x h`; at a
+/// miss ([`is_miss`]) the sanitised input color.
+pub fn finish(arch: &crate::Arch, y: &Chw, in_max: f32, frame: &crate::FrameInputs, w: usize, h: usize) -> Vec<f32> {
     use crate::model::Transfer;
     let limit = output_limit(arch, in_max);
     let mut out = vec![0.0; w * h * 3];
     for py in 0..h {
         for px in 0..w {
+            let i = py * w + px;
+            let miss = is_miss(arch, frame, i);
             for k in 0..3 {
                 let v = y.at(k, py, px).clamp(0.0, limit);
                 let mut r = match arch.transfer {
                     Transfer::Log1p => v.exp() - 1.0,
                     Transfer::None => v,
                 };
-                let i = py * w + px;
-                if arch.demodulate {
-                    r *= sanitize_albedo(albedo.expect("validated")[3 * i + k]) + arch.albedo_eps;
+                if miss {
+                    r = sanitize(frame.color[3 * i + k], 0.0, limits::RADIANCE_MAX, limits::RADIANCE_MAX);
+                } else if arch.demodulate {
+                    r *= sanitize_albedo(frame.albedo.expect("validated")[3 * i + k]) + arch.albedo_eps;
                 }
                 out[3 * i + k] = r;
             }

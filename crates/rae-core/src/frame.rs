@@ -3,16 +3,28 @@
 //! # Input policy
 //! The renderer's buffers are tightly packed f32, row-major, top row first: RGB for color,
 //! albedo and normal, one value per pixel for depth and roughness. Before anything else every
-//! value is made finite and bounded, on the GPU, in `shaders/prep.wgsl` (and identically in the
-//! PyTorch model of weights-tool):
+//! value is made finite and bounded, on the GPU, in `shaders/input_policy.wgsl` (shared by
+//! `prep.wgsl` and `output.wgsl`; identically in [`crate::cpu`] and the PyTorch model of
+//! weights-tool):
 //!
 //! | buffer | NaN | +Inf | -Inf | clamped to |
 //! |---|---|---|---|---|
 //! | color | 0 | 1e8 | 0 | [0, 1e8] |
 //! | albedo | 0 | 0 | 0 | [0, 1e3] |
 //! | normal | 0 | 0 | -1 | [-1, 1] |
-//! | depth | 0 | 1e6 (a miss) | 0 | [0, 1e6], then log1p |
+//! | depth | 1e6 | 1e6 | 1e6 | (0, 1e6], a value <= 0 becomes 1e6; then log1p |
 //! | roughness | 0 | 0 | 0 | [0, 1] |
+//!
+//! A depth of 1e6 is a miss, whatever the renderer wrote for it (+inf, 0, a huge value).
+//!
+//! # Misses
+//! A pixel whose camera ray hit nothing is a *miss*, told from the buffers the model reads
+//! ([`crate::Arch::miss_by`]): depth 1e6 as above, or a normal of zero (rae-trace and Cycles
+//! write 0 there). At a miss albedo counts as 1, for the network's input and for demodulation
+//! alike (renderers write 0, the sky's colour or anything else there; dividing a background by
+//! 0 + eps made it a thousand times brighter than it is, and the network spread it into the
+//! geometry beside it), and the output is the input color: the renderer looked the background
+//! up, it did not estimate it.
 //!
 //! Demodulation divides by `albedo + albedo_eps` (never by zero); the output is
 //! `(exp(clamp(y, 0, L)) - 1) * (albedo + albedo_eps)` with `L = min(80, log1p(2 M))`, `M` the

@@ -176,6 +176,12 @@ impl Arch {
         self.inputs.iter().map(|b| b.channels()).sum()
     }
 
+    /// Which of the buffers the model reads tell a miss (a pixel whose camera ray hit nothing,
+    /// see [`crate::frame`]): (depth, normal). Where it reads neither, no pixel is a miss.
+    pub fn miss_by(&self) -> (bool, bool) {
+        (self.inputs.contains(&InputBuffer::Depth), self.inputs.contains(&InputBuffer::Normal))
+    }
+
     /// Buffers each frame must carry: the network inputs, and albedo when demodulating.
     pub fn required_buffers(&self) -> Vec<InputBuffer> {
         let mut need = self.inputs.clone();

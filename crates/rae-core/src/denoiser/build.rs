@@ -357,20 +357,7 @@ impl Denoiser {
         let output_view = acts.slots[acts.assign[out_temp]].1.clone();
         let prep = kernels.prep_pipeline(device, &layout);
         let prep_params = PrepParams { width, height, pwidth, pheight };
-        let transfer = match arch.transfer {
-            Transfer::None => 0,
-            Transfer::Log1p => 1,
-        };
-        let output_params = OutputParams {
-            x0: 0,
-            y0: 0,
-            width,
-            height,
-            in_stride: width,
-            demodulate: arch.demodulate as u32,
-            transfer,
-            albedo_eps: arch.albedo_eps,
-        };
+        let output_params = OutputParams::new(&arch, (0, 0), (width, height), width);
         let stats_usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC;
         Ok(Self {
             id: NEXT_ID.fetch_add(1, Ordering::Relaxed),

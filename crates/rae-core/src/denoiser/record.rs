@@ -151,6 +151,9 @@ impl Denoiser {
                 wgpu::BindGroupEntry { binding: 2, resource: pick(InputBuffer::Albedo).as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 3, resource: io.output.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 4, resource: self.stats.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 5, resource: pick(InputBuffer::Color).as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 6, resource: pick(InputBuffer::Normal).as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 7, resource: pick(InputBuffer::Depth).as_entire_binding() },
             ],
         });
         (prep, output)

@@ -94,7 +94,7 @@ impl PrepLayout {
 }
 
 /// Uniform block of output.wgsl: the rectangle of the network's output written (the frame, or
-/// a frame tile's interior), and how the albedo buffer is laid out.
+/// a frame tile's interior), how the input buffers are laid out, and the model's output stage.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable)]
 pub struct OutputParams {
@@ -106,7 +106,7 @@ pub struct OutputParams {
     pub width: u32,
     /// Height written.
     pub height: u32,
-    /// Row length of the albedo buffer, whose pixel `(x, y)` is the network's `(x, y)`.
+    /// Row length of the input buffers, whose pixel `(x, y)` is the network's `(x, y)`.
     pub in_stride: u32,
     /// 1: remodulate.
     pub demodulate: u32,
@@ -114,6 +114,33 @@ pub struct OutputParams {
     pub transfer: u32,
     /// Demodulation epsilon.
     pub albedo_eps: f32,
+    /// Which buffers tell a miss ([`crate::Arch::miss_by`]): bit 0 depth, bit 1 normal.
+    pub miss_by: u32,
+    /// Padding to the uniform's 16-byte size.
+    pub _pad: [u32; 3],
+}
+
+impl OutputParams {
+    /// `arch`'s output stage over the `width x height` rectangle at `(x0, y0)` of the network's
+    /// output, its input buffers `in_stride` pixels a row.
+    pub fn new(arch: &crate::Arch, (x0, y0): (u32, u32), (width, height): (u32, u32), in_stride: u32) -> Self {
+        let (by_depth, by_normal) = arch.miss_by();
+        Self {
+            x0,
+            y0,
+            width,
+            height,
+            in_stride,
+            demodulate: arch.demodulate as u32,
+            transfer: match arch.transfer {
+                crate::model::Transfer::None => 0,
+                crate::model::Transfer::Log1p => 1,
+            },
+            albedo_eps: arch.albedo_eps,
+            miss_by: by_depth as u32 | (by_normal as u32) << 1,
+            _pad: [0; 3],
+        }
+    }
 }
 
 /// Uniform block of motion.wgsl.
@@ -522,7 +549,16 @@ impl Kernels {
         );
         let output_layout = layout(
             "output",
-            &[uniform_entry(0), texture_entry(1), storage_entry(2, true), storage_entry(3, false), storage_entry(4, true)],
+            &[
+                uniform_entry(0),
+                texture_entry(1),
+                storage_entry(2, true),
+                storage_entry(3, false),
+                storage_entry(4, true),
+                storage_entry(5, true),
+                storage_entry(6, true),
+                storage_entry(7, true),
+            ],
         );
         let pipeline_layout = |bgl: &wgpu::BindGroupLayout| {
             device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {

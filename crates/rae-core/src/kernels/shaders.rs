@@ -16,6 +16,7 @@ pub const SHADERS: &[(&str, &str)] = &[
     ("conv3x3_mma", include_str!("../../../../shaders/conv3x3_mma.wgsl")),
     ("conv3x3_mma_coop", include_str!("../../../../shaders/conv3x3_mma_coop.wgsl")),
     ("conv_common", include_str!("../../../../shaders/conv_common.wgsl")),
+    ("input_policy", include_str!("../../../../shaders/input_policy.wgsl")),
     ("prep", include_str!("../../../../shaders/prep.wgsl")),
     ("output", include_str!("../../../../shaders/output.wgsl")),
     ("pool", include_str!("../../../../shaders/pool.wgsl")),
@@ -193,10 +194,15 @@ pub fn shader_source(name: &str) -> &'static str {
 
 /// A shader's text as a module is made of it: the two conv kernels (`conv3x3`, `conv3x3_mma`)
 /// with conv_common.wgsl appended (their shared parameters, bindings, reads and activation),
-/// any other as written.
+/// the input and output stages (`prep`, `output`) with input_policy.wgsl appended (the input
+/// policy and the miss test they share), any other as written.
 pub fn conv_module_source(name: &str) -> String {
     let src = shader_source(name);
-    if ["conv3x3", "conv3x3_mma"].contains(&name) { format!("{src}\n{}", shader_source("conv_common")) } else { src.to_string() }
+    match name {
+        "conv3x3" | "conv3x3_mma" => format!("{src}\n{}", shader_source("conv_common")),
+        "prep" | "output" => format!("{src}\n{}", shader_source("input_policy")),
+        _ => src.to_string(),
+    }
 }
 
 /// motion.wgsl's warped-state declaration as f16 activations need it (its motion textures stay

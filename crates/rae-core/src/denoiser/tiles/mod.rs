@@ -174,25 +174,12 @@ impl Tiles {
                 left: make(mx, ih, columns),
             }
         };
-        let transfer = match arch.transfer {
-            Transfer::None => 0,
-            Transfer::Log1p => 1,
-        };
         let (ew, eh) = plan.extent;
         let mut prep_params = Vec::new();
         let mut output_params = Vec::new();
         for t in plan.tiles() {
             let prep = PrepParams { width: t.valid.0, height: t.valid.1, pwidth: ew, pheight: eh };
-            let output = OutputParams {
-                x0: t.ix0 - t.x0,
-                y0: t.iy0 - t.y0,
-                width: t.interior.0,
-                height: t.interior.1,
-                in_stride: t.valid.0,
-                demodulate: arch.demodulate as u32,
-                transfer,
-                albedo_eps: arch.albedo_eps,
-            };
+            let output = OutputParams::new(arch, (t.ix0 - t.x0, t.iy0 - t.y0), t.interior, t.valid.0);
             let uniform = |label, bytes: &[u8]| build::create_init(device, label, bytes, wgpu::BufferUsages::UNIFORM);
             prep_params.push(uniform("tile prep params", bytemuck::bytes_of(&prep)));
             output_params.push(uniform("tile output params", bytemuck::bytes_of(&output)));
