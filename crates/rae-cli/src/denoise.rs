@@ -250,6 +250,17 @@ pub fn run(o: &Options) -> Result<()> {
         println!("ignored: {:?} (layers rae does not read)", seq.ignored);
     }
     println!("model:   {} (uses {used:?})", weights_path.display());
+    match weights.arch.miss_by() {
+        (false, false) => println!("misses:  not told (the model reads neither depth nor normal)"),
+        by => println!(
+            "misses:  told by {}: albedo 1 there, the input color kept",
+            match by {
+                (true, true) => "depth and normal",
+                (true, false) => "depth",
+                _ => "normal",
+            }
+        ),
+    }
     match (motion_source, o.motion) {
         (None, _) => println!("motion:  none (the hidden state is not reprojected)"),
         (Some(_), None) => println!("motion:  not used (--no-motion)"),

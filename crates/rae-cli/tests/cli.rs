@@ -186,6 +186,7 @@ fn motion_files_reproject_the_hidden_state_and_say_so() {
     };
     let (text, with) = run("with", &[]);
     assert!(text.contains("motion:  motion_NNNN.exr, rae convention"), "{text}");
+    assert!(text.contains("misses:  told by depth and normal"), "{text}");
     let (text, without) = run("without", &["--no-motion"]);
     assert!(text.contains("motion:  not used (--no-motion)"), "{text}");
     let (text, optix) = run("optix", &["--motion-convention", "optix"]);
@@ -396,6 +397,7 @@ fn blender_multilayer_exr_is_read_and_a_missing_buffer_is_named() {
     assert!(out.status.success(), "{text}{}", String::from_utf8_lossy(&out.stderr));
     assert!(text.contains("multi-layer EXR"), "{text}");
     assert!(text.contains("motion:  the Vector pass, converted from Blender's convention (X, -Y)"), "{text}");
+    assert!(text.contains("misses:  told by normal:"), "{text}");
     assert_eq!(listing(&tmp.path().join("seq-denoised")).len(), 2);
 }
 
