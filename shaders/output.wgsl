@@ -3,7 +3,7 @@
 // padding; or a frame tile's interior, cropping its overlap). Inverts the transfer function,
 // clamping first so the result is finite, non-negative and bounded, and remodulates by
 // (albedo + eps). At a miss (input_policy.wgsl's `is_miss`, appended) the result is the input
-// color: where the ray hit nothing the renderer looked the background up, it did not estimate it.
+// color: where the ray hits nothing the renderer looks the background up, it does not estimate it.
 //
 // The bound: demodulated output radiance <= OUT_GAIN x the frame's largest demodulated input
 // radiance (prep.wgsl records its transfer-space value in `stats[0]`), and <= exp(80) - 1. A

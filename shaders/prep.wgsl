@@ -3,8 +3,8 @@
 //
 // Every value is made finite and bounded first (the input policy, input_policy.wgsl, appended);
 // at a miss (`is_miss`) albedo is 1; color is divided by (albedo + eps) when the model
-// demodulates and passed through log1p when it declares that transfer; depth goes through log1p. Only the buffers the model declares are packed, at the
-// channel offsets the host computed from the model. Pixels past the frame (padding to a multiple
+// demodulates and passed through log1p when it declares that transfer; depth goes through
+// log1p. Only the buffers the model declares are packed, at the channel offsets the host computed from the model. Pixels past the frame (padding to a multiple
 // of 2^levels) replicate the nearest edge pixel.
 //
 // It also records the frame's largest prepared color value in `stats` (cleared by the host

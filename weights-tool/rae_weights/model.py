@@ -184,6 +184,14 @@ def canonical_buffers(arch: Arch, frame: dict[str, torch.Tensor]) -> dict[str, t
     return b
 
 
+def _prepared_color(arch: Arch, b: dict[str, torch.Tensor]) -> torch.Tensor:
+    """Color of canonical buffers ``b`` as the network sees it: demodulated, transfer applied."""
+    t = b["color"]
+    if arch.demodulate:
+        t = t / (b["albedo"] + arch.albedo_eps)
+    return transfer.encode(arch.transfer, t)
+
+
 def prepare_input(arch: Arch, frame: dict[str, torch.Tensor]) -> torch.Tensor:
     """Buffers (NCHW, raw renderer output) -> packed network input, as ``prep.wgsl`` does."""
     b = canonical_buffers(arch, frame)
@@ -191,9 +199,7 @@ def prepare_input(arch: Arch, frame: dict[str, torch.Tensor]) -> torch.Tensor:
     for name in arch.inputs:
         t = b[name]
         if name == "color":
-            if arch.demodulate:
-                t = t / (b["albedo"] + arch.albedo_eps)
-            t = transfer.encode(arch.transfer, t)
+            t = _prepared_color(arch, b)
         elif name == "depth":
             t = torch.log1p(t)
         assert t.shape[1] == INPUT_CHANNELS[name]
@@ -210,10 +216,7 @@ def demodulation_albedo(arch: Arch, frame: dict[str, torch.Tensor]) -> torch.Ten
 
 def prepared_color(arch: Arch, frame: dict[str, torch.Tensor]) -> torch.Tensor:
     """Color as the network sees it (sanitised, demodulated, transfer applied), NCHW."""
-    t = sanitize_buffers({"color": frame["color"]})["color"]
-    if arch.demodulate:
-        t = t / demodulation_albedo(arch, frame)
-    return transfer.encode(arch.transfer, t)
+    return _prepared_color(arch, canonical_buffers(arch, frame))
 
 
 def output_limit(arch: Arch, in_max: torch.Tensor) -> torch.Tensor:
@@ -224,24 +227,26 @@ def output_limit(arch: Arch, in_max: torch.Tensor) -> torch.Tensor:
 
 def pass_misses(arch: Arch, y: torch.Tensor, frame: dict[str, torch.Tensor]) -> torch.Tensor:
     """The network output (its own space) with the prepared input color at misses: where the ray
-    hit nothing the renderer's color is the background's radiance, looked up, not estimated, so
+    hits nothing the renderer's color is the background's radiance, looked up, not estimated, so
     the output keeps it. Training composes its outputs so before the loss; ``finish_output``
     does the same in radiance."""
-    miss = is_miss(arch, sanitize_buffers({k: v for k, v in frame.items() if k in ("normal", "depth")}))
+    b = canonical_buffers(arch, frame)
+    miss = is_miss(arch, b)
     if miss is None:
         return y
-    return torch.where(miss, prepared_color(arch, frame).to(y.dtype), y)
+    return torch.where(miss, _prepared_color(arch, b).to(y.dtype), y)
 
 
 def finish_output(arch: Arch, y: torch.Tensor, frame: dict[str, torch.Tensor]) -> torch.Tensor:
     """Network output -> radiance, as ``output.wgsl`` does: clamp to [0, output_limit], inverse
     transfer, remodulation; at misses (``is_miss``) the sanitised input color itself."""
-    in_max = prepared_color(arch, frame).to(y.dtype).amax(dim=(1, 2, 3), keepdim=True)
+    b = canonical_buffers(arch, frame)
+    in_max = _prepared_color(arch, b).to(y.dtype).amax(dim=(1, 2, 3), keepdim=True)
     y = torch.minimum(y.clamp(min=0.0), output_limit(arch, in_max))
     r = transfer.decode(arch.transfer, y)
     if arch.demodulate:
-        r = r * demodulation_albedo(arch, frame)
-    miss = is_miss(arch, sanitize_buffers({k: v for k, v in frame.items() if k in ("normal", "depth")}))
+        r = r * (b["albedo"] + arch.albedo_eps).to(r.dtype)
+    miss = is_miss(arch, b)
     if miss is not None:
-        r = torch.where(miss, sanitize_buffers({"color": frame["color"]})["color"].to(r.dtype), r)
+        r = torch.where(miss, b["color"].to(r.dtype), r)
     return r

@@ -22,9 +22,9 @@
 //! ([`crate::Arch::miss_by`]): depth 1e6 as above, or a normal of zero (rae-trace and Cycles
 //! write 0 there). At a miss albedo counts as 1, for the network's input and for demodulation
 //! alike (renderers write 0, the sky's colour or anything else there; dividing a background by
-//! 0 + eps made it a thousand times brighter than it is, and the network spread it into the
-//! geometry beside it), and the output is the input color: the renderer looked the background
-//! up, it did not estimate it.
+//! 0 + eps would make it a thousand times brighter than it is, for the network to spread into
+//! the geometry beside it), and the output is the input color: the renderer looks the
+//! background up, it does not estimate it.
 //!
 //! Demodulation divides by `albedo + albedo_eps` (never by zero); the output is
 //! `(exp(clamp(y, 0, L)) - 1) * (albedo + albedo_eps)` with `L = min(80, log1p(2 M))`, `M` the
