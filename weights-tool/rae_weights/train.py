@@ -166,6 +166,12 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--frames", type=int, default=7)
     p.add_argument("--inputs", default="color,normal,depth,roughness")
     p.add_argument("--no-demodulate", action="store_true", help="feed color as is (no albedo needed)")
+    p.add_argument(
+        "--skip",
+        choices=["pooled", "prepool"],
+        default="pooled",
+        help="the decoder's skips: pooled encoder features (the reference code) or full-resolution ones before pooling (the paper)",
+    )
     p.add_argument("--transfer", choices=transfer.TRANSFERS, default="log1p", help="HDR transfer on color (rae-core runs log1p and none; the others are for comparison)")
     p.add_argument("--init", type=Path, help="warm start from a checkpoint of another architecture (see warm_start)")
     p.add_argument("--frame-weights", choices=["paper", "equal"], default="paper")
@@ -193,7 +199,7 @@ def main(argv: list[str] | None = None) -> int:
     torch.manual_seed(a.seed)
     rng = np.random.default_rng(a.seed)
     a.out.mkdir(parents=True, exist_ok=True)
-    arch = Arch(inputs=a.inputs.split(","), demodulate=not a.no_demodulate, transfer=a.transfer)
+    arch = Arch(inputs=a.inputs.split(","), demodulate=not a.no_demodulate, transfer=a.transfer, skip=a.skip)
     model = RecurrentAE(arch)
     ckpt = a.out / "checkpoint.pt"
     if a.init and not ckpt.exists():

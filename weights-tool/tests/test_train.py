@@ -52,6 +52,20 @@ def test_two_training_steps_write_checkpoint_log_and_weights(tmp_path: Path) -> 
     assert main(args) == 0
 
 
+def test_a_pooled_checkpoint_warm_starts_a_prepool_network_whole(tmp_path: Path) -> None:
+    # The two skip variants have the same tensors: a run with --skip prepool starts from every
+    # weight of a pooled one and exports a file whose architecture says prepool.
+    from rae_weights.export import read_weights
+
+    write_sequence(tmp_path / "data" / "a", 8, 32)
+    common = ["--data", str(tmp_path / "data"), "--steps", "1", "--crop", "32", "--threads", "1", "--lr", "0"]
+    assert main([*common, "--out", str(tmp_path / "pooled")]) == 0
+    assert main([*common, "--out", str(tmp_path / "prepool"), "--skip", "prepool", "--init", str(tmp_path / "pooled" / "checkpoint.pt")]) == 0
+    (a, pooled), (b, prepool) = (read_weights(tmp_path / run / "model.safetensors") for run in ("pooled", "prepool"))
+    assert (a.skip, b.skip) == ("pooled", "prepool")
+    assert pooled.keys() == prepool.keys() and all(torch.equal(pooled[k], prepool[k]) for k in pooled), "lr 0: the warm start is the whole network"
+
+
 def test_warm_start_copies_shared_tensors_and_input_columns_by_buffer() -> None:
     from rae_weights import RecurrentAE
     from rae_weights.train import warm_start
