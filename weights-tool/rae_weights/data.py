@@ -156,13 +156,14 @@ def load_sequence(folder: Path) -> Sequence:
     return Sequence(folder.name, buffers, folder)
 
 
-def load_sequences(root: Path) -> list[Sequence]:
+def load_sequences(root: Path, skip: set[Path] | frozenset[Path] = frozenset()) -> list[Sequence]:
     """Every sequence folder under root: folders holding color_NNNN.exr, or multi-layer EXRs
-    (and no sequence folder of their own)."""
+    (and no sequence folder of their own); hidden ones (a renderer's ``.NAME.partial``) and those
+    in ``skip`` are left out."""
     folders = sorted({p.parent for p in root.rglob("*.exr") if not p.name.startswith(".") and not any(q.name.startswith(".") for q in p.relative_to(root).parents if q.name)})
     if not folders:
         raise ValueError(f"{root}: no sequences (folders with color_0000.exr or multi-layer EXRs); render some with rae-trace")
-    return [load_sequence(f) for f in folders]
+    return [load_sequence(f) for f in folders if f not in skip]
 
 
 def transform(name: str, v: torch.Tensor, k: int, flip: bool) -> torch.Tensor:
@@ -197,7 +198,7 @@ def vary_conventions(clip: dict[str, torch.Tensor], rng: np.random.Generator) ->
     both to the same value). The same change holds for every frame of the clip."""
     out = dict(clip)
     if "normal" in out and rng.random() < 0.5:
-        m = random_orthogonal(rng)
+        m = random_orthogonal(rng).to(out["normal"].device)
         out["normal"] = torch.einsum("ij,tjhw->tihw", m, out["normal"])
     if "depth" in out and rng.random() < 0.5:
         out["depth"] = out["depth"] * float(10.0 ** rng.uniform(-1.0, 1.0))

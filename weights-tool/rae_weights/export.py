@@ -33,7 +33,11 @@ INPUTS_BY_CHANNELS: dict[int, list[str]] = {
 
 def load_checkpoint(path: str | Path) -> tuple[dict[str, torch.Tensor], Arch | None]:
     """Read a checkpoint: rae's own {'arch', 'state_dict'}, the reference train.py's
-    {'epoch', 'state_dict', 'optimizer'}, or a bare state dict. Strips a DataParallel 'module.'."""
+    {'epoch', 'state_dict', 'optimizer'}, a bare state dict, or a rae weights file
+    (``.safetensors``, ``read_weights``: a shipped model). Strips a DataParallel 'module.'."""
+    if Path(path).suffix == ".safetensors":
+        arch, state = read_weights(path)
+        return state, arch
     ckpt: Any = torch.load(path, map_location="cpu", weights_only=True)
     arch = None
     if isinstance(ckpt, dict) and "state_dict" in ckpt:

@@ -3,6 +3,10 @@ resume, validation to CSV, export to rae's weights file.
 
     python -m rae_weights train --data DATA/train --val DATA/val --out runs/default --steps 4000
 
+On a GPU (``--device cuda``) a step takes a batch of clips (``--batch``), and training can start
+while a renderer still writes its data (``--reload-every``); ``scripts/gpu-train.sh`` does both on
+a lent machine within a fixed time.
+
 The network learns in its own space: inputs prepared exactly as rae-core prepares them
 (sanitised, color demodulated by albedo and passed through the transfer function), and the
 target is the reference prepared the same way, so rae-core's output stage inverts it.
@@ -66,14 +70,14 @@ def loss_fn(
     With each frame's ``motions``, the temporal term compares ``y_t - warp(y_t-1)`` with
     ``t_t - warp(t_t-1)``: change along the motion, not at a fixed pixel."""
     ws, wg, wt = terms
-    total = torch.zeros(())
+    total = ys[0].new_zeros(())
     c = ys[0].shape[1]
-    k = log.repeat(c, 1, 1, 1)
+    k = log.to(ys[0]).repeat(c, 1, 1, 1)
     for i, (y, t) in enumerate(zip(ys, ts)):
         ls = F.l1_loss(y, t)
         lg = F.l1_loss(F.conv2d(y, k, padding=2, groups=c), F.conv2d(t, k, padding=2, groups=c))
         if i == 0:
-            lt = torch.zeros(())
+            lt = y.new_zeros(())
         elif motions is None:
             lt = F.l1_loss(y - ys[i - 1], t - ts[i - 1])
         else:
@@ -84,17 +88,24 @@ def loss_fn(
 
 
 def run_clip(model: RecurrentAE, arch: Arch, clip: dict[str, torch.Tensor]) -> list[torch.Tensor]:
-    """Network outputs for each frame of a clip ([T, C, H, W] buffers), hidden state carried and
-    reprojected with the clip's motion where it has one, misses passed through (``pass_misses``)
-    as the output stage does."""
+    """Network outputs (N x C x H x W) for each frame of a batch of clips ([T, N, C, H, W]
+    buffers, ``batch``), hidden state carried and reprojected with the clips' motion where they
+    have it, misses passed through (``pass_misses``) as the output stage does."""
     model.reset()
     outs = []
     for i in range(clip["color"].shape[0]):
-        frame = {k: v[i : i + 1] for k, v in clip.items() if k not in ("reference", "motion")}
+        frame = {k: v[i] for k, v in clip.items() if k not in ("reference", "motion")}
         x = prepare_input(arch, frame).contiguous(memory_format=torch.channels_last)
-        motion = clip["motion"][i : i + 1] if "motion" in clip else None
+        motion = clip["motion"][i] if "motion" in clip else None
         outs.append(pass_misses(arch, model(x, motion), frame))
     return outs
+
+
+def batch(clips: list[dict[str, torch.Tensor]], device: torch.device) -> dict[str, torch.Tensor]:
+    """Clips of [T, C, H, W] buffers (``data.sample``) stacked into one batch [T, N, C, H, W] on
+    ``device``; a buffer only some clips have (motion) is left out."""
+    names = [k for k in clips[0] if all(k in c for c in clips)]
+    return {k: torch.stack([c[k] for c in clips], 1).to(device, non_blocking=True) for k in names}
 
 
 @torch.no_grad()
@@ -102,16 +113,17 @@ def validate(model: RecurrentAE, arch: Arch, seqs: list[Sequence]) -> dict[str, 
     """Held-out metrics over whole sequences (``metrics.sequence_metrics``), input and rae,
     averaged over sequences."""
     model.eval()
+    device = next(model.parameters()).device
     rows: dict[str, list[float]] = {}
     for s in seqs:
-        clip = dict(s.buffers)
+        clip = batch([s.buffers], device)
         ys = run_clip(model, arch, clip)
         outs, noisy, refs = [], [], []
         for i, y in enumerate(ys):
-            frame = {k: v[i : i + 1] for k, v in clip.items()}
-            outs.append(finish_output(arch, y, frame)[0].permute(1, 2, 0).numpy())
-            noisy.append(frame["color"][0].permute(1, 2, 0).numpy())
-            refs.append(frame["reference"][0].permute(1, 2, 0).numpy())
+            frame = {k: v[i] for k, v in clip.items()}
+            outs.append(finish_output(arch, y, frame)[0].permute(1, 2, 0).cpu().numpy())
+            noisy.append(frame["color"][0].permute(1, 2, 0).cpu().numpy())
+            refs.append(frame["reference"][0].permute(1, 2, 0).cpu().numpy())
         for who, imgs in (("input", noisy), ("rae", outs)):
             for k, v in sequence_metrics(imgs, refs).items():
                 rows.setdefault(f"{k}_{who}", []).append(v)
@@ -155,6 +167,23 @@ def warm_start(model: RecurrentAE, arch: Arch, state: dict[str, torch.Tensor], s
     return copied
 
 
+def on_device(seqs: list[Sequence], device: torch.device) -> list[Sequence]:
+    """``seqs`` with their buffers moved to ``device``, where clips are then cut (``data.sample``)."""
+    for s in seqs:
+        s.buffers = {k: v.to(device) for k, v in s.buffers.items()}
+    return seqs
+
+
+def reload(roots: list[Path], have: list[Sequence], device: torch.device) -> list[Sequence]:
+    """``have`` and the sequences under ``roots`` not yet in it, on ``device`` (a renderer writes
+    each under a hidden name and renames it when done, so a folder seen here is complete)."""
+    known = {s.folder for s in have}
+    new = on_device([s for r in roots for s in load_sequences(r, skip=known)], device)
+    if new:
+        print(f"{len(new)} more training sequences ({len(have) + len(new)} in all)", flush=True)
+    return have + new
+
+
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(prog="rae-weights train", description=__doc__)
     p.add_argument("--data", required=True, type=Path, nargs="+", help="folders of training sequences (searched recursively)")
@@ -190,12 +219,30 @@ def main(argv: list[str] | None = None) -> int:
         help="varied: clips as other renderers might write them (normals turned, depth in other units; data.vary_conventions)",
     )
     p.add_argument("--threads", type=int, default=max(1, (os.cpu_count() or 2)))
-    p.add_argument("--max-minutes", type=float, default=0.0, help="stop (checkpoint and export) after this long")
+    p.add_argument(
+        "--max-minutes",
+        type=float,
+        default=0.0,
+        help="stop (checkpoint and export) after this long; the learning rate's cosine runs over whichever ends first, the steps or the minutes",
+    )
+    p.add_argument("--device", default="cpu", help="torch device to train on (cpu, cuda)")
+    p.add_argument("--batch", type=int, default=1, help="clips per step")
+    p.add_argument(
+        "--reload-every",
+        type=float,
+        default=0.0,
+        help="rescan the --data folders every this many seconds for sequences a renderer has finished since (0: load once)",
+    )
     a = p.parse_args(argv)
+    if a.batch < 1:
+        p.error(f"--batch {a.batch}: at least 1")
     terms = tuple(float(v) for v in a.loss_weights.split(","))
     if len(terms) != 3 or min(terms) < 0 or sum(terms) <= 0:
         p.error(f"--loss-weights {a.loss_weights}: expected three non-negative numbers, not all zero")
     torch.set_num_threads(a.threads)
+    device = torch.device(a.device)
+    if device.type == "cuda":
+        torch.backends.cudnn.benchmark = True  # every step has the same shapes
     torch.manual_seed(a.seed)
     rng = np.random.default_rng(a.seed)
     a.out.mkdir(parents=True, exist_ok=True)
@@ -206,29 +253,37 @@ def main(argv: list[str] | None = None) -> int:
         state, src = load_checkpoint(a.init)
         n = warm_start(model, arch, state, src or Arch())
         print(f"warm start from {a.init}: {n} of {len(model.state_dict())} tensors")
-    model = model.to(memory_format=torch.channels_last)
+    model = model.to(device, memory_format=torch.channels_last)
     opt = torch.optim.Adam(model.parameters(), lr=a.lr, betas=(0.9, 0.99))
-    sched = torch.optim.lr_scheduler.LambdaLR(opt, lambda s: 0.5 * (1 + math.cos(math.pi * min(s, a.steps) / a.steps)) * min(1.0, (s + 1) / 100))
+    start = time.time()
+
+    def progress(s: int) -> float:
+        """How far through the schedule step ``s`` is: by steps, or by time under --max-minutes."""
+        by_time = (time.time() - start) / (60 * a.max_minutes) if a.max_minutes > 0 else 0.0
+        return min(1.0, max(s / a.steps, by_time))
+
+    sched = torch.optim.lr_scheduler.LambdaLR(opt, lambda s: 0.5 * (1 + math.cos(math.pi * progress(s))) * min(1.0, (s + 1) / 100))
     step = 0
     if ckpt.exists():
-        state = torch.load(ckpt, map_location="cpu", weights_only=True)
+        state = torch.load(ckpt, map_location=device, weights_only=True)
         model.load_state_dict(state["state_dict"])
         opt.load_state_dict(state["optimizer"])
         sched.load_state_dict(state["scheduler"])
         step = int(state["step"])
         print(f"resumed at step {step}")
-    train = [s for d in a.data for s in load_sequences(d)]
+    train = on_device([s for d in a.data for s in load_sequences(d)], device)
     val = load_sequences(a.val) if a.val else []
     print(f"{len(train)} training sequences, {len(val)} held out; arch {arch.to_json()}")
+    loaded = time.time()
     weights = PAPER_FRAME_WEIGHTS if a.frame_weights == "paper" and a.frames == 7 else (1.0,) * a.frames
-    log = log_kernel()
+    log = log_kernel().to(device)
     log_path = a.out / "log.csv"
     new_log = not log_path.exists()
     logf = log_path.open("a", newline="")
     writer = csv.writer(logf)
     if new_log:
         writer.writerow(["step", "seconds", "loss", "lr", *VAL_COLUMNS])
-    start, running = time.time(), []
+    start, running = time.time(), []  # the clock --max-minutes and the schedule run on
 
     def save() -> None:
         tmp = ckpt.with_suffix(".tmp")
@@ -236,10 +291,13 @@ def main(argv: list[str] | None = None) -> int:
         os.replace(tmp, ckpt)
 
     while step < a.steps:
-        clip = sample(train, a.frames, a.crop, rng, vary=a.conventions == "varied")
+        if a.reload_every > 0 and time.time() - loaded > a.reload_every:
+            train = reload(a.data, train, device)
+            loaded = time.time()
+        clip = batch([sample(train, a.frames, a.crop, rng, vary=a.conventions == "varied") for _ in range(a.batch)], device)
         ys = run_clip(model, arch, clip)
-        ts = [target_space(arch, {k: v[i : i + 1] for k, v in clip.items()}) for i in range(a.frames)]
-        motions = [clip["motion"][i : i + 1] for i in range(a.frames)] if "motion" in clip else None
+        ts = [target_space(arch, {k: v[i] for k, v in clip.items()}) for i in range(a.frames)]
+        motions = [clip["motion"][i] for i in range(a.frames)] if "motion" in clip else None
         loss = loss_fn(ys, ts, weights, log, terms, motions)  # type: ignore[arg-type]
         opt.zero_grad(set_to_none=True)
         loss.backward()
@@ -259,6 +317,6 @@ def main(argv: list[str] | None = None) -> int:
             running = []
         if out_of_time:
             break
-    write_weights(a.out / "model.safetensors", arch, model.state_dict())
+    write_weights(a.out / "model.safetensors", arch, {k: v.cpu() for k, v in model.state_dict().items()})
     print(f"wrote {a.out / 'model.safetensors'} after {step} steps, {time.time() - start:.0f} s")
     return 0

@@ -143,3 +143,52 @@ def test_training_with_motion_reprojects_and_warps_the_temporal_term(tmp_path: P
     out = tmp_path / "run"
     args = ["--data", str(tmp_path / "data"), "--val", str(tmp_path / "data"), "--out", str(out), "--steps", "2", "--crop", "32", "--val-every", "2", "--threads", "1"]
     assert main(args) == 0
+
+
+def test_a_batch_of_clips_runs_each_clip_as_it_runs_alone(tmp_path: Path) -> None:
+    # run_clip on a batch [T, N, ...] gives each clip the outputs it gets alone (hidden state,
+    # warp and misses per clip), and a batched training run warm-starts from a shipped weights
+    # file (.safetensors) and exports.
+    from rae_weights.data import load_sequences, sample
+    from rae_weights.model import RecurrentAE
+    from rae_weights.train import batch, run_clip
+
+    write_sequence(tmp_path / "data" / "a", 8, 32, motion=True)
+    write_sequence(tmp_path / "data" / "b", 8, 32, motion=True)
+    seqs = load_sequences(tmp_path / "data")
+    rng = np.random.default_rng(3)
+    clips = [sample(seqs, 4, 32, rng, vary=True) for _ in range(3)]
+    arch = Arch(skip="prepool")
+    torch.manual_seed(0)
+    model = RecurrentAE(arch).eval()
+    with torch.no_grad():
+        together = run_clip(model, arch, batch(clips, torch.device("cpu")))
+        for n, clip in enumerate(clips):
+            alone = run_clip(model, arch, batch([clip], torch.device("cpu")))
+            for y, ys in zip(alone, together):
+                assert torch.allclose(y[0], ys[n], atol=1e-5), "a clip's output depends on the others in its batch"
+    out = tmp_path / "run"
+    assert main(["--data", str(tmp_path / "data"), "--out", str(out), "--steps", "2", "--crop", "32", "--threads", "1", "--batch", "3", "--skip", "prepool"]) == 0
+    init = out / "model.safetensors"
+    assert main(["--data", str(tmp_path / "data"), "--out", str(tmp_path / "again"), "--steps", "1", "--crop", "32", "--threads", "1", "--batch", "2", "--skip", "prepool", "--init", str(init), "--lr", "0"]) == 0
+    from rae_weights.export import read_weights
+
+    (_, a), (_, b) = read_weights(init), read_weights(tmp_path / "again" / "model.safetensors")
+    assert all(torch.equal(a[k], b[k]) for k in a), "lr 0: the warm start from a weights file is the whole network"
+
+
+def test_reload_adds_the_sequences_a_renderer_finished_since(tmp_path: Path) -> None:
+    # Training can start while a renderer writes: reload adds folders that appeared (not hidden
+    # ones still being written, not those already loaded).
+    from rae_weights.data import load_sequences
+    from rae_weights.train import reload
+
+    root = tmp_path / "data"
+    write_sequence(root / "a", 8, 16)
+    have = load_sequences(root)
+    write_sequence(root / "b", 8, 16)
+    write_sequence(root / ".c.partial", 8, 16)
+    now = reload([root], have, torch.device("cpu"))
+    assert [s.name for s in now] == ["a", "b"]
+    assert now[0] is have[0], "a loaded sequence is kept, not read again"
+    assert [s.name for s in reload([root], now, torch.device("cpu"))] == ["a", "b"]
