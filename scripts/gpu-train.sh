@@ -4,8 +4,6 @@
 # shipped model, and brings the weights back.
 #   build here:  bash scripts/gpu-train-prep.sh [BLENDER_FOLDER ...]   (.devbin, .whl, .devdata)
 #   run there:   bash scripts/gpu-train.sh "$OUT"         (carrying .devbin, .whl and .devdata)
-# On an H200, MINUTES=7 BATCH=16 trains 1,625 steps of 16 clips (0.26 s a step, the renderer on
-# 14 of 16 cores rendering about 100 sequences meanwhile).
 # Environment (defaults in brackets):
 #   MINUTES [6]    training time; the learning rate's cosine runs over it (train --max-minutes)
 #   INIT [models/rae-default.safetensors]   the model to continue from
