@@ -1,4 +1,4 @@
-"""Command line: ``rae-weights export`` and ``rae-weights golden`` (also ``python -m rae_weights``)."""
+"""Command line: ``rae-weights export``, ``interpolate``, ``drop-inputs`` and ``golden`` (also ``python -m rae_weights``)."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import tempfile
 from pathlib import Path
 
 from . import golden
-from .export import infer_arch, load_checkpoint, write_weights
+from .export import drop_inputs, infer_arch, interpolate, load_checkpoint, read_weights, write_weights
 
 
 def _export(args: argparse.Namespace) -> int:
@@ -26,6 +26,40 @@ def _export(args: argparse.Namespace) -> int:
     write_weights(args.output, arch, state)
     n = sum(t.numel() for t in state.values())
     print(f"wrote {args.output}: {arch.to_json()} ({n} parameters)")
+    return 0
+
+
+def _interpolate(args: argparse.Namespace) -> int:
+    arch, a = read_weights(args.a)
+    arch_b, b = read_weights(args.b)
+    if arch_b != arch:
+        raise ValueError(f"{args.b}: another architecture than {args.a} ({arch_b.to_json()})")
+    at: dict[str, float] = {}
+    for spec in args.at:
+        modules, sep, value = spec.partition("=")
+        if not sep:
+            raise ValueError(f"--at {spec}: expected MODULE[,MODULE...]=FRACTION")
+        known = {name.split(".", 1)[0] for name in a}
+        for m in modules.split(","):
+            if m not in known:
+                raise ValueError(f"--at {spec}: no module {m!r} (the weights have {', '.join(sorted(known))})")
+            at[m] = float(value)
+    write_weights(args.output, arch, interpolate(a, b, args.t, at))
+    print(f"wrote {args.output}: {1 - args.t:g} x {args.a} + {args.t:g} x {args.b}" + "".join(f"; {m} at {f:g}" for m, f in at.items()))
+    return 0
+
+
+def _drop_inputs(args: argparse.Namespace) -> int:
+    arch, state = read_weights(args.source)
+    fill: dict[str, float] = {}
+    for spec in args.fill.split(","):
+        name, sep, value = spec.partition("=")
+        if not sep:
+            raise ValueError(f"--fill {args.fill}: expected INPUT=VALUE[,INPUT=VALUE...]")
+        fill[name] = float(value)
+    arch, state = drop_inputs(arch, state, fill)
+    write_weights(args.output, arch, state)
+    print(f"wrote {args.output}: inputs {','.join(arch.inputs)} ({', '.join(f'{n} = {v:g}' for n, v in fill.items())} folded into d1.l1.0)")
     return 0
 
 
@@ -55,6 +89,18 @@ def main(argv: list[str] | None = None) -> int:
     e.add_argument("--transfer", choices=["log1p", "none"])
     e.add_argument("--no-demodulate", action="store_true")
     e.set_defaults(func=_export)
+    i = sub.add_parser("interpolate", help="weights (1 - t) * A + t * B, the fraction chosen per module")
+    i.add_argument("a")
+    i.add_argument("b")
+    i.add_argument("output")
+    i.add_argument("--t", type=float, required=True, help="fraction of B (0: A, 1: B)")
+    i.add_argument("--at", action="append", default=[], metavar="MODULE[,MODULE...]=FRACTION", help="another fraction for these modules (d1..d5, bottleneck, u1..u5)")
+    i.set_defaults(func=_interpolate)
+    d = sub.add_parser("drop-inputs", help="a network for fewer buffers: dropped inputs folded into the first conv's bias")
+    d.add_argument("source")
+    d.add_argument("output")
+    d.add_argument("--fill", required=True, metavar="INPUT=VALUE[,INPUT=VALUE...]", help="the inputs to drop and the value each stands at (prepared: log1p for depth)")
+    d.set_defaults(func=_drop_inputs)
     g = sub.add_parser("golden", help="write (or --check) the golden fixtures of the Rust tests")
     g.add_argument("--out", default="tests/fixtures")
     g.add_argument("--check", metavar="DIR", help="regenerate into a temporary folder and compare with DIR")

@@ -7,6 +7,7 @@ metadata, and well-kept readers in Rust and Python, so neither side hand-writes 
 
 from __future__ import annotations
 
+import json
 import os
 import tempfile
 from pathlib import Path
@@ -16,7 +17,7 @@ import torch
 from safetensors import safe_open
 from safetensors.torch import save_file
 
-from .arch import Arch
+from .arch import INPUT_CHANNELS, Arch
 
 METADATA_KEY = "rae.arch"
 
@@ -111,6 +112,51 @@ def _publish(tmp: str, path: Path) -> None:
     os.umask(umask)
     os.chmod(tmp, 0o666 & ~umask)
     os.replace(tmp, path)
+
+
+def interpolate(
+    a: dict[str, torch.Tensor], b: dict[str, torch.Tensor], t: float, at: dict[str, float] | None = None
+) -> dict[str, torch.Tensor]:
+    """Weights ``(1 - t) * a + t * b``, tensor by tensor, computed in f64 and stored in f32.
+    ``at`` gives other fractions by module: a tensor whose name starts with ``MODULE.`` (``d5``,
+    ``bottleneck``) takes ``at[MODULE]``. Two fine-tunes of one model average into a model
+    that is often better than either, and the fraction per level trades one's gains against the
+    other's behaviour (the deep levels set how far the network reaches, and so a tile's seams)."""
+    if a.keys() != b.keys():
+        raise ValueError(f"the weights differ in their tensors: {sorted(a.keys() ^ b.keys())[:5]}")
+    at = at or {}
+    out = {}
+    for name, x in a.items():
+        if x.shape != b[name].shape:
+            raise ValueError(f"tensor {name}: shapes {list(x.shape)} and {list(b[name].shape)}")
+        f = at.get(name.split(".", 1)[0], t)
+        out[name] = ((1 - f) * x.double() + f * b[name].double()).to(torch.float32)
+    return out
+
+
+def drop_inputs(arch: Arch, state: dict[str, torch.Tensor], fill: dict[str, float]) -> tuple[Arch, dict[str, torch.Tensor]]:
+    """A network for fewer buffers from one for more: each input in ``fill`` leaves the first
+    conv, its columns folded into the bias as if that channel held the given value everywhere
+    (a typical one: the training data's mean). Exact for a frame whose buffer holds that value,
+    but for the frame's border pixels, where the original conv reads zero padding."""
+    unknown = [n for n in fill if n not in arch.inputs]
+    if unknown or "color" in fill:
+        raise ValueError(f"cannot drop {unknown or ['color']}: the network reads {arch.inputs}")
+    w, b = state["d1.l1.0.weight"], state["d1.l1.0.bias"]
+    keep, bias, c = [], b.double(), 0
+    for name in arch.inputs:
+        n = INPUT_CHANNELS[name]
+        if name in fill:
+            bias = bias + w[:, c : c + n].double().sum(dim=(1, 2, 3)) * fill[name]
+        else:
+            keep.extend(range(c, c + n))
+        c += n
+    out = dict(state)
+    out["d1.l1.0.weight"] = w[:, keep].clone()
+    out["d1.l1.0.bias"] = bias.to(torch.float32)
+    fields = json.loads(arch.to_json())
+    fields["inputs"] = [n for n in arch.inputs if n not in fill]
+    return Arch.from_json(json.dumps(fields)), out
 
 
 def read_weights(path: str | Path) -> tuple[Arch, dict[str, torch.Tensor]]:

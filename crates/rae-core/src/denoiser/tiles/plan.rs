@@ -5,10 +5,11 @@ use super::*;
 
 /// The overlap a tile's extent takes around its interior, in pixels of the frame, when the
 /// caller does not choose one ([`FrameTiles`]). Chosen by measurement (`examples/tile_seams.rs`,
-/// `docs/PERF.md`): with the shipped model a tiled frame differs from the whole one by
+/// `docs/PERF.md`): with the model shipped then a tiled frame differs from the whole one by
 /// 1.1-1.8e-4 of its mean value on average, and by up to 0.7 of it at the worst pixel by a seam;
 /// 96 pixels cut that to 2.2-3.5e-5 and 0.07, but the state and the larger smallest tile no
-/// longer fit 4K in 1 GiB on the GPU.
+/// longer fit 4K in 1 GiB on the GPU. A model that reaches further fails the engine's tiles test
+/// (`docs/MODELS.md`, stage 12).
 pub const TILE_OVERLAP: u32 = 64;
 
 /// Frame tiles as the caller fixes them ([`Options::frame_tiles`]): the largest interior
