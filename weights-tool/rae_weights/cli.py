@@ -34,12 +34,12 @@ def _interpolate(args: argparse.Namespace) -> int:
     arch_b, b = read_weights(args.b)
     if arch_b != arch:
         raise ValueError(f"{args.b}: another architecture than {args.a} ({arch_b.to_json()})")
+    known = {name.split(".", 1)[0] for name in a}
     at: dict[str, float] = {}
     for spec in args.at:
         modules, sep, value = spec.partition("=")
         if not sep:
             raise ValueError(f"--at {spec}: expected MODULE[,MODULE...]=FRACTION")
-        known = {name.split(".", 1)[0] for name in a}
         for m in modules.split(","):
             if m not in known:
                 raise ValueError(f"--at {spec}: no module {m!r} (the weights have {', '.join(sorted(known))})")

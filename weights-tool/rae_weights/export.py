@@ -7,7 +7,7 @@ metadata, and well-kept readers in Rust and Python, so neither side hand-writes 
 
 from __future__ import annotations
 
-import json
+import dataclasses
 import os
 import tempfile
 from pathlib import Path
@@ -154,9 +154,7 @@ def drop_inputs(arch: Arch, state: dict[str, torch.Tensor], fill: dict[str, floa
     out = dict(state)
     out["d1.l1.0.weight"] = w[:, keep].clone()
     out["d1.l1.0.bias"] = bias.to(torch.float32)
-    fields = json.loads(arch.to_json())
-    fields["inputs"] = [n for n in arch.inputs if n not in fill]
-    return Arch.from_json(json.dumps(fields)), out
+    return dataclasses.replace(arch, inputs=[n for n in arch.inputs if n not in fill]), out
 
 
 def read_weights(path: str | Path) -> tuple[Arch, dict[str, torch.Tensor]]:
