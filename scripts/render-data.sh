@@ -7,6 +7,9 @@
 #              at 512 spp;
 #   DIR/val4:  the same held-out sequences at 4 spp (another noise seed), DIR/val's references
 #              copied in;
+#   DIR/val-aux-samples, DIR/val4-aux-samples: DIR/val and DIR/val4 with the auxiliary buffers
+#              averaged over the color's samples as offline renderers write them (`--aux
+#              samples`); the color is the same, bit for bit;
 #   DIR/blender-val, DIR/blender-val4: four held-out Blender Cycles scenes (seeds 2001-2004, 8
 #              frames of 128x128 as multi-layer EXRs, 1 and 4 spp, references at 256 spp;
 #              scripts/render-blender.py), where bpy is installed (pip install bpy==4.5.15).
@@ -41,6 +44,22 @@ render4() { # NAME ARGS...: a held-out sequence again at 4 spp, with DIR/val's r
 }
 for s in 1001 1002 1003; do render4 "r$s" --random "$s"; done
 render4 cornell-moving --scene cornell-moving
+sampled_aux() { # SET SPP NAME ARGS...: a held-out sequence again, its buffers from the samples
+    local set=$1 spp=$2 name=$3 dir=$out/$1-aux-samples/$3
+    shift 3
+    if [ ! -d "$dir" ]; then
+        echo "== $dir"
+        "$trace" render "$@" --frames 8 --spp "$spp" --ref-spp 0 --size 128x128 --aux samples "$dir.partial" > /dev/null
+        cp "$out/val/$name"/reference_*.exr "$dir.partial/"
+        mv "$dir.partial" "$dir"
+    fi
+}
+for s in 1001 1002 1003; do
+    sampled_aux val 1 "r$s" --random "$s"
+    sampled_aux val4 4 "r$s" --random "$s" --seed 4
+done
+sampled_aux val 1 cornell-moving --scene cornell-moving --seed 7
+sampled_aux val4 4 cornell-moving --scene cornell-moving --seed 4
 if python3 -c "import bpy" 2>/dev/null; then
     # Blender prints a line per tile; only the script's progress lines are shown.
     python3 scripts/render-blender.py "$out/blender-val" --seeds 2001-2004 | { grep '^b2' || true; }

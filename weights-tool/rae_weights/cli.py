@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import sys
 import tempfile
 from pathlib import Path
@@ -58,8 +59,13 @@ def _drop_inputs(args: argparse.Namespace) -> int:
             raise ValueError(f"--fill {args.fill}: expected INPUT=VALUE[,INPUT=VALUE...]")
         fill[name] = float(value)
     arch, state = drop_inputs(arch, state, fill)
+    if args.no_demodulate:
+        # Not a fold: the same weights then see the color itself rather than color / albedo, a
+        # starting point for training a color-only network (no albedo needed).
+        arch = dataclasses.replace(arch, demodulate=False)
     write_weights(args.output, arch, state)
-    print(f"wrote {args.output}: inputs {','.join(arch.inputs)} ({', '.join(f'{n} = {v:g}' for n, v in fill.items())} folded into d1.l1.0)")
+    demod = "" if arch.demodulate else "; color not demodulated"
+    print(f"wrote {args.output}: inputs {','.join(arch.inputs)} ({', '.join(f'{n} = {v:g}' for n, v in fill.items())} folded into d1.l1.0{demod})")
     return 0
 
 
@@ -100,6 +106,7 @@ def main(argv: list[str] | None = None) -> int:
     d.add_argument("source")
     d.add_argument("output")
     d.add_argument("--fill", required=True, metavar="INPUT=VALUE[,INPUT=VALUE...]", help="the inputs to drop and the value each stands at (prepared: log1p for depth)")
+    d.add_argument("--no-demodulate", action="store_true", help="the result reads color as is, without albedo (a warm start for training, not an exact fold)")
     d.set_defaults(func=_drop_inputs)
     g = sub.add_parser("golden", help="write (or --check) the golden fixtures of the Rust tests")
     g.add_argument("--out", default="tests/fixtures")

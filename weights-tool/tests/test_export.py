@@ -107,4 +107,9 @@ def test_drop_inputs_folds_a_constant_buffer_into_the_first_bias(tmp_path: Path)
     assert torch.allclose(a[..., 1:-1, 1:-1], b[..., 1:-1, 1:-1], atol=1e-5)
     assert not torch.allclose(a[..., 0, :], b[..., 0, :], atol=1e-5)
     assert all(torch.equal(state[k], v) for k, v in full.state_dict().items() if not k.startswith("d1.l1.0"))
+    color_only = tmp_path / "color.safetensors"
+    assert main(["drop-inputs", str(src), str(color_only), "--fill", "normal=0,depth=1.5,roughness=0.25", "--no-demodulate"]) == 0
+    color_arch, color_state = read_weights(color_only)
+    assert (color_arch.inputs, color_arch.demodulate) == (["color"], False)
+    assert color_state["d1.l1.0.weight"].shape[1] == 3
     assert main(["drop-inputs", str(src), str(out), "--fill", "albedo=1"]) == 1

@@ -11,5 +11,5 @@ pub mod scene;
 pub mod scenes;
 pub mod texture;
 
-pub use render::{FrameBuffers, Settings, render_frame};
+pub use render::{Aux, FrameBuffers, Settings, render_frame};
 pub use scene::Scene;

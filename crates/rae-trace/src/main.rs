@@ -7,7 +7,7 @@ use anyhow::{Context, Result, bail};
 use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use rae_core::frame::parse_size;
-use rae_trace::{Scene, Settings, output, render_frame, scenes};
+use rae_trace::{Aux, Scene, Settings, output, render_frame, scenes};
 
 #[derive(Parser)]
 #[command(name = "rae-trace", version, about = "Path tracer that renders training and test sequences for rae")]
@@ -73,12 +73,18 @@ enum Command {
         /// Write half-float EXR (smaller) instead of float.
         #[arg(long)]
         half: bool,
+        /// Auxiliary buffers from the pixel centre's ray (`centre`: noise-free, as a
+        /// rasteriser's G-buffer) or averaged over the color's samples through mirrors and glass
+        /// (`samples`: as Cycles and other offline renderers write them).
+        #[arg(long, default_value = "centre", value_parser = parse_aux)]
+        aux: Aux,
         /// Output folder (created).
         out: PathBuf,
     },
     /// Render a training set: --count sequences of `--varied` scenes (seeds from --first-seed),
     /// their sample counts cycling through 1, 2, 4 and 8 spp, references at --ref-spp, each in
-    /// OUT/vSEED-Nspp. Sequences already there are kept, so an interrupted run continues.
+    /// OUT/vSEED-Nspp (OUT/vSEED-Nspp-aux-samples where the auxiliary buffers are the samples').
+    /// Sequences already there are kept, so an interrupted run continues.
     Dataset {
         /// Sequences to render.
         #[arg(long, default_value_t = 300)]
@@ -95,6 +101,10 @@ enum Command {
         /// Image size, WxH.
         #[arg(long, default_value = "128x128", value_parser = parse_size)]
         size: (u32, u32),
+        /// Auxiliary buffers: `mixed` alternates `centre` and `samples` (see `render --aux`)
+        /// every four seeds, so each sample count has both.
+        #[arg(long, default_value = "mixed", value_parser = ["mixed", "centre", "samples"])]
+        aux: String,
         /// Output folder (created).
         out: PathBuf,
     },
@@ -148,14 +158,27 @@ fn render_frames(
 /// Sample counts a training set cycles through, so one model serves them all.
 const DATASET_SPP: [u32; 4] = [1, 2, 4, 8];
 
-fn dataset(count: u64, first_seed: u64, frames: u32, ref_spp: u32, (width, height): (u32, u32), out: &Path) -> Result<()> {
+fn parse_aux(s: &str) -> Result<Aux, String> {
+    match s {
+        "centre" => Ok(Aux::Centre),
+        "samples" => Ok(Aux::Samples),
+        _ => Err(format!("`{s}`: expected centre or samples")),
+    }
+}
+
+fn dataset(count: u64, first_seed: u64, frames: u32, ref_spp: u32, (width, height): (u32, u32), aux: &str, out: &Path) -> Result<()> {
     create_dir(out)?;
     let bar = progress(count * frames as u64);
     let start = Instant::now();
     let mut rendered = 0;
     for seed in first_seed..first_seed + count {
         let spp = DATASET_SPP[(seed % DATASET_SPP.len() as u64) as usize];
-        let name = format!("v{seed:05}-{spp}spp");
+        let aux = match aux {
+            "mixed" if (seed / DATASET_SPP.len() as u64) % 2 == 1 => Aux::Samples,
+            "samples" => Aux::Samples,
+            _ => Aux::Centre,
+        };
+        let name = format!("v{seed:05}-{spp}spp{}", if aux == Aux::Samples { "-aux-samples" } else { "" });
         let dir = out.join(&name);
         if dir.is_dir() {
             bar.inc(frames as u64);
@@ -167,7 +190,7 @@ fn dataset(count: u64, first_seed: u64, frames: u32, ref_spp: u32, (width, heigh
         if partial.exists() {
             std::fs::remove_dir_all(&partial).with_context(|| format!("removing {}", partial.display()))?;
         }
-        let settings = Settings { width, height, spp, ref_spp, seed, max_depth: 8 };
+        let settings = Settings { width, height, spp, ref_spp, seed, max_depth: 8, aux };
         render_frames(&scenes::varied(seed), frames, &settings, output::Precision::F32, &partial, &bar)?;
         std::fs::rename(&partial, &dir).with_context(|| format!("renaming {} to {}", partial.display(), dir.display()))?;
         rendered += 1;
@@ -219,7 +242,7 @@ fn live(choice: &SceneChoice, weights: &Path, frames: u32, size: (u32, u32), mot
     let mut denoiser = rae_core::Denoiser::with_options(&gpu.device, &gpu.queue, &weights, w, h, options)?;
     println!("{name} at {w}x{h}, denoising on {}", gpu.describe());
     println!("{:>5} {:>10} {:>12}", "frame", "trace ms", "denoise ms");
-    let settings = Settings { width: w, height: h, spp: 1, ref_spp: 0, seed: 0, max_depth: 8 };
+    let settings = Settings { width: w, height: h, spp: 1, ref_spp: 0, seed: 0, max_depth: 8, aux: Aux::Centre };
     let mut helper = None;
     for f in 0..frames {
         let t0 = Instant::now();
@@ -264,12 +287,14 @@ fn main() -> Result<()> {
     // SAFETY: first thing in main, before any thread (the renderer's, wgpu's) exists.
     unsafe { rae_core::gpu::prefer_wide_cpu_vectors() };
     match Cli::parse().command {
-        Command::Render { scene, frames, spp, ref_spp, size, seed, max_depth, half, out } => {
+        Command::Render { scene, frames, spp, ref_spp, size, seed, max_depth, half, aux, out } => {
             let (width, height) = size;
             let precision = if half { output::Precision::F16 } else { output::Precision::F32 };
-            render(&scene, frames, Settings { width, height, spp, ref_spp, seed, max_depth }, precision, &out)
+            render(&scene, frames, Settings { width, height, spp, ref_spp, seed, max_depth, aux }, precision, &out)
         }
-        Command::Dataset { count, first_seed, frames, ref_spp, size, out } => dataset(count, first_seed, frames, ref_spp, size, &out),
+        Command::Dataset { count, first_seed, frames, ref_spp, size, aux, out } => {
+            dataset(count, first_seed, frames, ref_spp, size, &aux, &out)
+        }
         Command::Live { scene, weights, frames, size, no_motion, out } => live(&scene, &weights, frames, size, !no_motion, &out),
     }
 }

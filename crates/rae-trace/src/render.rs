@@ -24,6 +24,99 @@ pub struct Settings {
     pub seed: u64,
     /// Longest path, in bounces.
     pub max_depth: u32,
+    /// Where the auxiliary buffers come from.
+    pub aux: Aux,
+}
+
+/// Where the auxiliary buffers (albedo, normal, depth, roughness) come from. Renderers differ:
+/// a rasteriser's G-buffer is the pixel centre's surface, an offline path tracer averages its
+/// samples' surfaces; a denoiser trained on both serves either.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum Aux {
+    /// The ray through the pixel centre, at its first surface: noise-free and aliased.
+    #[default]
+    Centre,
+    /// The noisy color's own jittered rays, averaged, each recorded at its first surface that
+    /// is not near-specular (mirrors, smooth glass and polished metal are followed, their
+    /// tint multiplied into the albedo), as Cycles writes its Denoising passes: antialiased,
+    /// and noisy at edges and through glass. Normals are then shorter than 1 at silhouettes.
+    Samples,
+}
+
+/// GGX roughness below which the [`Aux::Samples`] buffers look through a surface to what it
+/// reflects or transmits (alpha 0.075).
+pub const FEATURE_SPECULAR: f32 = 0.274;
+
+/// Most near-specular surfaces an [`Aux::Samples`] ray follows before it records where it is.
+const FEATURE_BOUNCES: u32 = 8;
+
+/// The auxiliary values one camera ray sees ([`Aux::Samples`]).
+#[derive(Debug, Clone, Copy, Default)]
+struct Features {
+    albedo: Vec3A,
+    normal: Vec3A,
+    /// Distance to the first surface, and 1 where there is one (0 at a miss).
+    depth: f32,
+    hit: f32,
+    roughness: f32,
+}
+
+impl std::ops::AddAssign for Features {
+    fn add_assign(&mut self, o: Self) {
+        self.albedo += o.albedo;
+        self.normal += o.normal;
+        self.depth += o.depth;
+        self.hit += o.hit;
+        self.roughness += o.roughness;
+    }
+}
+
+/// Traces a camera ray for [`Aux::Samples`]: through near-specular surfaces (drawing from `s`
+/// where glass reflects or refracts) to the first one that is not, or to the sky, which counts
+/// as albedo 1 (the engine's convention at a miss).
+fn features(scene: &Scene, origin: Vec3A, dir: Vec3A, s: &mut Sampler) -> Features {
+    let mut f = Features::default();
+    let mut tint = Vec3A::ONE;
+    let (mut o, mut d) = (origin, dir);
+    for bounce in 0..=FEATURE_BOUNCES {
+        let Some((prim, t)) = scene.intersect(Ray::new(o, d, 0.0, f32::INFINITY)) else {
+            if bounce > 0 {
+                f.albedo = tint;
+            }
+            return f;
+        };
+        let surf = scene.prims[prim].surface(o + d * t);
+        let mat = scene.material(prim);
+        let dielectric = matches!(mat, Material::Dielectric { .. });
+        let n = if surf.ns.dot(d) > 0.0 && !dielectric { -surf.ns } else { surf.ns };
+        if bounce == 0 {
+            (f.depth, f.hit, f.normal, f.roughness) = (t, 1.0, n, mat.roughness());
+        }
+        let specular = match mat {
+            Material::Conductor { roughness, .. } | Material::Dielectric { roughness, .. } => *roughness < FEATURE_SPECULAR,
+            _ => false,
+        };
+        let next = if specular && bounce < FEATURE_BOUNCES {
+            let frame = Frame::new(n);
+            mat.sample(frame.to_local(-d), surf.uv, s).map(|bs| frame.to_world(bs.wi).normalize())
+        } else {
+            None
+        };
+        match next {
+            Some(wi) => {
+                tint *= mat.albedo(surf.uv);
+                o = offset(surf.p, surf.ng, wi);
+                d = wi;
+            }
+            None => {
+                f.albedo = tint * mat.albedo(surf.uv);
+                f.normal = n;
+                f.roughness = mat.roughness();
+                return f;
+            }
+        }
+    }
+    f
 }
 
 /// One frame's buffers, row-major, top row first (the layout rae-core reads).
@@ -153,20 +246,41 @@ pub fn render_frame(scene: &Scene, frame: u32, frames: u32, st: &Settings) -> Fr
             if let Some(q) = prev.project(seen, w, h) {
                 aux.4 = [q.x - px, q.y - py];
             }
-            let sample = |pass: u32, n: u32| -> [f32; 3] {
+            // Averages `n` jittered paths of stream `pass`; `feat` also traces each one's
+            // auxiliary values (from a stream of its own: the color's noise is the same
+            // whichever way the auxiliary buffers are made).
+            let sample = |pass: u32, n: u32, feat: Option<&mut Features>| -> [f32; 3] {
                 if n == 0 {
                     return [0.0; 3];
                 }
                 let mut s = Sampler::new(st.seed, frame, i, pass);
+                let mut fs = Sampler::new(st.seed, frame, i, 2);
                 let mut acc = Vec3A::ZERO;
+                let mut sum = Features::default();
                 for _ in 0..n {
                     let j: Vec2 = s.uniform2();
                     let d = cam.direction(x as f32 + j.x, y as f32 + j.y, w, h);
+                    if feat.is_some() {
+                        sum += features(scene, cam.position, d, &mut fs);
+                    }
                     acc += radiance(scene, cam.position, d, st.max_depth, &mut s);
+                }
+                if let Some(f) = feat {
+                    let inv = 1.0 / n as f32;
+                    *f = Features { albedo: sum.albedo * inv, normal: sum.normal * inv, ..sum };
                 }
                 (acc / n as f32).to_array()
             };
-            (sample(0, st.spp), sample(1, st.ref_spp), aux)
+            let mut feat = Features::default();
+            let color = sample(0, st.spp, (st.aux == Aux::Samples && st.spp > 0).then_some(&mut feat));
+            if st.aux == Aux::Samples && st.spp > 0 {
+                // Depth and roughness over the samples that hit something; a pixel none of
+                // whose samples hit is a miss, as at the centre.
+                aux.0 = feat.albedo.to_array();
+                aux.1 = feat.normal.to_array();
+                (aux.2, aux.3) = if feat.hit > 0.0 { (feat.depth / feat.hit, feat.roughness / feat.hit) } else { (f32::INFINITY, 0.0) };
+            }
+            (color, sample(1, st.ref_spp, None), aux)
         })
         .collect();
     let mut fb = FrameBuffers {

@@ -5,10 +5,10 @@ use rae_trace::geometry::{Prim, Shape, quad};
 use rae_trace::material::Material;
 use rae_trace::scene::{Camera, CameraPath, Environment, v};
 use rae_trace::texture::Texture;
-use rae_trace::{Scene, Settings, render_frame, scenes};
+use rae_trace::{Aux, Scene, Settings, render_frame, scenes};
 
 fn settings(w: u32, h: u32, spp: u32, ref_spp: u32, seed: u64) -> Settings {
-    Settings { width: w, height: h, spp, ref_spp, seed, max_depth: 8 }
+    Settings { width: w, height: h, spp, ref_spp, seed, max_depth: 8, aux: Aux::Centre }
 }
 
 #[test]
@@ -90,6 +90,77 @@ fn auxiliary_buffers_are_right_on_a_textured_plane() {
         }
     }
     assert!(hits > 300, "most pixels see the floor");
+}
+
+#[test]
+fn sampled_auxiliary_buffers_average_the_pixel_and_keep_the_color_s_noise() {
+    // Looking toward the horizon: the floor's far edge crosses the view.
+    let cam = Camera { position: v(0.3, 1.0, 3.0), target: v(0.0, 0.5, -10.0), vfov: 50.0 };
+    let scene = floor_scene(vec![cam]);
+    let (w, h) = (31u32, 23u32);
+    let centre = render_frame(&scene, 0, 1, &settings(w, h, 16, 0, 4));
+    let sampled = render_frame(&scene, 0, 1, &Settings { aux: Aux::Samples, ..settings(w, h, 16, 0, 4) });
+    assert_eq!(centre.color, sampled.color, "the auxiliary buffers draw from a stream of their own");
+    assert_eq!(centre.motion, sampled.motion);
+    let (mut mixed_albedo, mut edge_pixels) = (0, 0);
+    for i in 0..(w * h) as usize {
+        let n = Vec3A::from_slice(&sampled.normal[3 * i..3 * i + 3]);
+        if centre.depth[i] < 8.0 {
+            // Away from the horizon the plane's depth over the pixel's footprint is near the
+            // centre's.
+            assert!(
+                (sampled.depth[i] - centre.depth[i]).abs() < 0.1 * centre.depth[i],
+                "pixel {i}: {} vs {}",
+                sampled.depth[i],
+                centre.depth[i]
+            );
+        }
+        if n.length() > 0.0 && n.length() < 0.999 {
+            // Some of its samples missed the plane: a horizon pixel, its normal shorter than 1.
+            edge_pixels += 1;
+            assert!((n.normalize() - Vec3A::Y).length() < 1e-5);
+        }
+        let a = &sampled.albedo[3 * i..3 * i + 3];
+        if centre.depth[i].is_finite() && a != &centre.albedo[3 * i..3 * i + 3] {
+            mixed_albedo += 1;
+        }
+    }
+    assert!(edge_pixels > 0, "the horizon's pixels average hits and misses");
+    assert!(mixed_albedo > 20, "checker edges are averaged over the pixel: {mixed_albedo} pixels differ from the centre's");
+}
+
+#[test]
+fn sampled_auxiliary_buffers_look_through_a_mirror_to_what_it_reflects() {
+    // A polished metal floor under a diffuse ceiling: the centre's buffers see the metal, the
+    // sampled ones (as Cycles writes them) the ceiling in it, tinted by the metal.
+    let cam = Camera { position: v(0.0, 2.0, 3.0), target: v(0.0, 0.0, 0.0), vfov: 40.0 };
+    let f0 = v(0.9, 0.8, 0.5);
+    let green = v(0.2, 0.7, 0.3);
+    let materials =
+        vec![Material::Conductor { f0: Texture::Constant(f0), roughness: 0.0 }, Material::Diffuse { albedo: Texture::Constant(green) }];
+    let mut prims = quad(v(-50.0, 0.0, 50.0), v(100.0, 0.0, 0.0), v(0.0, 0.0, -100.0), 1.0, 0).to_vec();
+    prims.extend(quad(v(-50.0, 5.0, -50.0), v(100.0, 0.0, 0.0), v(0.0, 0.0, 100.0), 1.0, 1));
+    let scene = Scene::new(
+        prims,
+        materials,
+        Environment::Sky { zenith: Vec3A::ONE, horizon: Vec3A::ONE, ground: Vec3A::ZERO },
+        CameraPath { keys: vec![cam] },
+    );
+    let (w, h) = (16u32, 12u32);
+    let centre = render_frame(&scene, 0, 1, &settings(w, h, 4, 0, 1));
+    let sampled = render_frame(&scene, 0, 1, &Settings { aux: Aux::Samples, ..settings(w, h, 4, 0, 1) });
+    let i = (h / 2 * w + w / 2) as usize;
+    let close = |a: &[f32], b: Vec3A| (Vec3A::from_slice(a) - b).length() < 1e-4;
+    assert!(close(&centre.albedo[3 * i..3 * i + 3], f0), "centre: the metal's albedo");
+    assert!(
+        close(&sampled.albedo[3 * i..3 * i + 3], f0 * green),
+        "sampled: the ceiling's, tinted: {:?}",
+        &sampled.albedo[3 * i..3 * i + 3]
+    );
+    assert!(close(&centre.normal[3 * i..3 * i + 3], Vec3A::Y));
+    assert!(close(&sampled.normal[3 * i..3 * i + 3], -Vec3A::Y), "the ceiling's normal, facing the reflected ray");
+    assert_eq!((centre.roughness[i], sampled.roughness[i]), (0.0, 1.0));
+    assert!((centre.depth[i] - sampled.depth[i]).abs() < 0.05 * centre.depth[i], "depth stays the first surface's");
 }
 
 #[test]
@@ -227,8 +298,13 @@ fn dataset_renders_varied_sequences_at_cycling_sample_counts_and_continues_where
     run("2");
     let mut names: Vec<String> = std::fs::read_dir(out.path()).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into()).collect();
     names.sort();
-    assert_eq!(names, ["v00003-8spp", "v00004-1spp"], "seed 3 at 8 spp, seed 4 at 1 spp: the counts cycle 1, 2, 4, 8 by seed");
-    assert!(out.path().join("v00004-1spp/reference_0001.exr").exists() && out.path().join("v00004-1spp/motion_0000.exr").exists());
+    assert_eq!(
+        names,
+        ["v00003-8spp", "v00004-1spp-aux-samples"],
+        "seed 3 at 8 spp, seed 4 at 1 spp: the counts cycle 1, 2, 4, 8 by seed, the auxiliary buffers every four seeds"
+    );
+    let four = out.path().join("v00004-1spp-aux-samples");
+    assert!(four.join("reference_0001.exr").exists() && four.join("motion_0000.exr").exists());
     let again = run("3");
     assert!(again.contains("1 rendered now, 2 already there"), "{again}");
 }
