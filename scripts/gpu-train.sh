@@ -55,8 +55,9 @@ while [ "$(rendered)" -lt "$need" ] && { [ "$waited" -lt 120 ] || [ "$(rendered)
 done
 echo "$(date -u +%T) $(rendered) sequences rendered; training for $minutes minutes"
 
-# train INIT RUN OUT_DIR [ARGS...]: one trainer's round, its log in OUT_DIR/train.log; the weights file is the checkpoint (the one with Adam's moments, 18 MB, is
-# over what comes back from the machine; train --init continues from the weights).
+# train INIT RUN OUT_DIR [ARGS...]: one trainer's round, its log in OUT_DIR/train.log. The
+# weights file is the checkpoint that comes back (the one with Adam's moments, 18 MB, is over
+# what returns from the machine; train --init continues from the weights).
 train() {
     local init=$1 run=$2 dir=$3
     shift 3

@@ -103,8 +103,8 @@ enum Command {
         size: (u32, u32),
         /// Auxiliary buffers: `mixed` alternates `centre` and `samples` (see `render --aux`)
         /// every four seeds, so each sample count has both.
-        #[arg(long, default_value = "mixed", value_parser = ["mixed", "centre", "samples"])]
-        aux: String,
+        #[arg(long, default_value = "mixed", value_parser = parse_dataset_aux)]
+        aux: DatasetAux,
         /// Output folder (created).
         out: PathBuf,
     },
@@ -166,7 +166,18 @@ fn parse_aux(s: &str) -> Result<Aux, String> {
     }
 }
 
-fn dataset(count: u64, first_seed: u64, frames: u32, ref_spp: u32, (width, height): (u32, u32), aux: &str, out: &Path) -> Result<()> {
+/// `dataset --aux`: both conventions, alternating by seed, or one.
+#[derive(Clone, Copy)]
+enum DatasetAux {
+    Mixed,
+    Only(Aux),
+}
+
+fn parse_dataset_aux(s: &str) -> Result<DatasetAux, String> {
+    if s == "mixed" { Ok(DatasetAux::Mixed) } else { parse_aux(s).map(DatasetAux::Only).map_err(|e| format!("{e} or mixed")) }
+}
+
+fn dataset(count: u64, first_seed: u64, frames: u32, ref_spp: u32, (width, height): (u32, u32), aux: DatasetAux, out: &Path) -> Result<()> {
     create_dir(out)?;
     let bar = progress(count * frames as u64);
     let start = Instant::now();
@@ -174,9 +185,9 @@ fn dataset(count: u64, first_seed: u64, frames: u32, ref_spp: u32, (width, heigh
     for seed in first_seed..first_seed + count {
         let spp = DATASET_SPP[(seed % DATASET_SPP.len() as u64) as usize];
         let aux = match aux {
-            "mixed" if (seed / DATASET_SPP.len() as u64) % 2 == 1 => Aux::Samples,
-            "samples" => Aux::Samples,
-            _ => Aux::Centre,
+            DatasetAux::Only(aux) => aux,
+            DatasetAux::Mixed if (seed / DATASET_SPP.len() as u64) % 2 == 1 => Aux::Samples,
+            DatasetAux::Mixed => Aux::Centre,
         };
         let name = format!("v{seed:05}-{spp}spp{}", if aux == Aux::Samples { "-aux-samples" } else { "" });
         let dir = out.join(&name);
@@ -293,7 +304,7 @@ fn main() -> Result<()> {
             render(&scene, frames, Settings { width, height, spp, ref_spp, seed, max_depth, aux }, precision, &out)
         }
         Command::Dataset { count, first_seed, frames, ref_spp, size, aux, out } => {
-            dataset(count, first_seed, frames, ref_spp, size, &aux, &out)
+            dataset(count, first_seed, frames, ref_spp, size, aux, &out)
         }
         Command::Live { scene, weights, frames, size, no_motion, out } => live(&scene, &weights, frames, size, !no_motion, &out),
     }

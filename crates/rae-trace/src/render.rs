@@ -246,38 +246,35 @@ pub fn render_frame(scene: &Scene, frame: u32, frames: u32, st: &Settings) -> Fr
             if let Some(q) = prev.project(seen, w, h) {
                 aux.4 = [q.x - px, q.y - py];
             }
-            // Averages `n` jittered paths of stream `pass`; `feat` also traces each one's
-            // auxiliary values (from a stream of its own: the color's noise is the same
-            // whichever way the auxiliary buffers are made).
-            let sample = |pass: u32, n: u32, feat: Option<&mut Features>| -> [f32; 3] {
+            // Averages `n` jittered paths of stream `pass`; `feat` also sums each one's
+            // auxiliary values (traced from a stream of their own: the color's noise is the
+            // same whichever way the auxiliary buffers are made).
+            let sample = |pass: u32, n: u32, mut feat: Option<&mut Features>| -> [f32; 3] {
                 if n == 0 {
                     return [0.0; 3];
                 }
                 let mut s = Sampler::new(st.seed, frame, i, pass);
                 let mut fs = Sampler::new(st.seed, frame, i, 2);
                 let mut acc = Vec3A::ZERO;
-                let mut sum = Features::default();
                 for _ in 0..n {
                     let j: Vec2 = s.uniform2();
                     let d = cam.direction(x as f32 + j.x, y as f32 + j.y, w, h);
-                    if feat.is_some() {
-                        sum += features(scene, cam.position, d, &mut fs);
+                    if let Some(f) = feat.as_deref_mut() {
+                        *f += features(scene, cam.position, d, &mut fs);
                     }
                     acc += radiance(scene, cam.position, d, st.max_depth, &mut s);
                 }
-                if let Some(f) = feat {
-                    let inv = 1.0 / n as f32;
-                    *f = Features { albedo: sum.albedo * inv, normal: sum.normal * inv, ..sum };
-                }
                 (acc / n as f32).to_array()
             };
+            let sampled = st.aux == Aux::Samples && st.spp > 0;
             let mut feat = Features::default();
-            let color = sample(0, st.spp, (st.aux == Aux::Samples && st.spp > 0).then_some(&mut feat));
-            if st.aux == Aux::Samples && st.spp > 0 {
-                // Depth and roughness over the samples that hit something; a pixel none of
-                // whose samples hit is a miss, as at the centre.
-                aux.0 = feat.albedo.to_array();
-                aux.1 = feat.normal.to_array();
+            let color = sample(0, st.spp, sampled.then_some(&mut feat));
+            if sampled {
+                // Albedo and normal over all samples (a miss adds zero), depth and roughness over
+                // those that hit; a pixel none of whose samples hit is a miss, as at the centre.
+                let n = st.spp as f32;
+                aux.0 = (feat.albedo / n).to_array();
+                aux.1 = (feat.normal / n).to_array();
                 (aux.2, aux.3) = if feat.hit > 0.0 { (feat.depth / feat.hit, feat.roughness / feat.hit) } else { (f32::INFINITY, 0.0) };
             }
             (color, sample(1, st.ref_spp, None), aux)
