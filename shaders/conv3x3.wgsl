@@ -71,6 +71,17 @@ fn pools() -> bool {
 // `pools`: the output max-pooled 2x2, at half the resolution (else the conv's own output, never
 // written here: kernels::ConvPlan::bind_group).
 @group(0) @binding(6) var pooled: texture_storage_2d_array<rgba32float, write>;
+
+// Where pooled channel block `layer` is: a pooled value is a level below full resolution, so
+// carved into an arena's cells (params.carve_pool).
+fn pool_cell(layer: u32) -> vec3<u32> {
+    return carved(params.carve_pool, layer);
+}
+
+// Store pooled texel p of the block in the cell `at` (`pool_cell`).
+fn store_pool(p: vec2<u32>, at: vec3<u32>, v: vec4<f32>) {
+    textureStore(pooled, p + at.xy, at.z, v);
+}
 // The part of the input blocks this invocation sums (SPLIT > 1).
 var<private> part: u32;
 // This invocation's lane in its subgroup (LANES).
@@ -197,43 +208,44 @@ fn add_taps(acc: ptr<function, Tile>, m0: mat4x4<f32>, m1: mat4x4<f32>, m2: mat4
 // ic (x - 1 + ic) feeds output column 0 through tap kx = ic and output column 1 through
 // kx = ic - 1, so a 2-wide tile fetches 4 columns for 2 outputs instead of 6.
 fn accumulate(acc0: ptr<function, Tile>, acc1: ptr<function, Tile>, acc2: ptr<function, Tile>, acc3: ptr<function, Tile>, t: Source, mode: u32, layer: u32, cb: u32, w: u32, x: i32, y0: i32) {
+    let at = cell(mode, layer);
     for (var ic = 0u; ic < TW + 2u; ic++) {
         let sx = x + i32(ic) - 1;
         // Column ic of the (ROWS + 2)-row input window.
         let zero = vec4<f32>(0.0);
-        let v0 = fetch(t, mode, sx, y0 + -1, layer);
-        let v1 = fetch(t, mode, sx, y0 + 0, layer);
-        let v2 = fetch(t, mode, sx, y0 + 1, layer);
+        let v0 = fetch(t, mode, sx, y0 + -1, at);
+        let v1 = fetch(t, mode, sx, y0 + 0, at);
+        let v2 = fetch(t, mode, sx, y0 + 1, at);
         var v3 = zero;
-        if ROWS > 1u { v3 = fetch(t, mode, sx, y0 + 2, layer); }
+        if ROWS > 1u { v3 = fetch(t, mode, sx, y0 + 2, at); }
         var v4 = zero;
-        if ROWS > 2u { v4 = fetch(t, mode, sx, y0 + 3, layer); }
+        if ROWS > 2u { v4 = fetch(t, mode, sx, y0 + 3, at); }
         var v5 = zero;
-        if ROWS > 3u { v5 = fetch(t, mode, sx, y0 + 4, layer); }
+        if ROWS > 3u { v5 = fetch(t, mode, sx, y0 + 4, at); }
         var v6 = zero;
-        if ROWS > 4u { v6 = fetch(t, mode, sx, y0 + 5, layer); }
+        if ROWS > 4u { v6 = fetch(t, mode, sx, y0 + 5, at); }
         var v7 = zero;
-        if ROWS > 5u { v7 = fetch(t, mode, sx, y0 + 6, layer); }
+        if ROWS > 5u { v7 = fetch(t, mode, sx, y0 + 6, at); }
         var v8 = zero;
-        if ROWS > 6u { v8 = fetch(t, mode, sx, y0 + 7, layer); }
+        if ROWS > 6u { v8 = fetch(t, mode, sx, y0 + 7, at); }
         var v9 = zero;
-        if ROWS > 7u { v9 = fetch(t, mode, sx, y0 + 8, layer); }
+        if ROWS > 7u { v9 = fetch(t, mode, sx, y0 + 8, at); }
         var v10 = zero;
-        if ROWS > 8u { v10 = fetch(t, mode, sx, y0 + 9, layer); }
+        if ROWS > 8u { v10 = fetch(t, mode, sx, y0 + 9, at); }
         var v11 = zero;
-        if ROWS > 9u { v11 = fetch(t, mode, sx, y0 + 10, layer); }
+        if ROWS > 9u { v11 = fetch(t, mode, sx, y0 + 10, at); }
         var v12 = zero;
-        if ROWS > 10u { v12 = fetch(t, mode, sx, y0 + 11, layer); }
+        if ROWS > 10u { v12 = fetch(t, mode, sx, y0 + 11, at); }
         var v13 = zero;
-        if ROWS > 11u { v13 = fetch(t, mode, sx, y0 + 12, layer); }
+        if ROWS > 11u { v13 = fetch(t, mode, sx, y0 + 12, at); }
         var v14 = zero;
-        if ROWS > 12u { v14 = fetch(t, mode, sx, y0 + 13, layer); }
+        if ROWS > 12u { v14 = fetch(t, mode, sx, y0 + 13, at); }
         var v15 = zero;
-        if ROWS > 13u { v15 = fetch(t, mode, sx, y0 + 14, layer); }
+        if ROWS > 13u { v15 = fetch(t, mode, sx, y0 + 14, at); }
         var v16 = zero;
-        if ROWS > 14u { v16 = fetch(t, mode, sx, y0 + 15, layer); }
+        if ROWS > 14u { v16 = fetch(t, mode, sx, y0 + 15, at); }
         var v17 = zero;
-        if ROWS > 15u { v17 = fetch(t, mode, sx, y0 + 16, layer); }
+        if ROWS > 15u { v17 = fetch(t, mode, sx, y0 + 16, at); }
         // Tap (ky, kx) starts at w + ((cb * 9 + ky * 3 + kx) * 4) * OB.
         if ic < 3u {
             let base = w + (cb * 36u + ic * 4u) * OB;
@@ -267,33 +279,34 @@ fn accumulate(acc0: ptr<function, Tile>, acc1: ptr<function, Tile>, acc2: ptr<fu
 fn accumulate_rows(acc0: ptr<function, Tile>, acc1: ptr<function, Tile>, acc2: ptr<function, Tile>, acc3: ptr<function, Tile>, acc4: ptr<function, Tile>, acc5: ptr<function, Tile>, acc6: ptr<function, Tile>, acc7: ptr<function, Tile>, cb: u32, w: u32, x: i32, y0: i32) {}
 
 // One output: activated into dst, or (SPLIT > 1) this part's raw sum into `partial`.
-fn put(x: u32, y: u32, layer: u32, v: vec4<f32>) {
+fn put(x: u32, y: u32, layer: u32, at: vec3<u32>, v: vec4<f32>) {
     if SPLIT > 1u {
         partial[((part * params.cout4 + layer) * params.height + y) * params.width + x] = v;
     } else {
-        textureStore(dst, vec2<u32>(x, y), layer, activate(v));
+        store_dst(vec2<u32>(x, y), at, activate(v));
     }
 }
 
 fn store(acc: Tile, x: u32, y0: u32, layer: u32) {
     // Rows past the bottom edge are dropped.
     let h = params.height;
-    put(x, y0, layer, acc.r0);
-    if ROWS > 1u && y0 + 1u < h { put(x, y0 + 1u, layer, acc.r1); }
-    if ROWS > 2u && y0 + 2u < h { put(x, y0 + 2u, layer, acc.r2); }
-    if ROWS > 3u && y0 + 3u < h { put(x, y0 + 3u, layer, acc.r3); }
-    if ROWS > 4u && y0 + 4u < h { put(x, y0 + 4u, layer, acc.r4); }
-    if ROWS > 5u && y0 + 5u < h { put(x, y0 + 5u, layer, acc.r5); }
-    if ROWS > 6u && y0 + 6u < h { put(x, y0 + 6u, layer, acc.r6); }
-    if ROWS > 7u && y0 + 7u < h { put(x, y0 + 7u, layer, acc.r7); }
-    if ROWS > 8u && y0 + 8u < h { put(x, y0 + 8u, layer, acc.r8); }
-    if ROWS > 9u && y0 + 9u < h { put(x, y0 + 9u, layer, acc.r9); }
-    if ROWS > 10u && y0 + 10u < h { put(x, y0 + 10u, layer, acc.r10); }
-    if ROWS > 11u && y0 + 11u < h { put(x, y0 + 11u, layer, acc.r11); }
-    if ROWS > 12u && y0 + 12u < h { put(x, y0 + 12u, layer, acc.r12); }
-    if ROWS > 13u && y0 + 13u < h { put(x, y0 + 13u, layer, acc.r13); }
-    if ROWS > 14u && y0 + 14u < h { put(x, y0 + 14u, layer, acc.r14); }
-    if ROWS > 15u && y0 + 15u < h { put(x, y0 + 15u, layer, acc.r15); }
+    let at = dst_cell(layer);
+    put(x, y0, layer, at, acc.r0);
+    if ROWS > 1u && y0 + 1u < h { put(x, y0 + 1u, layer, at, acc.r1); }
+    if ROWS > 2u && y0 + 2u < h { put(x, y0 + 2u, layer, at, acc.r2); }
+    if ROWS > 3u && y0 + 3u < h { put(x, y0 + 3u, layer, at, acc.r3); }
+    if ROWS > 4u && y0 + 4u < h { put(x, y0 + 4u, layer, at, acc.r4); }
+    if ROWS > 5u && y0 + 5u < h { put(x, y0 + 5u, layer, at, acc.r5); }
+    if ROWS > 6u && y0 + 6u < h { put(x, y0 + 6u, layer, at, acc.r6); }
+    if ROWS > 7u && y0 + 7u < h { put(x, y0 + 7u, layer, at, acc.r7); }
+    if ROWS > 8u && y0 + 8u < h { put(x, y0 + 8u, layer, at, acc.r8); }
+    if ROWS > 9u && y0 + 9u < h { put(x, y0 + 9u, layer, at, acc.r9); }
+    if ROWS > 10u && y0 + 10u < h { put(x, y0 + 10u, layer, at, acc.r10); }
+    if ROWS > 11u && y0 + 11u < h { put(x, y0 + 11u, layer, at, acc.r11); }
+    if ROWS > 12u && y0 + 12u < h { put(x, y0 + 12u, layer, at, acc.r12); }
+    if ROWS > 13u && y0 + 13u < h { put(x, y0 + 13u, layer, at, acc.r13); }
+    if ROWS > 14u && y0 + 14u < h { put(x, y0 + 14u, layer, at, acc.r14); }
+    if ROWS > 15u && y0 + 15u < h { put(x, y0 + 15u, layer, at, acc.r15); }
 }
 
 // `pools`: one block's two columns `a` and `b` of rows y0 .. y0 + ROWS at columns x, x + 1,
@@ -304,14 +317,15 @@ fn store(acc: Tile, x: u32, y0: u32, layer: u32) {
 fn store_pooled(a: Tile, b: Tile, x: u32, y0: u32, layer: u32) {
     let h = params.height;
     let p = vec2<u32>(x / 2u, y0 / 2u);
-    textureStore(pooled, p, layer, activate(max(max(a.r0, a.r1), max(b.r0, b.r1))));
-    if ROWS > 2u && y0 + 2u < h { textureStore(pooled, p + vec2<u32>(0u, 1u), layer, activate(max(max(a.r2, a.r3), max(b.r2, b.r3)))); }
-    if ROWS > 4u && y0 + 4u < h { textureStore(pooled, p + vec2<u32>(0u, 2u), layer, activate(max(max(a.r4, a.r5), max(b.r4, b.r5)))); }
-    if ROWS > 6u && y0 + 6u < h { textureStore(pooled, p + vec2<u32>(0u, 3u), layer, activate(max(max(a.r6, a.r7), max(b.r6, b.r7)))); }
-    if ROWS > 8u && y0 + 8u < h { textureStore(pooled, p + vec2<u32>(0u, 4u), layer, activate(max(max(a.r8, a.r9), max(b.r8, b.r9)))); }
-    if ROWS > 10u && y0 + 10u < h { textureStore(pooled, p + vec2<u32>(0u, 5u), layer, activate(max(max(a.r10, a.r11), max(b.r10, b.r11)))); }
-    if ROWS > 12u && y0 + 12u < h { textureStore(pooled, p + vec2<u32>(0u, 6u), layer, activate(max(max(a.r12, a.r13), max(b.r12, b.r13)))); }
-    if ROWS > 14u && y0 + 14u < h { textureStore(pooled, p + vec2<u32>(0u, 7u), layer, activate(max(max(a.r14, a.r15), max(b.r14, b.r15)))); }
+    let at = pool_cell(layer);
+    store_pool(p, at, activate(max(max(a.r0, a.r1), max(b.r0, b.r1))));
+    if ROWS > 2u && y0 + 2u < h { store_pool(p + vec2<u32>(0u, 1u), at, activate(max(max(a.r2, a.r3), max(b.r2, b.r3)))); }
+    if ROWS > 4u && y0 + 4u < h { store_pool(p + vec2<u32>(0u, 2u), at, activate(max(max(a.r4, a.r5), max(b.r4, b.r5)))); }
+    if ROWS > 6u && y0 + 6u < h { store_pool(p + vec2<u32>(0u, 3u), at, activate(max(max(a.r6, a.r7), max(b.r6, b.r7)))); }
+    if ROWS > 8u && y0 + 8u < h { store_pool(p + vec2<u32>(0u, 4u), at, activate(max(max(a.r8, a.r9), max(b.r8, b.r9)))); }
+    if ROWS > 10u && y0 + 10u < h { store_pool(p + vec2<u32>(0u, 5u), at, activate(max(max(a.r10, a.r11), max(b.r10, b.r11)))); }
+    if ROWS > 12u && y0 + 12u < h { store_pool(p + vec2<u32>(0u, 6u), at, activate(max(max(a.r12, a.r13), max(b.r12, b.r13)))); }
+    if ROWS > 14u && y0 + 14u < h { store_pool(p + vec2<u32>(0u, 7u), at, activate(max(max(a.r14, a.r15), max(b.r14, b.r15)))); }
 }
 
 // Workgroup shape (64 invocations: 8 x 8, 16 x 4, 32 x 2 or 64 x 1; kernels::Tile::group_x):
@@ -467,7 +481,7 @@ fn reduce(@builtin(global_invocation_id) gid: vec3<u32>) {
     for (var p = 0u; p < SPLIT; p++) {
         sum += partial[((p * params.cout4 + gid.z) * params.height + gid.y) * params.width + gid.x];
     }
-    textureStore(dst, gid.xy, gid.z, activate(sum));
+    store_dst(gid.xy, dst_cell(gid.z), activate(sum));
 }
 
 // ---- Winograd F(2x2, 3x3): entry point `winograd` ----
@@ -509,11 +523,11 @@ fn quad_sub(a: Quad, b: Quad) -> Quad {
 }
 
 // Input row y at columns x - 1 .. x + 2, times B (B^T = [1 0 -1 0; 0 1 1 0; 0 -1 1 0; 0 1 0 -1]).
-fn wino_row(t: Source, mode: u32, x: i32, y: i32, layer: u32) -> Quad {
-    let d0 = fetch(t, mode, x - 1, y, layer);
-    let d1 = fetch(t, mode, x, y, layer);
-    let d2 = fetch(t, mode, x + 1, y, layer);
-    let d3 = fetch(t, mode, x + 2, y, layer);
+fn wino_row(t: Source, mode: u32, x: i32, y: i32, at: vec3<u32>) -> Quad {
+    let d0 = fetch(t, mode, x - 1, y, at);
+    let d1 = fetch(t, mode, x, y, at);
+    let d2 = fetch(t, mode, x + 1, y, at);
+    let d3 = fetch(t, mode, x + 2, y, at);
     return Quad(d0 - d2, d1 + d2, d2 - d1, d1 - d3);
 }
 
@@ -556,15 +570,16 @@ fn wino_tile(a: ptr<function, Wino>, b: ptr<function, Wino>, base: u32, j: u32, 
 // (x, y0): the upper tile in m0 (block 0) and m1 (block 1), the lower (ROWS = 4) in m2 and m3.
 fn wino_accumulate(m0: ptr<function, Wino>, m1: ptr<function, Wino>, m2: ptr<function, Wino>, m3: ptr<function, Wino>, t: Source, mode: u32, layer: u32, cb: u32, w: u32, x: i32, y0: i32) {
     let base = w + cb * 64u * OB;
-    let e0 = wino_row(t, mode, x, y0 - 1, layer);
-    let e1 = wino_row(t, mode, x, y0, layer);
-    let e2 = wino_row(t, mode, x, y0 + 1, layer);
-    let e3 = wino_row(t, mode, x, y0 + 2, layer);
+    let at = cell(mode, layer);
+    let e0 = wino_row(t, mode, x, y0 - 1, at);
+    let e1 = wino_row(t, mode, x, y0, at);
+    let e2 = wino_row(t, mode, x, y0 + 1, at);
+    let e3 = wino_row(t, mode, x, y0 + 2, at);
     let v = wino_v(e0, e1, e2, e3);
     var u = v;
     if ROWS > 2u {
-        let e4 = wino_row(t, mode, x, y0 + 3, layer);
-        let e5 = wino_row(t, mode, x, y0 + 4, layer);
+        let e4 = wino_row(t, mode, x, y0 + 3, at);
+        let e5 = wino_row(t, mode, x, y0 + 4, at);
         u = wino_v(e2, e3, e4, e5);
     }
     wino_tile(m0, m2, base, 0u, v, u);
@@ -592,14 +607,15 @@ fn wino_store(m: Wino, bias: vec4<f32>, x: u32, y0: u32, layer: u32) {
     let o10 = bias + s10 - s20 - s30;
     let o11 = bias + s11 - s21 - s31;
     let right = x + 1u < params.width;
-    textureStore(dst, vec2<u32>(x, y0), layer, activate(o00));
-    if right { textureStore(dst, vec2<u32>(x + 1u, y0), layer, activate(o01)); }
+    let at = dst_cell(layer);
+    store_dst(vec2<u32>(x, y0), at, activate(o00));
+    if right { store_dst(vec2<u32>(x + 1u, y0), at, activate(o01)); }
     if y0 + 1u < params.height {
-        textureStore(dst, vec2<u32>(x, y0 + 1u), layer, activate(o10));
-        if right { textureStore(dst, vec2<u32>(x + 1u, y0 + 1u), layer, activate(o11)); }
+        store_dst(vec2<u32>(x, y0 + 1u), at, activate(o10));
+        if right { store_dst(vec2<u32>(x + 1u, y0 + 1u), at, activate(o11)); }
     }
     if pools() {
-        textureStore(pooled, vec2<u32>(x / 2u, y0 / 2u), layer, activate(max(max(o00, o01), max(o10, o11))));
+        store_pool(vec2<u32>(x / 2u, y0 / 2u), pool_cell(layer), activate(max(max(o00, o01), max(o10, o11))));
     }
 }
 

@@ -108,9 +108,9 @@ fn window_source(i: u32, c: u32, x0: u32, y0: u32) -> vec4<f32> {
     let ib = 4u * c + j;
     var v = vec4<f32>(0.0);
     if ib < params.cin4_a {
-        v = fetch(src_a, MODE_A, x, y, ib);
+        v = fetch(src_a, MODE_A, x, y, cell(MODE_A, ib));
     } else if SOURCE_B && ib < params.cin4_a + params.cin4_b {
-        v = fetch(src_b, MODE_B, x, y, ib - params.cin4_a);
+        v = fetch(src_b, MODE_B, x, y, cell(MODE_B, ib - params.cin4_a));
     }
     return v;
 }
@@ -213,7 +213,7 @@ fn emit(sg: u32, lane: u32, mt: u32, nt: u32, x0: u32, y0: u32, z: u32) {
             let bias_lo = bias_at + 16u * NT + n;
             let lo = vec4<f32>(f32(weights[bias_lo]), f32(weights[bias_lo + 1u]), f32(weights[bias_lo + 2u]), f32(weights[bias_lo + 3u]));
             let v = vec4<f32>(stage[s], stage[s + 1u], stage[s + 2u], stage[s + 3u]) + (hi + lo);
-            textureStore(dst, vec2<u32>(x, y), block, activate(v));
+            store_dst(vec2<u32>(x, y), dst_cell(block), activate(v));
         }
     }
 }

@@ -18,18 +18,18 @@ struct Column {
     v9: vec4<f32>,
 }
 
-fn column(t: Source, mode: u32, x: i32, y0: i32, layer: u32) -> Column {
+fn column(t: Source, mode: u32, x: i32, y0: i32, at: vec3<u32>) -> Column {
     var c: Column;
-    c.v0 = fetch(t, mode, x, y0 + -1, layer);
-    c.v1 = fetch(t, mode, x, y0 + 0, layer);
-    c.v2 = fetch(t, mode, x, y0 + 1, layer);
-    if ROWS > 1u { c.v3 = fetch(t, mode, x, y0 + 2, layer); }
-    if ROWS > 2u { c.v4 = fetch(t, mode, x, y0 + 3, layer); }
-    if ROWS > 3u { c.v5 = fetch(t, mode, x, y0 + 4, layer); }
-    if ROWS > 4u { c.v6 = fetch(t, mode, x, y0 + 5, layer); }
-    if ROWS > 5u { c.v7 = fetch(t, mode, x, y0 + 6, layer); }
-    if ROWS > 6u { c.v8 = fetch(t, mode, x, y0 + 7, layer); }
-    if ROWS > 7u { c.v9 = fetch(t, mode, x, y0 + 8, layer); }
+    c.v0 = fetch(t, mode, x, y0 + -1, at);
+    c.v1 = fetch(t, mode, x, y0 + 0, at);
+    c.v2 = fetch(t, mode, x, y0 + 1, at);
+    if ROWS > 1u { c.v3 = fetch(t, mode, x, y0 + 2, at); }
+    if ROWS > 2u { c.v4 = fetch(t, mode, x, y0 + 3, at); }
+    if ROWS > 3u { c.v5 = fetch(t, mode, x, y0 + 4, at); }
+    if ROWS > 4u { c.v6 = fetch(t, mode, x, y0 + 5, at); }
+    if ROWS > 5u { c.v7 = fetch(t, mode, x, y0 + 6, at); }
+    if ROWS > 6u { c.v8 = fetch(t, mode, x, y0 + 7, at); }
+    if ROWS > 7u { c.v9 = fetch(t, mode, x, y0 + 8, at); }
     return c;
 }
 
@@ -48,10 +48,11 @@ struct Window4 {
 fn window4(cb: u32, x: i32, y0: i32) -> Window4 {
     var k: Window4;
     if !SOURCE_B || cb < params.cin4_a {
-        k = Window4(column(src_a, MODE_A, x - 1, y0, cb), column(src_a, MODE_A, x, y0, cb), column(src_a, MODE_A, x + 1, y0, cb), column(src_a, MODE_A, x + 2, y0, cb));
+        let at = cell(MODE_A, cb);
+        k = Window4(column(src_a, MODE_A, x - 1, y0, at), column(src_a, MODE_A, x, y0, at), column(src_a, MODE_A, x + 1, y0, at), column(src_a, MODE_A, x + 2, y0, at));
     } else {
-        let l = cb - params.cin4_a;
-        k = Window4(column(src_b, MODE_B, x - 1, y0, l), column(src_b, MODE_B, x, y0, l), column(src_b, MODE_B, x + 1, y0, l), column(src_b, MODE_B, x + 2, y0, l));
+        let at = cell(MODE_B, cb - params.cin4_a);
+        k = Window4(column(src_b, MODE_B, x - 1, y0, at), column(src_b, MODE_B, x, y0, at), column(src_b, MODE_B, x + 1, y0, at), column(src_b, MODE_B, x + 2, y0, at));
     }
     return k;
 }

@@ -129,18 +129,20 @@ fn wino4_store(m: Wino6, bias: vec4<f32>, x: u32, y0: u32, layer: u32) {
     let o2 = hex_a(s0.c2, s1.c2, s2.c2, s3.c2, s4.c2, s5.c2);
     let o3 = hex_a(s0.c3, s1.c3, s2.c3, s3.c3, s4.c3, s5.c3);
     let h = params.height;
-    wino4_row(x, y0, layer, bias + o0.c0, bias + o1.c0, bias + o2.c0, bias + o3.c0);
-    if y0 + 1u < h { wino4_row(x, y0 + 1u, layer, bias + o0.c1, bias + o1.c1, bias + o2.c1, bias + o3.c1); }
-    if y0 + 2u < h { wino4_row(x, y0 + 2u, layer, bias + o0.c2, bias + o1.c2, bias + o2.c2, bias + o3.c2); }
-    if y0 + 3u < h { wino4_row(x, y0 + 3u, layer, bias + o0.c3, bias + o1.c3, bias + o2.c3, bias + o3.c3); }
+    let at = dst_cell(layer);
+    wino4_row(x, y0, layer, at, bias + o0.c0, bias + o1.c0, bias + o2.c0, bias + o3.c0);
+    if y0 + 1u < h { wino4_row(x, y0 + 1u, layer, at, bias + o0.c1, bias + o1.c1, bias + o2.c1, bias + o3.c1); }
+    if y0 + 2u < h { wino4_row(x, y0 + 2u, layer, at, bias + o0.c2, bias + o1.c2, bias + o2.c2, bias + o3.c2); }
+    if y0 + 3u < h { wino4_row(x, y0 + 3u, layer, at, bias + o0.c3, bias + o1.c3, bias + o2.c3, bias + o3.c3); }
     if pools() {
         let p = vec2<u32>(x / 2u, y0 / 2u);
         let right = x + 2u < params.width;
-        textureStore(pooled, p, layer, activate(bias + max(max(o0.c0, o1.c0), max(o0.c1, o1.c1))));
-        if right { textureStore(pooled, p + vec2<u32>(1u, 0u), layer, activate(bias + max(max(o2.c0, o3.c0), max(o2.c1, o3.c1)))); }
+        let pat = pool_cell(layer);
+        store_pool(p, pat, activate(bias + max(max(o0.c0, o1.c0), max(o0.c1, o1.c1))));
+        if right { store_pool(p + vec2<u32>(1u, 0u), pat, activate(bias + max(max(o2.c0, o3.c0), max(o2.c1, o3.c1)))); }
         if y0 + 2u < h {
-            textureStore(pooled, p + vec2<u32>(0u, 1u), layer, activate(bias + max(max(o0.c2, o1.c2), max(o0.c3, o1.c3))));
-            if right { textureStore(pooled, p + vec2<u32>(1u, 1u), layer, activate(bias + max(max(o2.c2, o3.c2), max(o2.c3, o3.c3)))); }
+            store_pool(p + vec2<u32>(0u, 1u), pat, activate(bias + max(max(o0.c2, o1.c2), max(o0.c3, o1.c3))));
+            if right { store_pool(p + vec2<u32>(1u, 1u), pat, activate(bias + max(max(o2.c2, o3.c2), max(o2.c3, o3.c3)))); }
         }
     }
 }
@@ -161,17 +163,18 @@ fn stage_row(i: u32, a: vec4<f32>, b: vec4<f32>, c: vec4<f32>, d: vec4<f32>) {
     partial[i + 3u] = d;
 }
 
-// One output row of a 4x4 tile at (x .. x + 3, y), columns past the right edge dropped.
-fn wino4_row(x: u32, y: u32, layer: u32, a: vec4<f32>, b: vec4<f32>, c: vec4<f32>, d: vec4<f32>) {
+// One output row of a 4x4 tile at (x .. x + 3, y) of block `layer` (its cell `at`), columns past
+// the right edge dropped.
+fn wino4_row(x: u32, y: u32, layer: u32, at: vec3<u32>, a: vec4<f32>, b: vec4<f32>, c: vec4<f32>, d: vec4<f32>) {
     let w = params.width;
     if OUT_BUFFER {
         // A staged level is a multiple of 16 wide, so the row's four pixels are inside.
         stage_row((layer * params.height + y) * w + x, activate(a), activate(b), activate(c), activate(d));
     } else {
-        textureStore(dst, vec2<u32>(x, y), layer, activate(a));
-        if x + 1u < w { textureStore(dst, vec2<u32>(x + 1u, y), layer, activate(b)); }
-        if x + 2u < w { textureStore(dst, vec2<u32>(x + 2u, y), layer, activate(c)); }
-        if x + 3u < w { textureStore(dst, vec2<u32>(x + 3u, y), layer, activate(d)); }
+        store_dst(vec2<u32>(x, y), at, activate(a));
+        if x + 1u < w { store_dst(vec2<u32>(x + 1u, y), at, activate(b)); }
+        if x + 2u < w { store_dst(vec2<u32>(x + 2u, y), at, activate(c)); }
+        if x + 3u < w { store_dst(vec2<u32>(x + 3u, y), at, activate(d)); }
     }
 }
 
@@ -186,7 +189,8 @@ struct Window6 {
 }
 
 fn window6(t: Source, mode: u32, layer: u32, x: i32, y0: i32) -> Window6 {
-    return Window6(column(t, mode, x - 1, y0, layer), column(t, mode, x, y0, layer), column(t, mode, x + 1, y0, layer), column(t, mode, x + 2, y0, layer), column(t, mode, x + 3, y0, layer), column(t, mode, x + 4, y0, layer));
+    let at = cell(mode, layer);
+    return Window6(column(t, mode, x - 1, y0, at), column(t, mode, x, y0, at), column(t, mode, x + 1, y0, at), column(t, mode, x + 2, y0, at), column(t, mode, x + 3, y0, at), column(t, mode, x + 4, y0, at));
 }
 
 // Add input block `cb` of cat(a, b) (source a's block cb, or source b's block cb - cin4_a) to

@@ -7,9 +7,16 @@ const READ_DIRECT: u32 = 0u;        // src[x, y]
 const READ_POOL: u32 = 1u;          // max of src[2x + i, 2y + j]          (src at 2x resolution)
 const READ_UPSAMPLE: u32 = 2u;      // src[x / 2, y / 2]                   (src at 1/2 resolution)
 const READ_POOL_UPSAMPLE: u32 = 3u; // upsample(pool(src)): max of the 2x2 block holding (x, y)
+// MODE_A and MODE_B hold the read mode in bits 0-1 and two flags: CARVED, the source is a
+// value carved into the cells of an arena below the arena's resolution (carve.wgsl), so its
+// fetches test the level's bounds; and FROM_B, the mode is source b's (so `cell` takes
+// params.carve_b).
+const READ_MODE: u32 = 3u;
+const CARVED: u32 = 4u;
+const FROM_B: u32 = 8u;
 
 override MODE_A: u32 = 0u;
-override MODE_B: u32 = 0u;
+override MODE_B: u32 = 8u;
 override LEAKY: bool = true;
 // The conv reads a source b (a concatenation). Half the convs read one source: without the
 // second input-block loop their kernels carry half the multiply-add code, which lavapipe
@@ -35,6 +42,11 @@ struct Params {
     group_stride: u32,// vec4s from one group's weights to the next (group z at z * group_stride)
     weight_texel: u32,// winograd_lanes, winograd4_lanes: the weight texel of group z = 0 (conv3x3_wino4.wgsl)
     pool_out: u32,    // 1: the conv writes its output max-pooled too (conv3x3.wgsl's `pools`)
+    _pad: u32,
+    carve_a: vec4<u32>,   // where source a's cells are (carve.wgsl; level 0: as bound)
+    carve_b: vec4<u32>,
+    carve_dst: vec4<u32>,
+    carve_pool: vec4<u32>,
 }
 
 // The conv's bindings but its weights (binding 3, declared by each kernel).
@@ -49,16 +61,30 @@ struct Params {
 // mip-level set-up.
 alias Source = texture_2d_array<f32>;
 
-// One texel of a source.
-fn load(t: Source, p: vec2<i32>, layer: u32) -> vec4<f32> {
+// One texel of a texture.
+fn texel(t: Source, p: vec2<i32>, layer: u32) -> vec4<f32> {
     return textureLoad(t, p, layer, 0);
 }
 
-fn max4(t: Source, p: vec2<i32>, layer: u32) -> vec4<f32> {
-    let a = load(t, p, layer);
-    let b = load(t, p + vec2<i32>(1, 0), layer);
-    let c = load(t, p + vec2<i32>(0, 1), layer);
-    let d = load(t, p + vec2<i32>(1, 1), layer);
+// Where channel block `layer` of the source read in `mode` (its FROM_B bit) is: its cell's
+// top-left texel (x, y) and arena layer (z) (carve.wgsl). A value bound as it is has the carve
+// of level 0 and first cell 0: (0, 0, layer). The kernels find it once per block, outside the
+// windows of fetches that read the block: lavapipe compiles a pipeline whose every fetch found
+// it in about 3x the time.
+fn cell(mode: u32, layer: u32) -> vec3<u32> {
+    return carved(select(params.carve_a, params.carve_b, (mode & FROM_B) != 0u), layer);
+}
+
+// One texel of a source at pixel p of its level, in the cell `at`.
+fn load(t: Source, p: vec2<i32>, at: vec3<u32>) -> vec4<f32> {
+    return texel(t, p + vec2<i32>(at.xy), at.z);
+}
+
+fn max4(t: Source, p: vec2<i32>, at: vec3<u32>) -> vec4<f32> {
+    let a = load(t, p, at);
+    let b = load(t, p + vec2<i32>(1, 0), at);
+    let c = load(t, p + vec2<i32>(0, 1), at);
+    let d = load(t, p + vec2<i32>(1, 1), at);
     return max(max(a, b), max(c, d));
 }
 
@@ -71,22 +97,34 @@ fn max4(t: Source, p: vec2<i32>, layer: u32) -> vec4<f32> {
 // runs the test's compares and masks on each fetch (`docs/perf/lavapipe-2026-12-02-s28.log`).
 override OOB_ZERO: bool = false;
 
-// One channel block of a source at output-resolution pixel (x, y); zero outside (padding 1).
-fn fetch(t: Source, mode: u32, x: i32, y: i32, layer: u32) -> vec4<f32> {
-    if !OOB_ZERO && (x < 0 || y < 0 || x >= i32(params.width) || y >= i32(params.height)) {
+// One channel block of a source at output-resolution pixel (x, y), the block in the cell `at`
+// (`cell`); zero outside (padding 1). Outside a carved source's cell lies another cell, never
+// zero: its fetches always test.
+fn fetch(t: Source, mode: u32, x: i32, y: i32, at: vec3<u32>) -> vec4<f32> {
+    if (!OOB_ZERO || (mode & CARVED) != 0u) && (x < 0 || y < 0 || x >= i32(params.width) || y >= i32(params.height)) {
         return vec4<f32>(0.0);
     }
-    return read_at(t, mode, x, y, layer);
+    return read_at(t, mode, x, y, at);
 }
 
 // `fetch` at a pixel (x, y) inside the level, without the test.
-fn read_at(t: Source, mode: u32, x: i32, y: i32, layer: u32) -> vec4<f32> {
-    switch mode {
-        case READ_POOL: { return max4(t, vec2<i32>(2 * x, 2 * y), layer); }
-        case READ_UPSAMPLE: { return load(t, vec2<i32>(x >> 1u, y >> 1u), layer); }
-        case READ_POOL_UPSAMPLE: { return max4(t, vec2<i32>(x & ~1, y & ~1), layer); }
-        default: { return load(t, vec2<i32>(x, y), layer); }
+fn read_at(t: Source, mode: u32, x: i32, y: i32, at: vec3<u32>) -> vec4<f32> {
+    switch mode & READ_MODE {
+        case READ_POOL: { return max4(t, vec2<i32>(2 * x, 2 * y), at); }
+        case READ_UPSAMPLE: { return load(t, vec2<i32>(x >> 1u, y >> 1u), at); }
+        case READ_POOL_UPSAMPLE: { return max4(t, vec2<i32>(x & ~1, y & ~1), at); }
+        default: { return load(t, vec2<i32>(x, y), at); }
     }
+}
+
+// Where output channel block `layer` is (as `cell` finds a source's), found once per block.
+fn dst_cell(layer: u32) -> vec3<u32> {
+    return carved(params.carve_dst, layer);
+}
+
+// Store output texel p of the block in the cell `at` (`dst_cell`).
+fn store_dst(p: vec2<u32>, at: vec3<u32>, v: vec4<f32>) {
+    textureStore(dst, p + at.xy, at.z, v);
 }
 
 // The condition of a loop that runs its body once, `loop { ... continuing { break if once(); } }`,

@@ -246,7 +246,7 @@ fn staged_outputs_are_the_unstaged_ones_bit_for_bit() {
                 let mut pass = enc.begin_compute_pass(&Default::default());
                 plan.record(&mut pass, 0, false, &group);
             }
-            plan.copy_staged(&mut enc, 0, &out);
+            plan.copy_staged(&mut enc, 0, &out, |j| wgpu::Origin3d { x: 0, y: 0, z: j });
             g.queue.submit(Some(enc.finish()));
             (read_texture(dev, &g.queue, &out).unwrap(), read_texture(dev, &g.queue, &pooled).unwrap())
         })

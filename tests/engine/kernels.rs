@@ -4,8 +4,8 @@
 
 use rae_core::cpu::{self, Chw};
 use rae_core::denoiser::read_texture;
-use rae_core::graph::Read;
-use rae_core::kernels::{self, ConvPlan, ConvSpec, Kernels, SourceAccess, Tile, WeightMemory, blocks};
+use rae_core::graph::{Place, Read};
+use rae_core::kernels::{self, Carve, ConvPlan, ConvSpec, Kernels, SourceAccess, Tile, WeightMemory, blocks};
 use wgpu::util::DeviceExt;
 
 use crate::{Tolerance, gpu};
@@ -143,6 +143,7 @@ pub(crate) fn gpu_conv_pooled(
         slope: 0.1,
         b_is_hidden: false,
         pooled,
+        carves: [Carve::NONE; 4],
     };
     let plan = ConvPlan::with_sources(dev, &g.queue, &mut kernels, &[spec], &[tile], &[sources]).unwrap();
     assert_eq!(plan.sources(), [sources]);
@@ -531,6 +532,7 @@ pub(crate) fn one_source_spec<'a>(name: &'a str, width: u32, height: u32, ca: us
         slope: 0.1,
         b_is_hidden: false,
         pooled: false,
+        carves: [Carve::NONE; 4],
     }
 }
 
@@ -758,4 +760,141 @@ fn conv_too_wide_for_a_weight_chunk_is_an_error() {
     let err =
         ConvPlan::new(&g.device, &g.queue, &mut kernels, &[spec], &[Tile::default()]).err().expect("460 channels do not fit").to_string();
     assert!(err.contains("d1.l1.0") && err.contains("460"), "{err}");
+}
+
+#[test]
+fn carved_values_are_read_and_written_in_their_cells_only() {
+    // A conv at level 1 of 64x40 arenas (cells of 32x20 at level 1, 16x10 at level 2) over
+    // cat(upsample(a), b), both carved into one arena whose other texels hold large values
+    // (a fetch outside a cell, or the padding read from a neighbour, shows), writing its
+    // output and its pooled output into the cells of two others, whose other texels must stay
+    // as they were. Bit for bit what the same conv computes over textures of their own, for
+    // the CPU drivers' tiles (the F(4x4) one staged, as on lavapipe, and copied cell by cell)
+    // and a direct one, with the kernels reading their padding from outside the textures where
+    // the device allows it (as a Denoiser's do).
+    let g = gpu();
+    let dev = &g.device;
+    let (aw, ah) = (64u32, 40u32);
+    let (w, h) = ((aw >> 1) as usize, (ah >> 1) as usize);
+    let (ca, cb, cout) = (6, 9, 7);
+    let a = Chw { c: ca, h: h / 2, w: w / 2, data: noise(ca * h * w / 4, 81) };
+    let b = Chw { c: cb, h, w, data: noise(cb * h * w, 82) };
+    let weight: Vec<f32> = noise(cout * (ca + cb) * 9, 83).iter().map(|v| v * 0.3).collect();
+    let bias = noise(cout, 84);
+    let place = |arena, level, first, channels: usize| Place { arena, level, first, blocks: blocks(channels) };
+    let (pa, pb, pout, ppool) = (place(0, 2, 5, ca), place(0, 1, 3, cb), place(1, 1, 2, cout), place(2, 2, 13, cout));
+    let layers = |places: &[Place]| places.iter().map(|p| (p.first + p.blocks - 1) >> (2 * p.level)).max().unwrap() + 1;
+    // An arena's texels with the places' values in their cells over `fill` elsewhere.
+    let arena = |places: &[(Place, &Chw)], layers: u32, fill: &dyn Fn(usize) -> f32, pad: f32| {
+        let mut data: Vec<f32> = (0..layers as usize * (aw * ah) as usize * 4).map(fill).collect();
+        // The channels that pad a value's last block are `pad`: zero in a source, as a conv
+        // writes them; NaN in an expected output, which `check` skips.
+        for (p, t) in places {
+            for c in 0..4 * blocks(t.c) as usize {
+                let (x0, y0, layer) = p.cell(c as u32 / 4, aw, ah);
+                for y in 0..t.h {
+                    for x in 0..t.w {
+                        let texel = (layer as usize * ah as usize + y0 as usize + y) * aw as usize + x0 as usize + x;
+                        data[texel * 4 + c % 4] = if c < t.c { t.data[(c * t.h + y) * t.w + x] } else { pad };
+                    }
+                }
+            }
+        }
+        data
+    };
+    let texture = |data: &[f32], layers: u32| {
+        dev.create_texture_with_data(
+            &g.queue,
+            &wgpu::TextureDescriptor {
+                label: None,
+                size: wgpu::Extent3d { width: aw, height: ah, depth_or_array_layers: layers },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: kernels::ACTIVATION_FORMAT,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING
+                    | wgpu::TextureUsages::STORAGE_BINDING
+                    | wgpu::TextureUsages::COPY_SRC
+                    | wgpu::TextureUsages::COPY_DST,
+                view_formats: &[],
+            },
+            wgpu::util::TextureDataOrder::LayerMajor,
+            bytemuck::cast_slice(data),
+        )
+    };
+    let big = noise(layers(&[pa, pb]) as usize * (aw * ah) as usize * 4, 85);
+    let sources = texture(&arena(&[(pa, &a), (pb, &b)], layers(&[pa, pb]), &|i| 1e4 * big[i], 0.0), layers(&[pa, pb]));
+    let lanes = kernels::lanes_supported(dev);
+    let tiles =
+        [Some(Tile::default()), lanes.then_some(Tile::CPU_LANES), kernels::winograd_lanes_supported(dev).then_some(Tile::CPU_WINOGRAD4)];
+    for tile in tiles.into_iter().flatten() {
+        let access = SourceAccess::for_device(dev);
+        let (want, want_pooled) = gpu_conv_pooled(
+            (&a, Read::Upsample),
+            Some((&b, Read::Direct)),
+            &weight,
+            &bias,
+            true,
+            w,
+            h,
+            tile,
+            WeightMemory::Storage,
+            access,
+            true,
+        );
+        let mut k = Kernels::with_sources(dev, kernels::Precision::F32, WeightMemory::Storage, access);
+        k.pad_from_bounds();
+        let staged = tile == Tile::CPU_WINOGRAD4;
+        if staged {
+            k.stage_outputs();
+        }
+        let carve = |p: &Place| Carve::of(p, aw, ah);
+        let spec = ConvSpec {
+            name: "carved",
+            width: w as u32,
+            height: h as u32,
+            ca,
+            cb,
+            cout,
+            weight: &weight,
+            bias: &bias,
+            read_a: Read::Upsample,
+            read_b: Read::Direct,
+            leaky: true,
+            slope: 0.1,
+            b_is_hidden: false,
+            pooled: true,
+            carves: [carve(&pa), carve(&pb), carve(&pout), carve(&ppool)],
+        };
+        let plan = ConvPlan::with_sources(dev, &g.queue, &mut k, &[spec], &[tile], &[access]).unwrap();
+        assert_eq!(plan.staged(0), staged, "{tile}");
+        let sentinel = |_| 7.0;
+        let (out_layers, pool_layers) = (layers(&[pout]), layers(&[ppool]));
+        let out = texture(&arena(&[], out_layers, &sentinel, 0.0), out_layers);
+        let pooled = texture(&arena(&[], pool_layers, &sentinel, 0.0), pool_layers);
+        let group =
+            plan.bind_group(dev, &k, 0, &array_view(&sources), &array_view(&sources), &array_view(&out), Some(&array_view(&pooled)));
+        let mut enc = dev.create_command_encoder(&Default::default());
+        {
+            let mut pass = enc.begin_compute_pass(&Default::default());
+            plan.record(&mut pass, 0, false, &group);
+        }
+        plan.copy_staged(&mut enc, 0, &out, |j| {
+            let (x, y, z) = pout.cell(j, aw, ah);
+            wgpu::Origin3d { x, y, z }
+        });
+        g.queue.submit(Some(enc.finish()));
+        // Each texel read back: the value of `t` where a cell of `p` holds it, else 7.
+        let check = |texture: &wgpu::Texture, p: &Place, t: &Chw, what: &str| {
+            let got = read_texture(dev, &g.queue, texture).unwrap();
+            let expected = arena(&[(*p, t)], layers(&[*p]), &sentinel, f32::NAN);
+            let wrong: Vec<usize> =
+                (0..got.len()).filter(|&i| !expected[i].is_nan() && got[i].to_bits() != expected[i].to_bits()).collect();
+            assert!(wrong.is_empty(), "{tile} {what}: {} of {} texels differ, first at {:?}", wrong.len(), got.len(), wrong.first());
+        };
+        check(&out, &pout, &want, "output");
+        if plan.pools(0) {
+            check(&pooled, &ppool, &want_pooled.expect("the uncarved conv pools too"), "pooled output");
+        }
+    }
 }

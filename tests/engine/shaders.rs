@@ -19,7 +19,7 @@ fn every_shader_validates_with_naga() {
     // The sources as written (conv3x3_rows.wgsl, conv3x3_wino.wgsl and conv3x3_wino4.wgsl inside conv3x3.wgsl,
     // the only way they are used), and the rewrites kernels::Kernels::new makes (f16 storage textures, storage-buffer
     // weights, storage-texture sources, 64-bit staged stores; no subgroups, validated without the capability).
-    // The conv kernels as modules are made: with conv_common.wgsl appended.
+    // The conv kernels as modules are made: with conv_common.wgsl and carve.wgsl appended.
     let conv = conv_module_source("conv3x3");
     let conv = conv.as_str();
     assert!(conv.contains(UNIFORM_WEIGHTS), "the weight declaration Kernels::new rewrites");
@@ -94,6 +94,7 @@ fn every_shader_validates_with_naga() {
                 "conv3x3_mma_coop",
                 "conv_common",
                 "input_policy",
+                "carve",
             ]
             .contains(n)
         })

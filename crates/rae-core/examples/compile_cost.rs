@@ -14,7 +14,7 @@ use std::time::Instant;
 
 use rae_core::Gpu;
 use rae_core::graph::Read;
-use rae_core::kernels::{self, ConvPlan, ConvSpec, Kernels, Tile, WeightMemory, blocks};
+use rae_core::kernels::{self, Carve, ConvPlan, ConvSpec, Kernels, Tile, WeightMemory, blocks};
 
 /// A `w` x `h` activation texture of `channels`, viewed as the array a conv binds.
 fn activation_view(device: &wgpu::Device, w: u32, h: u32, channels: usize) -> wgpu::TextureView {
@@ -61,6 +61,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             slope: 0.1,
             b_is_hidden: false,
             pooled: false,
+            carves: [Carve::NONE; 4],
         };
         let t0 = Instant::now();
         let plan = ConvPlan::new(&g.device, &g.queue, &mut k, &[spec], &[tile])?;

@@ -212,35 +212,144 @@ impl Graph {
             .unwrap_or((hidden, 0))
     }
 
-    /// Map temporaries onto as few physical buffers as their lifetimes allow.
-    ///
-    /// Returns, per temporary, the index of its slot, and per slot its (level, channels). A slot
-    /// is reused only at the same level once its last reader has run; the node that reads a
-    /// value never writes into that value's slot (it is bound for reading in the same dispatch).
-    pub fn allocate_temps(&self) -> (Vec<usize>, Vec<(usize, usize)>) {
-        let mut slots: Vec<(usize, usize)> = Vec::new();
-        let mut busy_until: Vec<usize> = Vec::new();
-        let mut assign = vec![usize::MAX; self.temps.len()];
-        for (t, info) in self.temps.iter().enumerate() {
-            // Free: slots whose last reader ran before this temp's writer.
-            let candidate = (0..slots.len())
-                .filter(|&s| slots[s].0 == info.level && busy_until[s] < info.def)
-                .min_by_key(|&s| (slots[s].1 < info.channels, slots[s].1.abs_diff(info.channels)));
-            let s = match candidate {
-                Some(s) => {
-                    slots[s].1 = slots[s].1.max(info.channels);
-                    s
+    /// Where every value that lives within a frame (the input, the temporaries, the pooled
+    /// values) is kept: packed by lifetime into arenas, full-resolution texture arrays that
+    /// values of every level share ([`Place`]). Greedy in the order the values are written:
+    /// each takes the lowest free cells of the arena it grows least, never an arena that the
+    /// node writing it reads (a dispatch does not read and write one texture). Every block's
+    /// hidden state, kept between frames, has a texture of its own.
+    pub fn place(&self) -> Placement {
+        let reads = |n: &ConvNode, v: Value| n.a.value == v || n.b.is_some_and(|b| b.value == v);
+        let last_reader = |v: Value, from: usize| self.nodes.iter().rposition(|n| reads(n, v)).unwrap_or(from).max(from);
+        let item = |value, level, channels: usize, def: usize, last| {
+            // The node that writes the value (the input's reader, for the input) reads these.
+            let n = &self.nodes[def];
+            let writer_reads = if value == Value::Input { [None, None] } else { [Some(n.a.value), n.b.map(|b| b.value)] };
+            Lived { value, level, blocks: channels.div_ceil(4) as u32, def, last, writer_reads }
+        };
+        let mut items = vec![item(Value::Input, 0, self.in_channels, 0, last_reader(Value::Input, 0))];
+        items.extend(self.temps.iter().enumerate().map(|(t, i)| item(Value::Temp(t), i.level, i.channels, i.def, i.last_use)));
+        items.extend(self.pools.iter().enumerate().map(|(k, p)| {
+            let v = Value::Pooled(k);
+            item(v, p.level, p.channels, p.after, last_reader(v, p.after))
+        }));
+        items.sort_by_key(|item| item.def);
+        // Addresses count cells of the deepest level placed: a cell of level l is 4^(finest - l)
+        // of them, and starts at a multiple of that (a Morton-ordered grid nests).
+        let finest = items.iter().map(|item| item.level).max().unwrap_or(0);
+        let cell = |level: usize| 1u64 << (2 * (finest - level));
+        // Per item: its arena and its first and end addresses.
+        let mut placed: Vec<(usize, u64, u64)> = Vec::new();
+        let mut ends: Vec<u64> = Vec::new();
+        for (i, it) in items.iter().enumerate() {
+            let (align, size) = (cell(it.level), it.blocks as u64 * cell(it.level));
+            let forbidden: Vec<usize> = (0..i).filter(|&j| it.writer_reads.contains(&Some(items[j].value))).map(|j| placed[j].0).collect();
+            // (growth of the arena, end, arena, start): the least growth, then the lowest end.
+            let mut best: Option<(u64, u64, usize, u64)> = None;
+            for arena in (0..=ends.len()).filter(|a| !forbidden.contains(a)) {
+                let mut busy: Vec<(u64, u64)> = (0..i)
+                    .filter(|&j| placed[j].0 == arena && items[j].def <= it.last && it.def <= items[j].last)
+                    .map(|j| (placed[j].1, placed[j].2))
+                    .collect();
+                busy.sort_unstable();
+                let mut start = 0u64;
+                for &(s, e) in &busy {
+                    if start + size <= s {
+                        break;
+                    }
+                    start = start.max(e.next_multiple_of(align));
                 }
-                None => {
-                    slots.push((info.level, info.channels));
-                    busy_until.push(0);
-                    slots.len() - 1
+                let end = start + size;
+                let growth = end.saturating_sub(ends.get(arena).copied().unwrap_or(0));
+                if best.is_none_or(|b| (growth, end) < (b.0, b.1)) {
+                    best = Some((growth, end, arena, start));
                 }
-            };
-            busy_until[s] = info.last_use;
-            assign[t] = s;
+            }
+            let (_, end, arena, start) = best.expect("a new arena is always allowed");
+            if arena == ends.len() {
+                ends.push(0);
+            }
+            ends[arena] = ends[arena].max(end);
+            placed.push((arena, start, end));
         }
-        (assign, slots)
+        let place = |v: Value| {
+            let i = items.iter().position(|item| item.value == v).expect("every value placed");
+            let it = &items[i];
+            Place { arena: placed[i].0, level: it.level, first: (placed[i].1 / cell(it.level)) as u32, blocks: it.blocks }
+        };
+        Placement {
+            input: place(Value::Input),
+            temps: (0..self.temps.len()).map(|t| place(Value::Temp(t))).collect(),
+            pooled: (0..self.pools.len()).map(|k| place(Value::Pooled(k))).collect(),
+            arena_layers: ends.iter().map(|&e| e.div_ceil(cell(0)) as u32).collect(),
+        }
+    }
+}
+
+/// A value that lives within a frame, as [`Graph::place`] packs it.
+struct Lived {
+    value: Value,
+    level: usize,
+    blocks: u32,
+    /// The node that writes it (the input: its reader, node 0) and the last that reads it.
+    def: usize,
+    last: usize,
+    /// What the node writing it reads (an arena it must not share).
+    writer_reads: [Option<Value>; 2],
+}
+
+/// Where a value that lives within a frame is kept ([`Graph::place`]): in an arena, a texture
+/// array at full resolution. A layer of an arena holds `4^level` cells of a level-`level`
+/// value, a `2^level x 2^level` grid of images of the level's size, numbered in Morton order
+/// (cell `k`'s column is `k`'s even bits, its row its odd bits), so the four cells of level
+/// `l + 1` inside a cell of level `l` are consecutive. Channel block `j` of the value is cell
+/// `first + j`: arena layer `(first + j) >> 2 level`, cell `(first + j) mod 4^level` there.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Place {
+    /// The arena.
+    pub arena: usize,
+    /// The value's resolution level.
+    pub level: usize,
+    /// Its first cell, in cells of its level.
+    pub first: u32,
+    /// Its channel blocks: cells.
+    pub blocks: u32,
+}
+
+impl Place {
+    /// Where channel block `j` is: the cell's top-left texel and arena layer, for a frame
+    /// padded to `pwidth` x `pheight` (conv_common.wgsl's `carved`).
+    pub fn cell(&self, j: u32, pwidth: u32, pheight: u32) -> (u32, u32, u32) {
+        let cell = self.first + j;
+        let shift = 2 * self.level as u32;
+        let k = cell & ((1u32 << shift) - 1);
+        let even_bits = |v: u32| (0..16).map(|b| ((v >> (2 * b)) & 1) << b).sum::<u32>();
+        (even_bits(k) * (pwidth >> self.level), even_bits(k >> 1) * (pheight >> self.level), cell >> shift)
+    }
+}
+
+/// Every frame-local value's [`Place`] and the arenas' sizes.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Placement {
+    /// The packed input's.
+    pub input: Place,
+    /// Each temporary's, by index.
+    pub temps: Vec<Place>,
+    /// Each pooled value's, by index.
+    pub pooled: Vec<Place>,
+    /// Layers of each arena.
+    pub arena_layers: Vec<u32>,
+}
+
+impl Placement {
+    /// The place of `v`; `None` for a hidden state (a texture of its own).
+    pub fn of(&self, v: Value) -> Option<Place> {
+        match v {
+            Value::Input => Some(self.input),
+            Value::Temp(t) => Some(self.temps[t]),
+            Value::Pooled(k) => Some(self.pooled[k]),
+            Value::HiddenPrev(_) | Value::HiddenNew(_) => None,
+        }
     }
 }
 

@@ -30,18 +30,25 @@ pub(super) fn texture(
     (t, v)
 }
 
-/// The activation textures of a [`Denoiser`]: the input, the hidden-state pairs, the
-/// temporaries shared by lifetime and the pooled copies, with the views a conv binds.
+/// The activation textures of a [`Denoiser`]: the arenas that the input, the temporaries and
+/// the pooled values share by lifetime ([`Graph::place`]), and the hidden states, with the
+/// views a conv binds.
 pub(super) struct Activations {
-    input_texture: wgpu::Texture,
+    /// Every frame-local value's place in the arenas.
+    placement: Placement,
+    /// The arenas, full-resolution texture arrays.
+    arenas: Vec<wgpu::Texture>,
+    /// Per placed value, the view a pass binds: its own layers for a full-resolution value,
+    /// the whole arena for a value carved into cells (the kernels find its cells,
+    /// [`Carve`]).
     input_view: wgpu::TextureView,
+    temp_views: Vec<wgpu::TextureView>,
+    pooled_views: Vec<wgpu::TextureView>,
     /// `[block][0|1]`: the ping-pong pair of each recurrent block.
     hidden_textures: Vec<[wgpu::Texture; 2]>,
     hidden: Vec<[wgpu::TextureView; 2]>,
-    /// Each temporary's slot ([`Graph::allocate_temps`]) and the slots' textures.
-    assign: Vec<usize>,
-    slots: Vec<(wgpu::Texture, wgpu::TextureView)>,
-    pooled: Vec<wgpu::TextureView>,
+    /// The padded frame, which the cells' sizes follow.
+    size: (u32, u32),
     /// Every texture above, for readback and accounting.
     textures: Vec<wgpu::Texture>,
     bytes: u64,
@@ -56,34 +63,46 @@ impl Activations {
     fn new(device: &wgpu::Device, graph: &Graph, pwidth: u32, pheight: u32, precision: Precision, motion: bool) -> Self {
         let mut textures = Vec::new();
         let mut bytes = 0u64;
-        let mut make = |label: &str, level: usize, channels: usize| {
-            let (w, h, l) = (pwidth >> level, pheight >> level, blocks(channels));
-            bytes += w as u64 * h as u64 * l as u64 * precision.texel_bytes();
-            let (t, v) = texture(device, label, w, h, l, precision.format());
+        let mut make = |label: &str, level: usize, layers: u32| {
+            let (w, h) = (pwidth >> level, pheight >> level);
+            bytes += w as u64 * h as u64 * layers as u64 * precision.texel_bytes();
+            let (t, v) = texture(device, label, w, h, layers, precision.format());
             textures.push(t.clone());
             (t, v)
         };
-        let (input_texture, input_view) = make("input", 0, graph.in_channels);
+        let placement = graph.place();
+        let arenas: Vec<(wgpu::Texture, wgpu::TextureView)> =
+            placement.arena_layers.iter().map(|&layers| make("arena", 0, layers)).collect();
         let pairs: Vec<[(wgpu::Texture, wgpu::TextureView); 2]> = graph
             .hidden
             .iter()
             .map(|&(c, level)| {
-                let first = make("hidden", level, c);
-                let second = if motion { make("hidden", level, c) } else { first.clone() };
+                let first = make("hidden", level, blocks(c));
+                let second = if motion { make("hidden", level, blocks(c)) } else { first.clone() };
                 [first, second]
             })
             .collect();
-        let (assign, slot_sizes) = graph.allocate_temps();
-        let slots = slot_sizes.iter().map(|&(level, c)| make("temp", level, c)).collect();
-        let pooled = graph.pools.iter().map(|p| make("pooled", p.level, p.channels).1).collect();
+        let view = |p: &Place| {
+            let (arena, whole) = &arenas[p.arena];
+            if p.level > 0 {
+                return whole.clone();
+            }
+            arena.create_view(&wgpu::TextureViewDescriptor {
+                dimension: Some(wgpu::TextureViewDimension::D2Array),
+                base_array_layer: p.first,
+                array_layer_count: Some(p.blocks),
+                ..Default::default()
+            })
+        };
         Activations {
-            input_texture,
-            input_view,
+            input_view: view(&placement.input),
+            temp_views: placement.temps.iter().map(view).collect(),
+            pooled_views: placement.pooled.iter().map(view).collect(),
+            arenas: arenas.into_iter().map(|(t, _)| t).collect(),
+            placement,
             hidden_textures: pairs.iter().map(|[a, b]| [a.0.clone(), b.0.clone()]).collect(),
             hidden: pairs.iter().map(|[a, b]| [a.1.clone(), b.1.clone()]).collect(),
-            assign,
-            slots,
-            pooled,
+            size: (pwidth, pheight),
             textures,
             bytes,
         }
@@ -95,23 +114,41 @@ impl Activations {
             Value::Input => &self.input_view,
             Value::HiddenPrev(k) => &self.hidden[k][parity],
             Value::HiddenNew(k) => &self.hidden[k][1 - parity],
-            Value::Temp(t) => &self.slots[self.assign[t]].1,
-            Value::Pooled(k) => &self.pooled[k],
+            Value::Temp(t) => &self.temp_views[t],
+            Value::Pooled(k) => &self.pooled_views[k],
         }
     }
 
-    /// The texture of a value a conv writes (a temporary or a new hidden state).
-    fn written(&self, v: Value, parity: usize) -> wgpu::Texture {
+    /// Where the kernels find `v`'s cells in the view they bind ([`Self::view`]): carved for a
+    /// value below full resolution in an arena, as bound otherwise.
+    pub(super) fn carve(&self, v: Value) -> Carve {
+        match self.placement.of(v) {
+            Some(p) if p.level > 0 => Carve::of(&p, self.size.0, self.size.1),
+            _ => Carve::NONE,
+        }
+    }
+
+    /// The texture a conv writes `v` into (a temporary or a new hidden state), and the value's
+    /// place there for a temporary.
+    pub(super) fn written(&self, v: Value, parity: usize) -> (wgpu::Texture, Option<Place>) {
         match v {
-            Value::HiddenNew(k) => self.hidden_textures[k][1 - parity].clone(),
-            Value::Temp(t) => self.slots[self.assign[t]].0.clone(),
+            Value::HiddenNew(k) => (self.hidden_textures[k][1 - parity].clone(), None),
+            Value::Temp(t) => {
+                let p = self.placement.temps[t];
+                (self.arenas[p.arena].clone(), Some(p))
+            }
             _ => unreachable!("a conv writes a temporary or a new hidden state"),
         }
     }
 
+    /// The arena holding the packed input, and the input's place there.
+    pub(super) fn input(&self) -> (wgpu::Texture, Place) {
+        (self.arenas[self.placement.input.arena].clone(), self.placement.input)
+    }
+
     /// The pooled value node `i`'s output is max-pooled into, if any.
     pub(super) fn pooled_by(&self, graph: &Graph, i: usize) -> Option<&wgpu::TextureView> {
-        graph.pools.iter().position(|p| p.after == i).map(|k| &self.pooled[k])
+        graph.pools.iter().position(|p| p.after == i).map(|k| &self.pooled_views[k])
     }
 }
 
@@ -132,7 +169,7 @@ fn padded_size(device: &wgpu::Device, arch: &Arch, width: u32, height: u32) -> R
 
 /// Every conv of `graph` as the plan takes it: its size at the padded frame, its sources,
 /// its weights from `weights` (found by the PyTorch module name).
-fn conv_specs<'a>(graph: &'a Graph, weights: &'a Weights, arch: &Arch, pwidth: u32, pheight: u32) -> Vec<ConvSpec<'a>> {
+fn conv_specs<'a>(graph: &'a Graph, weights: &'a Weights, arch: &Arch, acts: &Activations, pwidth: u32, pheight: u32) -> Vec<ConvSpec<'a>> {
     graph
         .nodes
         .iter()
@@ -152,6 +189,12 @@ fn conv_specs<'a>(graph: &'a Graph, weights: &'a Weights, arch: &Arch, pwidth: u
             slope: arch.negative_slope,
             b_is_hidden: n.b.is_some_and(|b| matches!(b.value, Value::HiddenPrev(_))),
             pooled: graph.pools.iter().any(|p| p.after == i),
+            carves: [
+                acts.carve(n.a.value),
+                n.b.map_or(Carve::NONE, |b| acts.carve(b.value)),
+                acts.carve(n.out),
+                graph.pools.iter().position(|p| p.after == i).map_or(Carve::NONE, |k| acts.carve(Value::Pooled(k))),
+            ],
         })
         .collect()
 }
@@ -255,8 +298,12 @@ fn conv_groups(device: &wgpu::Device, kernels: &Kernels, graph: &Graph, acts: &A
     })
 }
 
-/// The pool passes' bind groups of both parities (a pool reads the state written this frame).
+/// The pool passes' bind groups of both parities (a pool reads the state written this frame
+/// and writes the cells of its pooled value, [`Carve`]).
 fn pool_groups(device: &wgpu::Device, kernels: &Kernels, graph: &Graph, acts: &Activations) -> [Vec<wgpu::BindGroup>; 2] {
+    let carves: Vec<wgpu::Buffer> = (0..graph.pools.len())
+        .map(|k| create_init(device, "pool carve", bytemuck::bytes_of(&acts.carve(Value::Pooled(k))), wgpu::BufferUsages::UNIFORM))
+        .collect();
     std::array::from_fn(|parity| {
         graph
             .pools
@@ -271,7 +318,11 @@ fn pool_groups(device: &wgpu::Device, kernels: &Kernels, graph: &Graph, acts: &A
                             binding: 0,
                             resource: wgpu::BindingResource::TextureView(acts.view(Value::HiddenNew(p.hidden), parity)),
                         },
-                        wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&acts.pooled[i]) },
+                        wgpu::BindGroupEntry {
+                            binding: 1,
+                            resource: wgpu::BindingResource::TextureView(acts.view(Value::Pooled(i), parity)),
+                        },
+                        wgpu::BindGroupEntry { binding: 2, resource: carves[i].as_entire_binding() },
                     ],
                 })
             })
@@ -336,7 +387,7 @@ impl Denoiser {
         // outside the textures where the device reads zero there (before tuning makes any).
         kernels.pad_from_bounds();
         let acts = Activations::new(device, &graph, pwidth, pheight, precision, motion);
-        let specs = conv_specs(&graph, weights, &arch, pwidth, pheight);
+        let specs = conv_specs(&graph, weights, &arch, &acts, pwidth, pheight);
         let choices = choose(device, queue, &mut kernels, &graph, &acts, &specs, &options, memory)?;
         // On CPU drivers the F(4x4) convs write their outputs into a buffer that the frame copies
         // into their textures (Kernels::stage_outputs; record_with records the copies). Tuning,
@@ -351,10 +402,9 @@ impl Denoiser {
         let layout = prep_layout(&arch, &graph);
         let guide = Guide::of(&layout);
         let motion = motion.then(|| Motion::new(device, &mut kernels, &graph, &acts, &convs, guide, (width, height, pwidth, pheight)));
-        let conv_outputs: [Vec<wgpu::Texture>; 2] =
+        let conv_outputs: [Vec<(wgpu::Texture, Option<Place>)>; 2] =
             std::array::from_fn(|parity| graph.nodes.iter().map(|n| acts.written(n.out, parity)).collect());
-        let Value::Temp(out_temp) = graph.output else { unreachable!("the output is a temporary") };
-        let output_view = acts.slots[acts.assign[out_temp]].1.clone();
+        let output_view = acts.view(graph.output, 0).clone();
         let prep = kernels.prep_pipeline(device, &layout);
         let prep_params = PrepParams { width, height, pwidth, pheight };
         let output_params = OutputParams::new(&arch, (0, 0), (width, height), width);
@@ -374,7 +424,8 @@ impl Denoiser {
             bytes: acts.bytes + convs.bytes() + motion.as_ref().map_or(0, |m| m.bytes) + tiles.as_ref().map_or(0, |t| t.bytes),
             tiles,
             motion,
-            input_texture: acts.input_texture,
+            input_view: acts.view(Value::Input, 0).clone(),
+            input_at: acts.input(),
             output_view,
             textures: acts.textures,
             hidden_textures: acts.hidden_textures,
@@ -397,20 +448,16 @@ impl Denoiser {
 }
 
 /// Bytes of the activation and hidden-state textures a [`Denoiser`] allocates for `graph` at
-/// the padded size `pwidth` x `pheight`: the input, one texture per recurrent block (two with
-/// `motion`), the temporaries as shared by liveness, and the pooled copies of the encoder
-/// blocks' outputs. Weights and uniforms are not included. Needs no device, so memory at any
-/// size can be reported (`rae-cli info --size`).
+/// the padded size `pwidth` x `pheight`: the arenas of the input, the temporaries and the
+/// pooled values ([`Graph::place`]), and one texture per recurrent block (two with `motion`).
+/// Weights and uniforms are not included. Needs no device, so memory at any size can be
+/// reported (`rae-cli info --size`).
 pub fn activation_bytes(graph: &Graph, pwidth: u32, pheight: u32, precision: Precision, motion: bool) -> u64 {
-    let tex = |level: usize, channels: usize| {
-        (pwidth >> level) as u64 * (pheight >> level) as u64 * blocks(channels) as u64 * precision.texel_bytes()
-    };
-    let input = tex(0, graph.in_channels);
+    let tex = |level: usize, layers: u64| (pwidth >> level) as u64 * (pheight >> level) as u64 * layers * precision.texel_bytes();
     let copies = if motion { 2 } else { 1 };
-    let hidden: u64 = graph.hidden.iter().map(|&(c, level)| copies * tex(level, c)).sum();
-    let temps: u64 = graph.allocate_temps().1.iter().map(|&(level, c)| tex(level, c)).sum();
-    let pooled: u64 = graph.pools.iter().map(|p| tex(p.level, p.channels)).sum();
-    input + hidden + temps + pooled
+    let hidden: u64 = graph.hidden.iter().map(|&(c, level)| copies * tex(level, blocks(c) as u64)).sum();
+    let arenas: u64 = graph.place().arena_layers.iter().map(|&l| tex(0, l as u64)).sum();
+    arenas + hidden
 }
 
 pub(super) fn create_init(device: &wgpu::Device, label: &str, contents: &[u8], usage: wgpu::BufferUsages) -> wgpu::Buffer {

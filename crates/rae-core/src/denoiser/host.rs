@@ -362,15 +362,27 @@ impl Denoiser {
     }
 
     /// The packed network input of the last frame, channel-major (`channels x ph x pw`), for
-    /// checking the prep kernel.
+    /// checking the prep kernel. The frame's convs write over the input's arena cells once its
+    /// one reader has run, so prep runs again on the last frame's uploaded buffers first.
     pub fn read_input(&self) -> Result<Vec<f32>> {
-        let all = read_texture(&self.device, &self.queue, &self.input_texture)?;
+        let host = self.host.as_ref().ok_or_else(|| Error::Gpu("read_input: no frame has been denoised".into()))?;
+        let mut encoder = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("rae prep again") });
+        {
+            let mut pass =
+                encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("rae prep again"), timestamp_writes: None });
+            pass.set_pipeline(&self.prep);
+            pass.set_bind_group(0, &host.binding.prep, &[]);
+            pass.dispatch_workgroups(self.pwidth.div_ceil(WORKGROUP), self.pheight.div_ceil(WORKGROUP), 1);
+        }
+        self.queue.submit(Some(encoder.finish()));
+        let (arena, place) = &self.input_at;
+        let all = read_texture(&self.device, &self.queue, arena)?;
         let (w, h) = (self.pwidth as usize, self.pheight as usize);
-        let c = self.graph.in_channels;
+        let (c, first) = (self.graph.in_channels, place.first as usize);
         Ok((0..c * h * w)
             .map(|i| {
                 let (ch, p) = (i / (h * w), i % (h * w));
-                all[((ch / 4) * h * w + p) * 4 + ch % 4]
+                all[((first + ch / 4) * h * w + p) * 4 + ch % 4]
             })
             .collect())
     }

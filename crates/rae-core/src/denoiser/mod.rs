@@ -2,9 +2,13 @@
 //! encoder and one submit per frame.
 //!
 //! # Buffers and their lifetimes
-//! - **Input** (packed network input) and **temporaries** live for one frame. Temporaries are
-//!   texture arrays shared by lifetime ([`Graph::allocate_temps`]): two values whose live
-//!   ranges do not overlap at a resolution use the same texture.
+//! - **Input** (packed network input), **temporaries** and **pooled copies** live within one
+//!   frame, in arenas: full-resolution texture arrays that they share by lifetime whatever
+//!   their level ([`Graph::place`]). A value below full resolution takes cells of an arena's
+//!   layers, a grid of images of its level's size, which the kernels address through its
+//!   [`Carve`]; so the memory the first level's temporaries hold while the encoder runs deeper
+//!   serves the deeper levels'. At 1080p that is the floor of any sharing by lifetime
+//!   ([`Graph::least_live_bytes`]).
 //! - **Hidden state**: each recurrent block owns one texture. Block `k` reads last frame's state
 //!   in its recurrent conv (`d{k}.l2.0`), the only reader of the old state, and its last conv
 //!   (`d{k}.l2.2`) writes the new state (its output) over it. A denoiser built for motion
@@ -13,9 +17,9 @@
 //!   `hidden[k][1 - p]`, which the block then writes its new state into; the next frame has
 //!   parity `1 - p`. Nothing is copied. Bind groups for both parities are built up front (the
 //!   pool pass's too: it reads the state written this frame); with one texture they are alike.
-//! - **Pooled copies**: right after block `k` writes its state, a pool pass writes it max-pooled
-//!   into a texture of its own at the next level ([`crate::graph::Pool`]), which the next block
-//!   and the decoder's skip read; it lives for the rest of the frame.
+//! - **Pooled copies**: right after block `k` writes its state, a pool pass (or the conv itself)
+//!   writes it max-pooled at the next level ([`crate::graph::Pool`]), which the next block
+//!   and the decoder's skip read, until its last reader.
 //! - **Reset** (first frame, scene cut) does not clear anything: for that frame the recurrent
 //!   convs run with a uniform block that reads zero channels from the hidden state, which is
 //!   exactly a zero hidden state (the skipped terms are the last summed), so frame 0 after
@@ -54,10 +58,10 @@ use std::time::Instant;
 
 use crate::error::{Error, Result};
 use crate::frame::{FrameInputs, FrameTimings};
-use crate::graph::{Graph, Read, Source, Value};
+use crate::graph::{Graph, Place, Placement, Read, Source, Value};
 use crate::kernels::{
-    ConvPlan, ConvSpec, Guide, Kernels, MMA_WORKGROUP_BYTES, Method, MotionKernels, MotionParams, OutputParams, Precision, PrepLayout,
-    PrepParams, SourceAccess, Tile, TileList, WORKGROUP, WeightMemory, blocks, per_conv,
+    Carve, ConvPlan, ConvSpec, Guide, Kernels, MMA_WORKGROUP_BYTES, Method, MotionKernels, MotionParams, OutputParams, Precision,
+    PrepLayout, PrepParams, SourceAccess, Tile, TileList, WORKGROUP, WeightMemory, blocks, per_conv,
 };
 use crate::model::{Arch, InputBuffer, Transfer};
 use crate::weights::Weights;
@@ -127,12 +131,15 @@ pub struct Denoiser {
     conv_groups: [Vec<wgpu::BindGroup>; 2],
     /// `[parity][pool]` (a pool reads the state written this frame, whose texture alternates).
     pool_groups: [Vec<wgpu::BindGroup>; 2],
-    /// `[parity][node]`: the texture a conv writes, for the copy of a staged output
-    /// ([`ConvPlan::staged`]).
-    conv_outputs: [Vec<wgpu::Texture>; 2],
+    /// `[parity][node]`: the texture a conv writes and the output's place there (a
+    /// temporary's), for the copy of a staged output ([`ConvPlan::staged`]).
+    conv_outputs: [Vec<(wgpu::Texture, Option<Place>)>; 2],
     prep_params: wgpu::Buffer,
     output_params: wgpu::Buffer,
-    input_texture: wgpu::Texture,
+    /// The packed input's view, which prep writes and the history test reads.
+    input_view: wgpu::TextureView,
+    /// The arena holding the packed input, and the input's place there ([`Self::read_input`]).
+    input_at: (wgpu::Texture, Place),
     output_view: wgpu::TextureView,
     dummy: wgpu::Buffer,
     /// Per-frame statistics prep writes and output reads (the frame's largest prepared color);

@@ -91,9 +91,7 @@ impl Denoiser {
         }
         check("output", io.output, 3)?;
         let (prep, output) = self.io_groups(io, &self.prep_params, &self.output_params);
-        let input = self
-            .input_texture
-            .create_view(&wgpu::TextureViewDescriptor { dimension: Some(wgpu::TextureViewDimension::D2Array), ..Default::default() });
+        let input = &self.input_view;
         let motion = match (io.motion, &self.motion) {
             (None, _) => None,
             (Some(_), None) => return Err(Error::Motion("the denoiser was built without motion (Options::motion)".into())),
@@ -107,7 +105,7 @@ impl Denoiser {
                         wgpu::BindGroupEntry { binding: 0, resource: m.params.as_entire_binding() },
                         wgpu::BindGroupEntry { binding: 1, resource: buf.as_entire_binding() },
                         wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::TextureView(&m.level0) },
-                        wgpu::BindGroupEntry { binding: 8, resource: wgpu::BindingResource::TextureView(&input) },
+                        wgpu::BindGroupEntry { binding: 8, resource: wgpu::BindingResource::TextureView(input) },
                         wgpu::BindGroupEntry { binding: 9, resource: wgpu::BindingResource::TextureView(&m.guide) },
                     ],
                 }))
@@ -124,9 +122,7 @@ impl Denoiser {
         output_params: &wgpu::Buffer,
     ) -> (wgpu::BindGroup, wgpu::BindGroup) {
         let needed = self.arch.required_buffers();
-        let input = self
-            .input_texture
-            .create_view(&wgpu::TextureViewDescriptor { dimension: Some(wgpu::TextureViewDimension::D2Array), ..Default::default() });
+        let input = &self.input_view;
         let pick = |b: InputBuffer| if needed.contains(&b) { io.get(b).expect("checked") } else { &self.dummy };
         let prep = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("prep"),
@@ -138,7 +134,7 @@ impl Denoiser {
                 wgpu::BindGroupEntry { binding: 3, resource: pick(InputBuffer::Normal).as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 4, resource: pick(InputBuffer::Depth).as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 5, resource: pick(InputBuffer::Roughness).as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 6, resource: wgpu::BindingResource::TextureView(&input) },
+                wgpu::BindGroupEntry { binding: 6, resource: wgpu::BindingResource::TextureView(input) },
                 wgpu::BindGroupEntry { binding: 7, resource: self.stats.as_entire_binding() },
             ],
         });
@@ -269,7 +265,11 @@ impl Denoiser {
             }
             if let Some(i) = staged {
                 drop(pass);
-                self.convs.copy_staged(encoder, i, &self.conv_outputs[parity][i]);
+                let (texture, place) = &self.conv_outputs[parity][i];
+                self.convs.copy_staged(encoder, i, texture, |j| {
+                    let (x, y, z) = place.map_or((0, 0, j), |p| p.cell(j, self.pwidth, self.pheight));
+                    wgpu::Origin3d { x, y, z }
+                });
                 // A staged conv pools its own output (F(4x4) tiles always can).
                 debug_assert!(self.graph.pools.iter().all(|p| p.after != i) || self.convs.pools(i));
                 let _ = pools.next_if(|(p, _)| p.after == i);

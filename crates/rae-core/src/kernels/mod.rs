@@ -19,6 +19,37 @@ pub use plan::*;
 pub use shaders::*;
 pub use tile::*;
 
+/// Where a conv finds a value carved into the cells of an arena ([`crate::graph::Place`]): its
+/// first cell, its level and the level's size, as conv_common.wgsl's `carved` reads them;
+/// [`Carve::NONE`] for a value read as its view binds it.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct Carve {
+    /// The value's first cell, in cells of its level.
+    pub first: u32,
+    /// Its level (0: not carved).
+    pub level: u32,
+    /// The level's width: a cell's.
+    pub width: u32,
+    /// The level's height.
+    pub height: u32,
+}
+
+impl Carve {
+    /// Not carved.
+    pub const NONE: Carve = Carve { first: 0, level: 0, width: 0, height: 0 };
+
+    /// The carve of a value placed at `p` in arenas of `pwidth` x `pheight`.
+    pub fn of(p: &crate::graph::Place, pwidth: u32, pheight: u32) -> Self {
+        Carve { first: p.first, level: p.level as u32, width: pwidth >> p.level, height: pheight >> p.level }
+    }
+
+    /// Whether the value is carved (below the arena's resolution).
+    pub fn is_carved(&self) -> bool {
+        self.level > 0
+    }
+}
+
 /// vec4s in one weight chunk (`CHUNK` in conv3x3.wgsl): a 64 KiB uniform binding, the limit
 /// every WebGPU device guarantees.
 pub const WEIGHT_CHUNK: u32 = 4096;

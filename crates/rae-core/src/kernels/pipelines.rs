@@ -43,6 +43,14 @@ pub struct ConvParams {
     pub pool_out: u32,
     /// Padding to the uniform's 16-byte size.
     pub _pad: u32,
+    /// Where source a's cells are, where carved ([`ConvVariant::carve_a`]).
+    pub carve_a: Carve,
+    /// Where source b's cells are, where carved.
+    pub carve_b: Carve,
+    /// Where the output's cells are, where carved.
+    pub carve_dst: Carve,
+    /// Where the pooled output's cells are (always carved: a level below the output's).
+    pub carve_pool: Carve,
 }
 
 /// Uniform block of prep.wgsl: the sizes (the model's layout is [`PrepLayout`], overrides).
@@ -393,6 +401,12 @@ pub struct ConvVariant {
     /// It writes its output into the plan's buffer rather than its texture
     /// (conv3x3_wino4.wgsl's OUT_BUFFER), for the frame to copy ([`ConvPlan::staged`]).
     pub staged: bool,
+    /// Source a is carved into cells of an arena below its resolution ([`Carve`]): its fetches
+    /// test the level's bounds (outside a cell lies another, not zero). Every load and store
+    /// finds its cell from the parameters' carves, whatever the variant.
+    pub carve_a: bool,
+    /// Source b is carved.
+    pub carve_b: bool,
 }
 
 impl ConvVariant {
@@ -587,7 +601,7 @@ impl Kernels {
             })
         };
         let output = pipeline("output", &pipeline_layout(&output_layout), &module("output"), &[]);
-        let pool_layout = layout("pool", &[texture_entry(0), storage_texture_entry(1, precision.format())]);
+        let pool_layout = layout("pool", &[texture_entry(0), storage_texture_entry(1, precision.format()), uniform_entry(2)]);
         let pool = pipeline("pool", &pipeline_layout(&pool_layout), &module("pool"), &[]);
         let conv_layouts = CONV_SLOTS.map(|(access, memory)| conv_layout(access, memory));
         Self {
@@ -665,8 +679,9 @@ impl Kernels {
     /// source twice the level's, an upsampled one half, a pooled-and-upsampled one the level's,
     /// each level even where a mode halves or doubles it, as the [`crate::Denoiser`]'s padded
     /// levels are. Then every pixel outside the level reads texels outside its source; at odd
-    /// sizes an upsampled read at the right edge would land inside. Call it before any conv
-    /// pipeline is made (they are made once per variant).
+    /// sizes an upsampled read at the right edge would land inside. A source carved into an
+    /// arena's cells ([`ConvVariant::carve_a`]) keeps its test: beside its cell lies another.
+    /// Call it before any conv pipeline is made (they are made once per variant).
     pub fn pad_from_bounds(&mut self) {
         assert!(self.conv.is_empty(), "pad_from_bounds after conv pipelines were made");
         self.oob_zero = self.reads_zero;
@@ -852,8 +867,9 @@ impl Kernels {
         let modules = &self.modules[conv_slot(v.sources, v.memory)];
         // conv_common.wgsl's overrides, then the kernel's own.
         let mut constants = vec![
-            ("MODE_A", v.read_a as u32 as f64),
-            ("MODE_B", v.read_b as u32 as f64),
+            // conv_common.wgsl's read-mode bits: the mode, CARVED, FROM_B.
+            ("MODE_A", (v.read_a as u32 | (v.carve_a as u32) << 2) as f64),
+            ("MODE_B", (v.read_b as u32 | (v.carve_b as u32) << 2 | 8) as f64),
             ("SOURCE_B", if v.source_b { 1.0 } else { 0.0 }),
             ("LEAKY", if v.leaky { 1.0 } else { 0.0 }),
             ("STORE_MAX", self.precision.store_max() as f64),

@@ -44,6 +44,9 @@ pub struct ConvSpec<'a> {
     /// The output is read max-pooled 2x2 (an encoder block's last conv, [`crate::graph::Pool`]):
     /// the conv writes the pooled value itself where its tile allows ([`ConvPlan::pools`]).
     pub pooled: bool,
+    /// Where source a, source b, the output and the pooled output are carved into an arena's
+    /// cells ([`Carve`]; [`Carve::NONE`]: as bound).
+    pub carves: [Carve; 4],
 }
 
 /// One dispatch: `count` consecutive output-block groups (workgroup z), their parameter and
@@ -76,6 +79,10 @@ fn push_params(params: &mut Vec<u8>, align: usize, s: &ConvSpec, ob0: u32, group
             weight_texel,
             pool_out: pool as u32,
             _pad: 0,
+            carve_a: s.carves[0],
+            carve_b: s.carves[1],
+            carve_dst: s.carves[2],
+            carve_pool: s.carves[3],
         };
         params.resize(params.len().next_multiple_of(align), 0);
         let at = params.len() as u32;
@@ -231,6 +238,8 @@ impl Packing {
             pool: false,
             memory,
             staged: false,
+            carve_a: s.carves[0].is_carved(),
+            carve_b: s.carves[1].is_carved(),
         };
         // Workgroups of 4 rows (conv3x3_mma.wgsl's ROWS) x 64 or 32 pixels (16 MT).
         let pixels = if split { MMA_SPLIT_PIXELS } else { MMA_PIXELS };
@@ -318,6 +327,8 @@ impl Packing {
             pool: can_pool,
             memory,
             staged: staged.is_some(),
+            carve_a: s.carves[0].is_carved(),
+            carve_b: s.carves[1].is_carved(),
         };
         // Split-K's partial sums: one buffer for the largest split conv, which every split
         // conv overwrites in turn (the reduce of one runs before the next conv starts).
@@ -589,18 +600,29 @@ impl ConvPlan {
         self.convs[i].staged.is_some()
     }
 
-    /// Copy conv `i`'s staged output into `dst`, its output texture (nothing where it is not
-    /// staged).
-    pub fn copy_staged(&self, encoder: &mut wgpu::CommandEncoder, i: usize, dst: &wgpu::Texture) {
+    /// Copy conv `i`'s staged output into `dst`, its output texture, channel block `j` to
+    /// the texel and layer `at(j)` (its cell where the output is carved; nothing where the
+    /// conv is not staged). Consecutive layers from one corner go in one copy.
+    pub fn copy_staged(&self, encoder: &mut wgpu::CommandEncoder, i: usize, dst: &wgpu::Texture, at: impl Fn(u32) -> wgpu::Origin3d) {
         let Some([width, height, layers]) = self.convs[i].staged else { return };
-        encoder.copy_buffer_to_texture(
-            wgpu::TexelCopyBufferInfo {
-                buffer: &self.partial,
-                layout: wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(width * 16), rows_per_image: Some(height) },
-            },
-            dst.as_image_copy(),
-            wgpu::Extent3d { width, height, depth_or_array_layers: layers },
-        );
+        let mut j = 0;
+        while j < layers {
+            let origin = at(j);
+            let run = (j + 1..layers).take_while(|&k| at(k) == wgpu::Origin3d { z: origin.z + (k - j), ..origin }).count() as u32 + 1;
+            encoder.copy_buffer_to_texture(
+                wgpu::TexelCopyBufferInfo {
+                    buffer: &self.partial,
+                    layout: wgpu::TexelCopyBufferLayout {
+                        offset: j as u64 * width as u64 * height as u64 * 16,
+                        bytes_per_row: Some(width * 16),
+                        rows_per_image: Some(height),
+                    },
+                },
+                wgpu::TexelCopyTextureInfo { texture: dst, mip_level: 0, origin, aspect: wgpu::TextureAspect::All },
+                wgpu::Extent3d { width, height, depth_or_array_layers: run },
+            );
+            j += run;
+        }
     }
 
     /// Dispatches per frame.

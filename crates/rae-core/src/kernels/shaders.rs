@@ -21,6 +21,7 @@ pub const SHADERS: &[(&str, &str)] = &[
     ("output", include_str!("../../../../shaders/output.wgsl")),
     ("pool", include_str!("../../../../shaders/pool.wgsl")),
     ("motion", include_str!("../../../../shaders/motion.wgsl")),
+    ("carve", include_str!("../../../../shaders/carve.wgsl")),
 ];
 
 /// The weight declaration of conv3x3.wgsl (uniform chunks).
@@ -193,13 +194,15 @@ pub fn shader_source(name: &str) -> &'static str {
 }
 
 /// A shader's text as a module is made of it: the two conv kernels (`conv3x3`, `conv3x3_mma`)
-/// with conv_common.wgsl appended (their shared parameters, bindings, reads and activation),
-/// the input and output stages (`prep`, `output`) with input_policy.wgsl appended (the input
-/// policy and the miss test they share), any other as written.
+/// with conv_common.wgsl appended (their shared parameters, bindings, reads and activation)
+/// and carve.wgsl (where a value carved into an arena's cells is), the pool kernel with
+/// carve.wgsl, the input and output stages (`prep`, `output`) with input_policy.wgsl appended
+/// (the input policy and the miss test they share), any other as written.
 pub fn conv_module_source(name: &str) -> String {
     let src = shader_source(name);
     match name {
-        "conv3x3" | "conv3x3_mma" => format!("{src}\n{}", shader_source("conv_common")),
+        "conv3x3" | "conv3x3_mma" => format!("{src}\n{}\n{}", shader_source("conv_common"), shader_source("carve")),
+        "pool" => format!("{src}\n{}", shader_source("carve")),
         "prep" | "output" => format!("{src}\n{}", shader_source("input_policy")),
         _ => src.to_string(),
     }
