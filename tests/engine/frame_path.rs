@@ -3,7 +3,7 @@
 
 use rae_core::cpu::{self, Chw};
 use rae_core::denoiser::read_texture;
-use rae_core::kernels::{self, ConvPlan, ConvSpec, Kernels, Tile, WeightMemory};
+use rae_core::kernels::{self, ConvPlan, ConvSpec, Kernels, Tile, WeightMemory, blocks};
 use rae_core::{Denoiser, FrameInputs, Weights};
 use wgpu::util::DeviceExt;
 
@@ -246,7 +246,8 @@ fn staged_outputs_are_the_unstaged_ones_bit_for_bit() {
                 let mut pass = enc.begin_compute_pass(&Default::default());
                 plan.record(&mut pass, 0, false, &group);
             }
-            plan.copy_staged(&mut enc, 0, &out, |j| wgpu::Origin3d { x: 0, y: 0, z: j });
+            let layers: Vec<wgpu::Origin3d> = (0..blocks(cout)).map(|z| wgpu::Origin3d { x: 0, y: 0, z }).collect();
+            plan.copy_staged(&mut enc, 0, &out, &layers);
             g.queue.submit(Some(enc.finish()));
             (read_texture(dev, &g.queue, &out).unwrap(), read_texture(dev, &g.queue, &pooled).unwrap())
         })

@@ -879,10 +879,13 @@ fn carved_values_are_read_and_written_in_their_cells_only() {
             let mut pass = enc.begin_compute_pass(&Default::default());
             plan.record(&mut pass, 0, false, &group);
         }
-        plan.copy_staged(&mut enc, 0, &out, |j| {
-            let (x, y, z) = pout.cell(j, aw, ah);
-            wgpu::Origin3d { x, y, z }
-        });
+        let cells: Vec<wgpu::Origin3d> = (0..pout.blocks)
+            .map(|j| {
+                let (x, y, z) = pout.cell(j, aw, ah);
+                wgpu::Origin3d { x, y, z }
+            })
+            .collect();
+        plan.copy_staged(&mut enc, 0, &out, &cells);
         g.queue.submit(Some(enc.finish()));
         // Each texel read back: the value of `t` where a cell of `p` holds it, else 7.
         let check = |texture: &wgpu::Texture, p: &Place, t: &Chw, what: &str| {

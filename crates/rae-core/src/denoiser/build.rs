@@ -128,17 +128,24 @@ impl Activations {
         }
     }
 
-    /// The texture a conv writes `v` into (a temporary or a new hidden state), and the value's
-    /// place there for a temporary.
-    pub(super) fn written(&self, v: Value, parity: usize) -> (wgpu::Texture, Option<Place>) {
-        match v {
+    /// The texture a conv writes `v` into (a temporary or a new hidden state), and where in it
+    /// each of `v`'s `blocks` channel blocks starts (its cell in an arena).
+    pub(super) fn written(&self, v: Value, parity: usize, blocks: u32) -> (wgpu::Texture, Vec<wgpu::Origin3d>) {
+        let (texture, place) = match v {
             Value::HiddenNew(k) => (self.hidden_textures[k][1 - parity].clone(), None),
             Value::Temp(t) => {
                 let p = self.placement.temps[t];
                 (self.arenas[p.arena].clone(), Some(p))
             }
             _ => unreachable!("a conv writes a temporary or a new hidden state"),
-        }
+        };
+        let cells = (0..blocks)
+            .map(|j| {
+                let (x, y, z) = place.map_or((0, 0, j), |p| p.cell(j, self.size.0, self.size.1));
+                wgpu::Origin3d { x, y, z }
+            })
+            .collect();
+        (texture, cells)
     }
 
     /// The arena holding the packed input, and the input's place there.
@@ -402,8 +409,8 @@ impl Denoiser {
         let layout = prep_layout(&arch, &graph);
         let guide = Guide::of(&layout);
         let motion = motion.then(|| Motion::new(device, &mut kernels, &graph, &acts, &convs, guide, (width, height, pwidth, pheight)));
-        let conv_outputs: [Vec<(wgpu::Texture, Option<Place>)>; 2] =
-            std::array::from_fn(|parity| graph.nodes.iter().map(|n| acts.written(n.out, parity)).collect());
+        let conv_outputs: [Vec<(wgpu::Texture, Vec<wgpu::Origin3d>)>; 2] =
+            std::array::from_fn(|parity| graph.nodes.iter().map(|n| acts.written(n.out, parity, blocks(n.cout))).collect());
         let output_view = acts.view(graph.output, 0).clone();
         let prep = kernels.prep_pipeline(device, &layout);
         let prep_params = PrepParams { width, height, pwidth, pheight };

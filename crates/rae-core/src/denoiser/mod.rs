@@ -131,9 +131,9 @@ pub struct Denoiser {
     conv_groups: [Vec<wgpu::BindGroup>; 2],
     /// `[parity][pool]` (a pool reads the state written this frame, whose texture alternates).
     pool_groups: [Vec<wgpu::BindGroup>; 2],
-    /// `[parity][node]`: the texture a conv writes and the output's place there (a
-    /// temporary's), for the copy of a staged output ([`ConvPlan::staged`]).
-    conv_outputs: [Vec<(wgpu::Texture, Option<Place>)>; 2],
+    /// `[parity][node]`: the texture a conv writes and where each output block starts there
+    /// (its cell, for a temporary), for the copy of a staged output ([`ConvPlan::staged`]).
+    conv_outputs: [Vec<(wgpu::Texture, Vec<wgpu::Origin3d>)>; 2],
     prep_params: wgpu::Buffer,
     output_params: wgpu::Buffer,
     /// The packed input's view, which prep writes and the history test reads.

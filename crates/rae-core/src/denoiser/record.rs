@@ -265,11 +265,8 @@ impl Denoiser {
             }
             if let Some(i) = staged {
                 drop(pass);
-                let (texture, place) = &self.conv_outputs[parity][i];
-                self.convs.copy_staged(encoder, i, texture, |j| {
-                    let (x, y, z) = place.map_or((0, 0, j), |p| p.cell(j, self.pwidth, self.pheight));
-                    wgpu::Origin3d { x, y, z }
-                });
+                let (texture, cells) = &self.conv_outputs[parity][i];
+                self.convs.copy_staged(encoder, i, texture, cells);
                 // A staged conv pools its own output (F(4x4) tiles always can).
                 debug_assert!(self.graph.pools.iter().all(|p| p.after != i) || self.convs.pools(i));
                 let _ = pools.next_if(|(p, _)| p.after == i);

@@ -601,14 +601,15 @@ impl ConvPlan {
     }
 
     /// Copy conv `i`'s staged output into `dst`, its output texture, channel block `j` to
-    /// the texel and layer `at(j)` (its cell where the output is carved; nothing where the
+    /// the texel and layer `at[j]` (its cell where the output is carved; nothing where the
     /// conv is not staged). Consecutive layers from one corner go in one copy.
-    pub fn copy_staged(&self, encoder: &mut wgpu::CommandEncoder, i: usize, dst: &wgpu::Texture, at: impl Fn(u32) -> wgpu::Origin3d) {
+    pub fn copy_staged(&self, encoder: &mut wgpu::CommandEncoder, i: usize, dst: &wgpu::Texture, at: &[wgpu::Origin3d]) {
         let Some([width, height, layers]) = self.convs[i].staged else { return };
         let mut j = 0;
         while j < layers {
-            let origin = at(j);
-            let run = (j + 1..layers).take_while(|&k| at(k) == wgpu::Origin3d { z: origin.z + (k - j), ..origin }).count() as u32 + 1;
+            let origin = at[j as usize];
+            let run =
+                (j + 1..layers).take_while(|&k| at[k as usize] == wgpu::Origin3d { z: origin.z + (k - j), ..origin }).count() as u32 + 1;
             encoder.copy_buffer_to_texture(
                 wgpu::TexelCopyBufferInfo {
                     buffer: &self.partial,
