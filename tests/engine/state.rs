@@ -94,9 +94,9 @@ fn weights_chosen_by_level_give_the_frames_of_uniform_chunks() {
 fn cpu_tiles_by_level_and_width_follow_the_rule() {
     // Left to choose, a CPU driver with subgroups runs 4-row lanes tiles on levels of at most
     // 8x8 pixels (the 64x64 golden's L3); where 8-lane subgroups allow, 4-row Winograd F(4x4)
-    // lanes tiles on levels of 32x32 and more (L0, L1) and 4-row F(2x2) ones between for convs
-    // of 32 channels and more (L2); and 8-row lanes tiles for the others. On 8 lanes the F(2x2)
-    // one takes every conv of 32 channels and more below 32x32 (L2, L3 and deeper).
+    // lanes tiles on levels of 64x64 and more (L0) and 4-row F(2x2) ones between for convs
+    // of 32 channels and more (L1, L2); and 8-row lanes tiles for the others. On 8 lanes the F(2x2)
+    // one takes every conv of 32 channels and more below 64x64 (L1 and deeper).
     // The 4- and 8-row direct tiles take the same sums in the same order, so with Winograd
     // only where it is chosen the frames stay bit for bit those of the rule's tiles; against
     // the 8-row tile everywhere they differ by Winograd's rounding alone.
@@ -142,12 +142,12 @@ fn cpu_tiles_by_level_and_width_follow_the_rule() {
         assert_eq!((t.method, t.rows), want, "{} on {w}x{h} reading {in_blocks} blocks", n.name);
     }
     let methods: Vec<Method> = auto.conv_tiles().iter().map(|t| t.method).collect();
-    // On 8 lanes every conv of the 64x64 golden is Winograd's (its L0 and L1 F(4x4), its
+    // On 8 lanes every conv of the 64x64 golden is Winograd's (its L0 F(4x4), its
     // deeper convs all of 32 channels and more).
     assert_eq!(methods.contains(&Method::Lanes), !(wino && narrow));
     assert_eq!(methods.contains(&Method::WinogradLanes), wino);
     assert_eq!(methods.contains(&Method::Winograd4Lanes), wino);
-    // The 64x64 golden's L0 and L1 (64 and 32 wide) stage where F(4x4) runs: the goldens and
+    // The 64x64 golden's L0 (64 wide) stages where F(4x4) runs: the goldens and
     // the frames here go through the copies.
     assert_eq!(auto.staged_convs().contains(&true), wino);
     // Winograd's rounding only: the frames within 1e-5 of the largest value.

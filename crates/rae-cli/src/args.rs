@@ -67,7 +67,7 @@ pub enum Command {
         #[arg(long)]
         csv: Option<PathBuf>,
         /// Conv register tile, as `bench --tile` takes it (one): `auto` (tuned on GPUs; on CPU
-        /// drivers wino4lanes4x4 on levels of 32x32 and more, winolanes4x4 for convs of 32+
+        /// drivers wino4lanes4x4 on levels of 64x64 and more, winolanes4x4 for convs of 32+
         /// channels below those (down to 16x16 on 16-lane subgroups, to 1x1 on 8-lane ones),
         /// lanes8x2w2 for the others, lanes4x2w2 on levels of at most 8x8), `tuned`, or a fixed
         /// tile. On lavapipe `lanes4x2w2` compiles into an empty shader cache sooner for slower
@@ -154,7 +154,7 @@ pub enum Command {
         /// everywhere; `tuned` (each conv timed with every candidate on this device while
         /// building; on CPU drivers with subgroups of 8 or more lanes lanes8x2w2, lanes4x2w2,
         /// winolanes4x4 and wino4lanes4x4); `auto` (tuned-mma on GPUs; on CPU drivers
-        /// wino4lanes4x4 on levels of 32x32 and more, winolanes4x4 for convs of 32+ channels
+        /// wino4lanes4x4 on levels of 64x64 and more, winolanes4x4 for convs of 32+ channels
         /// below those (down to 16x16 on 16-lane subgroups, to 1x1 on 8-lane ones), lanes8x2w2
         /// for the others, lanes4x2w2 on levels of at most 8x8; 16x4 without subgroups: what
         /// `denoise` uses). `mma16`, `mma32`, `mma48`, `mma64`: the matrix-unit kernel (f16

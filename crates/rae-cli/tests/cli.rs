@@ -810,7 +810,7 @@ fn bench_interleave_prints_a_row_per_combination_against_the_first() {
     // Three combinations timed round-robin, the first its own reference: bench's reference
     // tile twice, whose pipelines the other bench runs compile for their error's reference
     // frames, and the 2x1 tile bench_times_sampled_and_storage_sources compiles (lavapipe
-    // compiles each distinct pipeline for seconds, `auto`'s F(4x4) ones for 10-20).
+    // compiles each distinct pipeline for seconds, the F(4x4) ones for 10-20).
     let text = bench_32x32("2", &["--tile", &format!("{REFERENCE_TILE},2x1,{REFERENCE_TILE}"), "--interleave"]);
     let rows = bench_rows(&text, "32x32");
     assert_eq!(rows.iter().map(|r| r["tile"].as_str()).collect::<Vec<_>>(), [REFERENCE_TILE, "2x1", REFERENCE_TILE], "{text}");
