@@ -23,9 +23,9 @@ pub const CPU_WINOGRAD_MIN_BLOCKS: u32 = 8;
 /// 2 input blocks, takes 0.82x the time of `lanes8x2w2`'s; `docs/perf/lavapipe-2026-11-25-s23.log`).
 /// On 32 x 32 levels F(4x4) also runs faster than F(2x2), but a level that small is a few
 /// percent of any frame worth timing, and lavapipe compiles an F(4x4) pipeline for seconds
-/// where F(2x2)'s take a fraction of that: with 32 x 32 here a 64x64 frame's first frame
-/// compiled for 24.9 s into an empty shader cache, with 64 x 64 for 14.9 s, and the 256x256
-/// frame took the same time (1.01x host to host; `docs/perf/lavapipe-2026-12-05-s45.log`).
+/// where F(2x2)'s take a fraction of that: a 64x64 frame's first frame compiles in 14.9 s
+/// into an empty shader cache, 24.9 s with F(4x4) on its 32 x 32 level too, and the 256x256
+/// frame takes the same time either way (1.01x host to host; `docs/perf/lavapipe-2026-12-05-s45.log`).
 pub const CPU_WINOGRAD4_MIN_PIXELS: u32 = 64 * 64;
 
 /// How a conv tile is computed: the entry point of conv3x3.wgsl.
