@@ -138,7 +138,9 @@ VAL_COLUMNS = ["relmse_input", "relmse_rae", "ssim_input", "ssim_rae", "temporal
 def warm_start(model: RecurrentAE, arch: Arch, state: dict[str, torch.Tensor], src: Arch) -> int:
     """Initialise ``model`` from another architecture's weights: every tensor of equal shape is
     copied; the first convolution's input columns are copied by buffer name (a color+normal net
-    starts from the default net's color and normal columns). Returns the tensors copied."""
+    starts from the default net's color and normal columns), and the columns of a buffer the
+    source does not read start at zero, so the network computes what the source computes (for the
+    buffers they share) and learns to use the new buffer from there. Returns the tensors copied."""
     own = model.state_dict()
     copied = 0
     for name, t in own.items():
@@ -149,7 +151,7 @@ def warm_start(model: RecurrentAE, arch: Arch, state: dict[str, torch.Tensor], s
             own[name] = w.clone()
             copied += 1
         elif name == "d1.l1.0.weight" and w.shape[0] == t.shape[0]:
-            new = t.clone()
+            new = torch.zeros_like(t)
             offsets = {}
             c = 0
             for b in src.inputs:
@@ -193,7 +195,10 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--lr", type=float, default=5e-4)
     p.add_argument("--crop", type=int, default=128)
     p.add_argument("--frames", type=int, default=7)
-    p.add_argument("--inputs", default="color,normal,depth,roughness")
+    p.add_argument(
+        "--inputs",
+        help="network inputs, comma-separated (default: those of the --init weights, so a round continues the model it starts from; without --init color,normal,depth,roughness)",
+    )
     p.add_argument("--no-demodulate", action="store_true", help="feed color as is (no albedo needed)")
     p.add_argument(
         "--skip",
@@ -246,11 +251,12 @@ def main(argv: list[str] | None = None) -> int:
     torch.manual_seed(a.seed)
     rng = np.random.default_rng(a.seed)
     a.out.mkdir(parents=True, exist_ok=True)
-    arch = Arch(inputs=a.inputs.split(","), demodulate=not a.no_demodulate, transfer=a.transfer, skip=a.skip)
+    state, src = load_checkpoint(a.init) if a.init else (None, None)
+    inputs = a.inputs.split(",") if a.inputs else list(src.inputs if src else Arch().inputs)
+    arch = Arch(inputs=inputs, demodulate=not a.no_demodulate, transfer=a.transfer, skip=a.skip)
     model = RecurrentAE(arch)
     ckpt = a.out / "checkpoint.pt"
-    if a.init and not ckpt.exists():
-        state, src = load_checkpoint(a.init)
+    if state is not None and not ckpt.exists():
         n = warm_start(model, arch, state, src or Arch())
         print(f"warm start from {a.init}: {n} of {len(model.state_dict())} tensors")
     model = model.to(device, memory_format=torch.channels_last)

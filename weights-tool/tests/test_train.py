@@ -66,6 +66,26 @@ def test_a_pooled_checkpoint_warm_starts_a_prepool_network_whole(tmp_path: Path)
     assert pooled.keys() == prepool.keys() and all(torch.equal(pooled[k], prepool[k]) for k in pooled), "lr 0: the warm start is the whole network"
 
 
+def test_a_round_from_weights_keeps_their_inputs_unless_told_otherwise(tmp_path: Path) -> None:
+    # gpu-train.sh continues whatever model ships: without --inputs, a run takes the --init
+    # weights' inputs (albedo included) instead of dropping the buffers the default lacks.
+    from rae_weights.export import read_weights
+
+    write_sequence(tmp_path / "data" / "a", 8, 32)
+    common = ["--data", str(tmp_path / "data"), "--steps", "1", "--crop", "32", "--threads", "1", "--lr", "0"]
+    five = "color,albedo,normal,depth,roughness"
+    assert main([*common, "--out", str(tmp_path / "a"), "--inputs", five]) == 0
+    init = str(tmp_path / "a" / "model.safetensors")
+    assert main([*common, "--out", str(tmp_path / "b"), "--init", init]) == 0
+    assert main([*common, "--out", str(tmp_path / "c"), "--init", init, "--inputs", "color,normal"]) == 0
+    assert main([*common, "--out", str(tmp_path / "d")]) == 0
+    (a, wa), (b, wb), (c, _), (d, _) = (read_weights(tmp_path / r / "model.safetensors") for r in "abcd")
+    assert a.inputs == b.inputs == five.split(",")
+    assert all(torch.equal(wa[k], wb[k]) for k in wa), "lr 0: the same network"
+    assert c.inputs == ["color", "normal"]
+    assert d.inputs == Arch().inputs
+
+
 def test_warm_start_copies_shared_tensors_and_input_columns_by_buffer() -> None:
     from rae_weights import RecurrentAE
     from rae_weights.train import warm_start
@@ -75,15 +95,34 @@ def test_warm_start_copies_shared_tensors_and_input_columns_by_buffer() -> None:
     src = RecurrentAE(src_arch).state_dict()
     arch = Arch(inputs=["color", "albedo", "normal"])
     model = RecurrentAE(arch)
-    fresh = model.state_dict()["d1.l1.0.weight"].clone()
     n = warm_start(model, arch, src, src_arch)
     got = model.state_dict()
     assert n == len(got), "every tensor has a source: equal shapes, or the first conv by columns"
     w, s = got["d1.l1.0.weight"], src["d1.l1.0.weight"]
     assert torch.equal(w[:, 0:3], s[:, 0:3]), "color columns"
     assert torch.equal(w[:, 6:9], s[:, 3:6]), "normal columns"
-    assert torch.equal(w[:, 3:6], fresh[:, 3:6]), "albedo has no source column: left as initialised"
+    assert torch.equal(w[:, 3:6], torch.zeros_like(w[:, 3:6])), "albedo has no source column: zero"
     assert torch.equal(got["u1.l1.3.weight"], src["u1.l1.3.weight"])
+
+
+def test_a_buffer_added_by_warm_start_leaves_the_networks_output_as_the_sources() -> None:
+    # rae-default with albedo as an input as well starts as rae-default: the new columns are zero,
+    # so the first frames' outputs are the source network's whatever the albedo holds.
+    from rae_weights import RecurrentAE
+    from rae_weights.train import warm_start
+
+    torch.manual_seed(1)
+    src_arch = Arch(encoder=[8, 12, 16], bottleneck=20)
+    src = RecurrentAE(src_arch)
+    arch = Arch(inputs=["color", "albedo", "normal", "depth", "roughness"], encoder=[8, 12, 16], bottleneck=20)
+    model = RecurrentAE(arch)
+    warm_start(model, arch, src.state_dict(), src_arch)
+    x = torch.rand(2, 8, 32, 32)
+    albedo = torch.rand(2, 3, 32, 32)
+    with torch.no_grad():
+        a = src(x[:, :8])
+        b = model(torch.cat([x[:, :3], albedo, x[:, 3:]], dim=1))
+    assert torch.allclose(a, b, atol=1e-6)
 
 
 def test_metrics_match_their_definitions() -> None:
