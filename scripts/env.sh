@@ -16,9 +16,13 @@ if [ -z "${LP_NATIVE_VECTOR_WIDTH:-}" ] && grep -qw avx512f /proc/cpuinfo 2>/dev
   export LP_NATIVE_VECTOR_WIDTH=512
 fi
 
-# Mesa wants a private runtime dir; keep its shader cache inside target/, one per vector width
-# (Mesa 22.3's cache does not key on it and would serve shaders compiled for the other).
+# Mesa wants a private runtime dir; keep its shader cache inside the repository's target/, one
+# per vector width (Mesa 22.3's cache does not key on it and would serve shaders compiled for the
+# other). Mesa does not create the cache's parent folders, and without them it caches nothing
+# (every rae-cli run compiles its shaders again), so the folder is made here, whichever folder
+# this file is sourced from.
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp/rae-xdg-$(id -u)}"
 mkdir -p -m 0700 "$XDG_RUNTIME_DIR"
-export MESA_SHADER_CACHE_DIR="${MESA_SHADER_CACHE_DIR:-$PWD/target/mesa_shader_cache-${LP_NATIVE_VECTOR_WIDTH:-default}}"
+export MESA_SHADER_CACHE_DIR="${MESA_SHADER_CACHE_DIR:-$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)/target/mesa_shader_cache-${LP_NATIVE_VECTOR_WIDTH:-default}}"
+mkdir -p "$MESA_SHADER_CACHE_DIR"
 export OMP_WAIT_POLICY=PASSIVE
