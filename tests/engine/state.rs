@@ -65,7 +65,7 @@ fn weights_chosen_by_level_give_the_frames_of_uniform_chunks() {
     let g = gpu();
     let device_type = g.device.adapter_info().device_type;
     if kernels::lanes_supported(&g.device) {
-        let options = Options { tiles: TileChoice::Fixed(Tile::CPU_LANES), ..Default::default() };
+        let options = Options { tiles: TileChoice::Fixed(Tile::lanes(8, 2, 2).unwrap()), ..Default::default() };
         let d = Denoiser::with_options(&g.device, &g.queue, &weights, golden.width, golden.height, options).unwrap();
         assert!(d.weight_memories().iter().all(|&m| m == WeightMemory::Storage), "{:?}", d.weight_memories());
     }

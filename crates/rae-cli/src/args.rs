@@ -69,9 +69,9 @@ pub enum Command {
         /// Conv register tile, as `bench --tile` takes it (one): `auto` (tuned on GPUs; on CPU
         /// drivers wino4lanes4x4 on levels of 64x64 and more, winolanes4x4 for convs of 32+
         /// channels below those (down to 16x16 on 16-lane subgroups, to 1x1 on 8-lane ones),
-        /// lanes8x2w2 for the others, lanes4x2w2 on levels of at most 8x8), `tuned`, or a fixed
-        /// tile. On lavapipe `lanes4x2w2` compiles into an empty shader cache sooner for slower
-        /// frames.
+        /// lanes8x2 for the others, lanes4x2 on levels of at most 8x8), `tuned`, or a fixed
+        /// tile. On lavapipe a two-column lanes tile (`lanes8x2w2`) runs faster on large levels
+        /// than a one-column one and compiles into an empty shader cache for eight times as long.
         #[arg(long, default_value = "auto")]
         tile: String,
         /// On CPU drivers, do not compile kernels on a second device while a slow first frame
@@ -152,11 +152,11 @@ pub enum Command {
         /// devices; blocks 1, 2, 4) or wino4lanes4xBLOCKS[gGROUPX] (Winograd F(4x4, 3x3) in 4
         /// columns, weights from a texture across the subgroup, the same devices) for one tile
         /// everywhere; `tuned` (each conv timed with every candidate on this device while
-        /// building; on CPU drivers with subgroups of 8 or more lanes lanes8x2w2, lanes4x2w2,
+        /// building; on CPU drivers with subgroups of 8 or more lanes lanes8x2, lanes4x2,
         /// winolanes4x4 and wino4lanes4x4); `auto` (tuned-mma on GPUs; on CPU drivers
         /// wino4lanes4x4 on levels of 64x64 and more, winolanes4x4 for convs of 32+ channels
-        /// below those (down to 16x16 on 16-lane subgroups, to 1x1 on 8-lane ones), lanes8x2w2
-        /// for the others, lanes4x2w2 on levels of at most 8x8; 16x4 without subgroups: what
+        /// below those (down to 16x16 on 16-lane subgroups, to 1x1 on 8-lane ones), lanes8x2
+        /// for the others, lanes4x2 on levels of at most 8x8; 16x4 without subgroups: what
         /// `denoise` uses). `mma16`, `mma32`, `mma48`, `mma64`: the matrix-unit kernel (f16
         /// products summed in f32, 16 to 64 output channels per workgroup; tensor cores where
         /// wgpu's cooperative matrices have 16x16x16 f16 -> f32, emulated and slow elsewhere;

@@ -10,7 +10,7 @@ fn rae() -> Command {
 /// drivers with subgroups of 8 or more lanes, as lavapipe has with AVX2 or AVX-512). Its
 /// pipelines are compiled by every bench run for the error's reference frames, so tests that
 /// need a fixed tile take it and add no compiling (bench_reports checks the name).
-const REFERENCE_TILE: &str = "lanes8x2w2";
+const REFERENCE_TILE: &str = "lanes8x2";
 
 fn fixture(name: &str) -> String {
     format!("{}/../../tests/fixtures/{name}", env!("CARGO_MANIFEST_DIR"))

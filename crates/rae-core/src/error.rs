@@ -117,7 +117,8 @@ pub enum Error {
         /// Channels of the buffer.
         channels: usize,
     },
-    /// A GPU buffer handed in is too small or lacks a usage.
+    /// A GPU buffer handed in is too small or lacks a usage, or one the denoiser needs is past
+    /// the device's limits.
     #[error("GPU buffer `{buffer}`: {reason}")]
     GpuBuffer {
         /// The buffer.

@@ -402,7 +402,12 @@ impl Denoiser {
         if staging.unwrap_or(device_type == wgpu::DeviceType::Cpu) {
             kernels.stage_outputs();
         }
-        let convs = ConvPlan::with_choices(device, queue, &mut kernels, &specs, &choices.tiles, &choices.sources, &choices.memories)?;
+        // The plan's weight buffer depends on the frame (each level's tiles and weight memory).
+        let convs = ConvPlan::with_choices(device, queue, &mut kernels, &specs, &choices.tiles, &choices.sources, &choices.memories)
+            .map_err(|e| match e {
+                Error::GpuBuffer { .. } => Error::FrameSize { width, height, reason: e.to_string() },
+                e => e,
+            })?;
         debug_assert_eq!(acts.bytes, activation_bytes(&graph, pwidth, pheight, precision, motion));
         let host_state = memory_plan.host_state > 0;
         let tiles = memory_plan.tiles.map(|plan| Tiles::new(device, plan, &graph, &arch, precision, host_state)).transpose()?;

@@ -92,8 +92,8 @@ pub const MMA_SPLIT_TILES: [Tile; 4] = [
     Tile { rows: 4, blocks: 16, cols: 1, group_x: 8, method: Method::MmaSplit, split: 1 },
 ];
 
-/// The tiles [`TileChoice::Tuned`] times on CPU drivers with subgroups: the two-column lanes
-/// tile in 8 and 4 rows and the Winograd lanes tiles ([`Tile::CPU_LANES`], [`Tile::CPU_WINOGRAD`],
+/// The tiles [`TileChoice::Tuned`] times on CPU drivers with subgroups: the lanes tile in 8
+/// and 4 rows and the Winograd lanes tiles ([`Tile::CPU_LANES`], [`Tile::CPU_WINOGRAD`],
 /// [`Tile::CPU_WINOGRAD4`]): what [`TileChoice::Tuned`] times on CPU drivers with subgroups
 /// of 8 lanes or more ([`crate::kernels::winograd_lanes_supported`]); every tile
 /// [`Tile::cpu_for`] gives there is among them.
@@ -335,8 +335,8 @@ mod tests {
         ] {
             assert_eq!(choice.to_string().parse::<TileChoice>().unwrap(), choice, "{choice}");
         }
-        assert_eq!("tuned:16x2+lanes8x2w2+mma32x3+wino4lanes4x4".parse::<TileChoice>().unwrap(), TileChoice::TunedAmong(list));
-        assert_eq!(TileChoice::TunedAmong(list).to_string(), "tuned:16x2+lanes8x2w2+mma32x3+wino4lanes4x4");
+        assert_eq!("tuned:16x2+lanes8x2+mma32x3+wino4lanes4x4".parse::<TileChoice>().unwrap(), TileChoice::TunedAmong(list));
+        assert_eq!(TileChoice::TunedAmong(list).to_string(), "tuned:16x2+lanes8x2+mma32x3+wino4lanes4x4");
         // Named tiles of each kind, and their names back.
         for name in ["16x2", "8x1w2", "8x1g32k4", "wino4x2", "winolanes4x4", "wino4lanes4x4g16", "wino4lanes4x1", "mma48"] {
             assert_eq!(name.parse::<Tile>().unwrap().to_string(), name);

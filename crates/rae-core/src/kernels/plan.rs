@@ -412,6 +412,18 @@ impl Packing {
                 WeightMemory::Storage => wgpu::BufferUsages::STORAGE,
             })
             .fold(wgpu::BufferUsages::empty(), |a, b| a | b);
+        // A buffer past the device's limits would be created invalid, and filling it panics.
+        let limits = device.limits();
+        let (bytes, max_bytes) = (self.weights.len() as u64, u64::from(limits.max_buffer_size));
+        let (binding, max_binding) = (weight_binding[1], u64::from(limits.max_storage_buffer_binding_size));
+        if bytes > max_bytes || (weight_usage.contains(wgpu::BufferUsages::STORAGE) && binding > max_binding) {
+            return Err(crate::Error::GpuBuffer {
+                buffer: "conv weights",
+                reason: format!(
+                    "{bytes} bytes, {binding} bytes a storage binding: the device allows {max_bytes} bytes a buffer and {max_binding} a storage binding"
+                ),
+            });
+        }
         // The weight texture: rows of WEIGHT_TEXELS_WIDTH texels (1 x 1 when no conv reads it).
         let (tex_w, tex_h) = if self.weight_texels.is_empty() {
             (1, 1)

@@ -122,9 +122,8 @@ pub const LANES_W2_MAX_ROWS: u32 = 8;
 /// (a 2-column tile fetches 4 input columns for 2 outputs, a 1-column tile 3 for 1). A Winograd
 /// tile (2 columns, 2 or 4 rows) multiplies 16 times per 2x2 outputs and input channel where the
 /// direct one multiplies 36 times, for 16 weights per channel pair instead of 9 and a few
-/// additions. CPU drivers run [`Tile::cpu`] (8 x 2 in two columns, weights loaded across the
-/// subgroup), where every input fetch is a call into the driver and the two columns share it
-/// (docs/PERF.md); GPUs tune per conv ([`crate::TileChoice`]) and fall back to the default
+/// additions. CPU drivers run the Winograd lanes tiles and, where those do not run,
+/// [`Tile::cpu`] (8 x 2, weights loaded across the subgroup; [`Tile::cpu_for`]); GPUs tune per conv ([`crate::TileChoice`]) and fall back to the default
 /// (16 x 2) where they cannot time candidates; `rae-cli bench --tile` sweeps any of them.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct Tile {
@@ -156,11 +155,18 @@ impl Tile {
     /// where the device has subgroups.
     pub const CPU: Tile = Tile { rows: CONV_ROWS, blocks: 4, cols: 1, group_x: WORKGROUP, method: Method::Direct, split: 1 };
 
-    /// The tile of CPU drivers with subgroups: 8 rows x 2 blocks x 2 columns, weights loaded
-    /// across the subgroup: on lavapipe 0.78x the frame time of `lanes16x4` at 512-bit vectors
-    /// (0.84-0.86x at 256 bits) and 0.93x that of `lanes4x2w2`, for a longer compile into an
-    /// empty shader cache (`docs/perf/lavapipe-2026-11-24-s11.log`).
-    pub const CPU_LANES: Tile = Tile { rows: 8, blocks: 2, cols: 2, group_x: WORKGROUP, method: Method::Lanes, split: 1 };
+    /// The tile of CPU drivers with subgroups: 8 rows x 2 blocks in one column, weights loaded
+    /// across the subgroup. In the CPU plan ([`Tile::cpu_for`]) it runs only the convs the
+    /// Winograd tiles do not: few input blocks on levels under 64 x 64, and (in 4 rows) levels
+    /// of at most 8 x 8, where one column keeps twice the lanes busy that two columns do and
+    /// runs faster (the 256x256 frame's bottleneck convs 1.05-1.15x the GFLOP/s of
+    /// `lanes4x2w2`, the 64x64 frame's 8 x 8 to 2 x 2 levels 1.1-1.6x). Its pipelines compile
+    /// into an empty shader cache in an eighth of the two-column tile's time (0.44 s against
+    /// 3.6 s on Zen 4: `cargo run --release -p rae-core --example compile_cost -- lanes8x2
+    /// lanes8x2w2`), which is what the cold first frames of small frames and the test suite
+    /// wait on. Run on every conv, `lanes8x2w2` takes 0.76x its frame time at 256x256
+    /// (`docs/perf/lavapipe-2026-12-06-s50.log`).
+    pub const CPU_LANES: Tile = Tile { rows: 8, blocks: 2, cols: 1, group_x: WORKGROUP, method: Method::Lanes, split: 1 };
 
     /// The CPU drivers' Winograd tile: F(2x2, 3x3) in two stacked 2x2 output tiles (4 rows x
     /// 2 columns) x 4 blocks, weights loaded across the subgroup ([`Method::WinogradLanes`]).
@@ -216,12 +222,13 @@ impl Tile {
     /// take [`Tile::CPU_LANES`], in 4 rows instead of 8 on levels of at most
     /// [`CPU_SHORT_TILE_MAX_PIXELS`].
     ///
-    /// An 8 x 8 level is 4 invocations of 8 rows x 2 columns per output group, so 4 of a
-    /// subgroup's 16 lanes have pixels, and the others still load weights for them. At 4 rows
-    /// twice as many lanes work: the 256x256 frame's bottleneck convs (8 x 8, storage weights)
-    /// take 0.72x the time (`docs/perf/lavapipe-2026-11-24-s21.log`). With 16 lanes
-    /// `lanes4x2w2` beats [`Tile::CPU_WINOGRAD`] there by 4-18% (`lavapipe-2026-12-03-s32.log`);
-    /// with 8 lanes the Winograd tile takes half its time (`lavapipe-2026-12-02-s31.log`).
+    /// An 8 x 8 level is 8 invocations of 8 rows per output group, so half a subgroup's 16
+    /// lanes have pixels, and the others still load weights for them; at 4 rows every lane
+    /// works (in two columns, `lanes4x2w2`, half of them again: the one-column tile runs the
+    /// 256x256 frame's bottleneck convs at 1.05-1.15x its GFLOP/s,
+    /// `docs/perf/lavapipe-2026-12-06-s50.log`). With 16 lanes `lanes4x2w2` beat
+    /// [`Tile::CPU_WINOGRAD`] there by 4-18% (`lavapipe-2026-12-03-s32.log`); with 8 lanes the
+    /// Winograd tile takes half its time (`lavapipe-2026-12-02-s31.log`).
     pub fn cpu_for(device: &wgpu::Device, width: u32, height: u32, in_blocks: u32) -> Tile {
         let tile = Tile::cpu(device);
         let (winograd, narrow) = (winograd_lanes_supported(device), narrow_gathers(device));
