@@ -58,9 +58,10 @@ fn weights_chosen_by_level_give_the_frames_of_uniform_chunks() {
     // Left open, each conv reads its weights as its level suits the adapter (on CPU drivers
     // storage on the 32x32 and smaller levels, uniform chunks on the 64x64 one: one plan, one
     // weight buffer, both layouts), and the frames are those of every conv in uniform chunks.
-    // Held with the direct tile, which reads the buffer: the lanes module's tiles read the
-    // weight texture and take storage on every level (kernels::TEXEL_WEIGHTS), so that a
-    // conv's pipeline is the same on either side of the 32x32 line.
+    // Held with the CPU drivers' one-column tile, which reads the buffer (and compiles in a
+    // fraction of a direct 16-row tile's time): the lanes module's tiles read the weight
+    // texture and take storage on every level (kernels::TEXEL_WEIGHTS), so that a conv's
+    // pipeline is the same on either side of the 32x32 line.
     let (golden, weights) = setup();
     let g = gpu();
     let device_type = g.device.adapter_info().device_type;
@@ -69,7 +70,7 @@ fn weights_chosen_by_level_give_the_frames_of_uniform_chunks() {
         let d = Denoiser::with_options(&g.device, &g.queue, &weights, golden.width, golden.height, options).unwrap();
         assert!(d.weight_memories().iter().all(|&m| m == WeightMemory::Storage), "{:?}", d.weight_memories());
     }
-    let tiles = TileChoice::Fixed(Tile::CPU);
+    let tiles = TileChoice::Fixed(Tile::cpu(&g.device));
     let run = |memory: Option<WeightMemory>| {
         let options = Options { tiles, weights: memory, ..Default::default() };
         let mut d = Denoiser::with_options(&g.device, &g.queue, &weights, golden.width, golden.height, options).unwrap();
