@@ -123,8 +123,9 @@ pub const LANES_W2_MAX_ROWS: u32 = 8;
 /// tile (2 columns, 2 or 4 rows) multiplies 16 times per 2x2 outputs and input channel where the
 /// direct one multiplies 36 times, for 16 weights per channel pair instead of 9 and a few
 /// additions. CPU drivers run the Winograd lanes tiles and, where those do not run,
-/// [`Tile::cpu`] (8 x 2, weights loaded across the subgroup; [`Tile::cpu_for`]); GPUs tune per conv ([`crate::TileChoice`]) and fall back to the default
-/// (16 x 2) where they cannot time candidates; `rae-cli bench --tile` sweeps any of them.
+/// [`Tile::cpu`] (8 x 2, weights loaded across the subgroup; [`Tile::cpu_for`]); GPUs tune per
+/// conv ([`crate::TileChoice`]) and fall back to the default (16 x 2) where they cannot time
+/// candidates; `rae-cli bench --tile` sweeps any of them.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct Tile {
     /// Output rows per invocation: 1, 2, 4, 8 or 16 ([`CONV_ROWS`]).
@@ -226,9 +227,9 @@ impl Tile {
     /// lanes have pixels, and the others still load weights for them; at 4 rows every lane
     /// works (in two columns, `lanes4x2w2`, half of them again: the one-column tile runs the
     /// 256x256 frame's bottleneck convs at 1.05-1.15x its GFLOP/s,
-    /// `docs/perf/lavapipe-2026-12-06-s50.log`). With 16 lanes `lanes4x2w2` beat
-    /// [`Tile::CPU_WINOGRAD`] there by 4-18% (`lavapipe-2026-12-03-s32.log`); with 8 lanes the
-    /// Winograd tile takes half its time (`lavapipe-2026-12-02-s31.log`).
+    /// `docs/perf/lavapipe-2026-12-06-s50.log`). With 16 lanes `lanes4x2w2` runs those convs
+    /// 4-18% faster than [`Tile::CPU_WINOGRAD`] (`lavapipe-2026-12-03-s32.log`); with 8 lanes
+    /// the Winograd tile takes half its time (`lavapipe-2026-12-02-s31.log`).
     pub fn cpu_for(device: &wgpu::Device, width: u32, height: u32, in_blocks: u32) -> Tile {
         let tile = Tile::cpu(device);
         let (winograd, narrow) = (winograd_lanes_supported(device), narrow_gathers(device));
