@@ -3,6 +3,7 @@
 from pathlib import Path
 
 import numpy as np
+import pytest
 import torch
 
 from rae_weights import Arch, finish_output
@@ -231,3 +232,23 @@ def test_reload_adds_the_sequences_a_renderer_finished_since(tmp_path: Path) -> 
     assert [s.name for s in now] == ["a", "b"]
     assert now[0] is have[0], "a loaded sequence is kept, not read again"
     assert [s.name for s in reload([root], now, torch.device("cpu"))] == ["a", "b"]
+
+
+def test_reload_takes_up_a_folder_a_renderer_has_not_written_to_yet(tmp_path: Path) -> None:
+    # Training starts on the folders that have sequences; one still empty (or not yet made) is
+    # read at a later reload instead of stopping the run.
+    from rae_weights.data import load_sequences
+    from rae_weights.train import reload
+
+    first, later = tmp_path / "first", tmp_path / "later"
+    write_sequence(first / "a", 8, 32)
+    write_sequence(later / ".b.partial", 8, 16)
+    have = reload([first, later, tmp_path / "missing"], load_sequences(first), torch.device("cpu"))
+    assert [s.name for s in have] == ["a"]
+    write_sequence(later / "b", 8, 16)
+    assert [s.name for s in reload([first, later], have, torch.device("cpu"))] == ["a", "b"]
+    out = tmp_path / "run"
+    base = ["--val", str(first), "--out", str(out), "--steps", "1", "--crop", "32", "--frames", "4", "--threads", "1"]
+    assert main(["--data", str(first), str(tmp_path / "missing"), "--reload-every", "60", *base]) == 0
+    with pytest.raises(ValueError, match="no sequences"):
+        main(["--data", str(first), str(tmp_path / "empty-too"), *base, "--out", str(tmp_path / "run2")])
