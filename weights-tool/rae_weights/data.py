@@ -156,23 +156,13 @@ def load_sequence(folder: Path) -> Sequence:
     return Sequence(folder.name, buffers, folder)
 
 
-def sequence_folders(root: Path) -> list[Path]:
-    """The folders under root holding a sequence's EXRs, hidden ones (a renderer's
-    ``.NAME.partial``) left out."""
-    return sorted({p.parent for p in root.rglob("*.exr") if not p.name.startswith(".") and not any(q.name.startswith(".") for q in p.relative_to(root).parents if q.name)})
-
-
-def has_sequences(root: Path) -> bool:
-    """Whether root exists and holds a finished sequence (``sequence_folders``)."""
-    return root.is_dir() and bool(sequence_folders(root))
-
-
-def load_sequences(root: Path, skip: set[Path] | frozenset[Path] = frozenset()) -> list[Sequence]:
+def load_sequences(root: Path, skip: set[Path] | frozenset[Path] = frozenset(), empty_ok: bool = False) -> list[Sequence]:
     """Every sequence folder under root: folders holding color_NNNN.exr, or multi-layer EXRs
     (and no sequence folder of their own); hidden ones (a renderer's ``.NAME.partial``) and those
-    in ``skip`` are left out."""
-    folders = sequence_folders(root)
-    if not folders:
+    in ``skip`` are left out. A root with none (missing, or a renderer's not written to yet) is an
+    error unless ``empty_ok``."""
+    folders = sorted({p.parent for p in root.rglob("*.exr") if not p.name.startswith(".") and not any(q.name.startswith(".") for q in p.relative_to(root).parents if q.name)})
+    if not folders and not empty_ok:
         raise ValueError(f"{root}: no sequences (folders with color_0000.exr or multi-layer EXRs); render some with rae-trace")
     return [load_sequence(f) for f in folders if f not in skip]
 

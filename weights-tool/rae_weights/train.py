@@ -28,7 +28,7 @@ import torch.nn.functional as F
 
 from . import transfer, warp
 from .arch import INPUT_CHANNELS, Arch
-from .data import Sequence, has_sequences, load_sequences, sample
+from .data import Sequence, load_sequences, sample
 from .export import load_checkpoint, write_weights
 from .metrics import sequence_metrics
 from .model import RecurrentAE, demodulation_albedo, finish_output, pass_misses, prepare_input, sanitize_buffers
@@ -180,7 +180,7 @@ def reload(roots: list[Path], have: list[Sequence], device: torch.device) -> lis
     """``have`` and the sequences under ``roots`` not yet in it, on ``device`` (a renderer writes
     each under a hidden name and renames it when done, so a folder seen here is complete)."""
     known = {s.folder for s in have}
-    new = on_device([s for r in roots if has_sequences(r) for s in load_sequences(r, skip=known)], device)
+    new = on_device([s for r in roots for s in load_sequences(r, skip=known, empty_ok=True)], device)
     if new:
         print(f"{len(new)} more training sequences ({len(have) + len(new)} in all)", flush=True)
     return have + new
@@ -278,10 +278,9 @@ def main(argv: list[str] | None = None) -> int:
         step = int(state["step"])
         print(f"resumed at step {step}")
     # Under --reload-every a folder a renderer has not written to yet is taken up later.
-    roots = [d for d in a.data if a.reload_every <= 0 or has_sequences(d)]
-    if not roots:
+    train = on_device([s for d in a.data for s in load_sequences(d, empty_ok=a.reload_every > 0)], device)
+    if not train:
         p.error(f"--data {' '.join(map(str, a.data))}: no sequences yet")
-    train = on_device([s for d in roots for s in load_sequences(d)], device)
     val = load_sequences(a.val) if a.val else []
     print(f"{len(train)} training sequences, {len(val)} held out; arch {arch.to_json()}")
     loaded = time.time()
