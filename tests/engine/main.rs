@@ -4,6 +4,7 @@
 //! Fixtures in tests/fixtures are written by weights-tool:
 //!     cd weights-tool && python -m rae_weights golden --out ../tests/fixtures
 
+mod accumulate;
 mod faults;
 mod frame_path;
 mod generated;

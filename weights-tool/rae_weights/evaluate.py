@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from . import accumulate as temporal
 from .data import Sequence, load_sequences
 from .export import read_weights
 from .metrics import sequence_metrics
@@ -30,24 +31,31 @@ def hwc(t: torch.Tensor) -> np.ndarray:
     return t.reshape(t.shape[-3:]).permute(1, 2, 0).contiguous().numpy().astype(np.float32)
 
 
-def run_rae(path: Path, seq: Sequence, times: list[float] | None = None, motion: bool = True) -> list[np.ndarray]:
+def run_rae(
+    path: Path, seq: Sequence, times: list[float] | None = None, motion: bool = True, accumulate: bool = True
+) -> list[np.ndarray]:
     """Denoised frames of a sequence by a rae weights file (hidden state carried, and reprojected
-    with the sequence's motion where it has one and `motion`, as `rae-cli denoise` does; CPU,
-    float32, channels_last). With `times`, appends the ms of every frame after the first (input
-    stage, network, output stage)."""
+    with the sequence's motion where it has one and `motion`, the output then accumulated along
+    it where `accumulate` (``accumulate.accumulate``), as `rae-cli denoise` does; CPU, float32,
+    channels_last). With `times`, appends the ms of every frame after the first (input stage,
+    network, output stage, accumulation)."""
     arch, state = read_weights(path)
     model = RecurrentAE(arch).eval()
     model.load_state_dict(state)
     model = model.to(memory_format=torch.channels_last)
     model.reset()
     outs = []
+    previous = None
     with torch.inference_mode():
         for i in range(seq.frames):
             t = time.perf_counter()
             frame = {k: v[i : i + 1] for k, v in seq.buffers.items()}
             x = prepare_input(arch, frame).contiguous(memory_format=torch.channels_last)
             m = frame.get("motion") if motion else None
-            outs.append(hwc(finish_output(arch, model(x, m), frame)))
+            y = finish_output(arch, model(x, m), frame)
+            if accumulate:
+                y = previous = temporal.accumulate(y.contiguous(), previous, m)
+            outs.append(hwc(y))
             if times is not None and i > 0:
                 times.append((time.perf_counter() - t) * 1e3)
     return outs
@@ -71,10 +79,13 @@ def run_oidn(seq: Sequence, quality: str, times: list[float] | None = None) -> l
     return outs
 
 
-def evaluate(models: list[Path], sets: dict[str, Path], oidn: bool = True, motion: str = "both") -> list[dict[str, object]]:
+def evaluate(
+    models: list[Path], sets: dict[str, Path], oidn: bool = True, motion: str = "both", accumulate: str = "on"
+) -> list[dict[str, object]]:
     """Rows of (set, method, metrics...) averaged over each set's sequences. Where a sequence has
     motion, each model runs with it (its hidden state reprojected), without it, or both
-    (`motion`: on, off, both), as separate rows."""
+    (`motion`: on, off, both), as separate rows; with motion, its output accumulated along it,
+    not, or both (`accumulate`)."""
     rows: list[dict[str, object]] = []
     for label, folder in sets.items():
         seqs = load_sequences(folder)
@@ -88,8 +99,9 @@ def evaluate(models: list[Path], sets: dict[str, Path], oidn: bool = True, motio
                     methods.setdefault(f"rae {m.stem}", []).append(sequence_metrics(run_rae(m, s), refs))
                     continue
                 for on in {"on": [True], "off": [False], "both": [True, False]}[motion]:
-                    name = f"rae {m.stem} ({'motion' if on else 'no motion'})"
-                    methods.setdefault(name, []).append(sequence_metrics(run_rae(m, s, motion=on), refs))
+                    for acc in {"on": [True], "off": [False], "both": [True, False]}[accumulate] if on else [False]:
+                        name = f"rae {m.stem} ({'motion' if on else 'no motion'}{'' if acc or not on else ', no accumulation'})"
+                        methods.setdefault(name, []).append(sequence_metrics(run_rae(m, s, motion=on, accumulate=acc), refs))
             if oidn:
                 methods.setdefault("OIDN 2.5 high (c+a+n)", []).append(sequence_metrics(run_oidn(s, "high"), refs))
         for name, ms in methods.items():
@@ -113,6 +125,9 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--data", nargs="+", required=True, metavar="LABEL=FOLDER", help="held-out sets, e.g. 1spp=data/val")
     p.add_argument("--no-oidn", action="store_true")
     p.add_argument("--motion", choices=["on", "off", "both"], default="both", help="run the models with the sequences' motion, without, or both")
+    p.add_argument(
+        "--accumulate", choices=["on", "off", "both"], default="on", help="with motion, accumulate the output along it, not, or both"
+    )
     p.add_argument("--threads", type=int, default=2)
     a = p.parse_args(argv)
     torch.set_num_threads(a.threads)
@@ -122,5 +137,5 @@ def main(argv: list[str] | None = None) -> int:
         if not folder:
             p.error(f"--data {d}: expected LABEL=FOLDER")
         sets[label] = Path(folder)
-    print(markdown(evaluate(a.models, sets, oidn=not a.no_oidn, motion=a.motion)))
+    print(markdown(evaluate(a.models, sets, oidn=not a.no_oidn, motion=a.motion, accumulate=a.accumulate)))
     return 0

@@ -21,7 +21,7 @@ import numpy as np
 import torch
 from safetensors.numpy import load_file, save_file
 
-from . import metrics
+from . import accumulate, metrics
 from .arch import INPUT_CHANNELS, Arch
 from .export import _publish, read_weights, write_weights
 from .model import RecurrentAE, finish_output, prepare_input
@@ -241,13 +241,15 @@ def generate(out_dir: Path) -> list[Path]:
         written.append(out_dir / case.name)
     _atomic_save(metrics.shared_vectors(), out_dir / metrics.VECTORS_FILE, {"command": COMMAND})
     written.append(out_dir / metrics.VECTORS_FILE)
+    _atomic_save(accumulate.shared_vectors(), out_dir / accumulate.VECTORS_FILE, {"command": COMMAND})
+    written.append(out_dir / accumulate.VECTORS_FILE)
     return written
 
 
 def compare(committed: Path, regenerated: Path, rtol: float = 1e-5) -> list[str]:
     """Differences between two fixture folders beyond |a-b| <= rtol * max(1, |a|); [] if none."""
     problems = []
-    for name in [w.file for w in WEIGHTS] + [c.name for c in CASES] + [metrics.VECTORS_FILE]:
+    for name in [w.file for w in WEIGHTS] + [c.name for c in CASES] + [metrics.VECTORS_FILE, accumulate.VECTORS_FILE]:
         a_path, b_path = committed / name, regenerated / name
         if not a_path.exists():
             problems.append(f"{a_path}: missing (run `{COMMAND}`)")

@@ -83,15 +83,26 @@ def machine() -> str:
 
 
 def run_rae_cli(
-    cli: Path, weights: Path, precision: str, folder: Path, frames: int, times: list[float], log: list[str], motion: bool = True
+    cli: Path,
+    weights: Path,
+    precision: str,
+    folder: Path,
+    frames: int,
+    times: list[float],
+    log: list[str],
+    motion: bool = True,
+    accumulate: bool = True,
 ) -> list[np.ndarray]:
-    """rae-cli denoise of one sequence folder (``--no-motion`` unless `motion`); the denoised
-    frames and per-frame times (all but the first, which compiles the shaders)."""
+    """rae-cli denoise of one sequence folder (``--no-motion`` unless `motion`,
+    ``--no-accumulate`` unless `accumulate`); the denoised frames and per-frame times (all but
+    the first, which compiles the shaders)."""
     with tempfile.TemporaryDirectory() as tmp:
         out, table = Path(tmp) / "out", Path(tmp) / "times.csv"
         cmd = [str(cli), "denoise", str(folder), "-o", str(out), "--weights", str(weights), "--precision", precision, "--csv", str(table)]
         if not motion:
             cmd.append("--no-motion")
+        if not accumulate:
+            cmd.append("--no-accumulate")
         r = subprocess.run(cmd, capture_output=True, text=True)
         if r.returncode != 0:
             raise RuntimeError(f"{shlex.join(cmd)} failed ({r.returncode}):\n{r.stdout}\n{r.stderr}")
@@ -347,6 +358,7 @@ def main(argv: list[str] | None = None) -> int:
     noisy = Method("noisy input", "input")
     raes = {(m, pr): Method(f"rae {m.stem} {pr}", "rae") for m in a.models for pr in precisions}
     stills = {m: Method(f"rae {m.stem} {precisions[0]} no motion", "rae") for m in a.models} if moving else {}
+    unblended = {m: Method(f"rae {m.stem} {precisions[0]} no accumulation", "rae") for m in a.models} if moving else {}
     torches = {m: Method(f"PyTorch CPU {m.stem}", "pytorch") for m in a.models}
     oidns = {q: Method(f"OIDN {q}", "oidn") for q in ("high", "fast")}
     refs: dict[str, dict[str, list[np.ndarray]]] = {}
@@ -362,12 +374,15 @@ def main(argv: list[str] | None = None) -> int:
                 meth.add(label, seq.name, run_rae_cli(cli, m, pr, seq_folder, seq.frames, meth.times_ms, devices))
             for m, meth in stills.items():
                 meth.add(label, seq.name, run_rae_cli(cli, m, precisions[0], seq_folder, seq.frames, meth.times_ms, devices, motion=False))
+            for m, meth in unblended.items():
+                out = run_rae_cli(cli, m, precisions[0], seq_folder, seq.frames, meth.times_ms, devices, accumulate=False)
+                meth.add(label, seq.name, out)
             for m, meth in torches.items():
                 meth.add(label, seq.name, run_rae(m, seq, meth.times_ms))
             for q, meth in oidns.items():
                 meth.add(label, seq.name, run_oidn(seq, q, meth.times_ms))
             first = first or (label, seq.name, seq.frames - 1)
-    methods = [noisy, *raes.values(), *stills.values(), *torches.values(), *oidns.values()]
+    methods = [noisy, *raes.values(), *unblended.values(), *stills.values(), *torches.values(), *oidns.values()]
     score(methods, refs)
     assert first is not None
 
@@ -385,7 +400,7 @@ def main(argv: list[str] | None = None) -> int:
     crop_cols = [("noisy input", noisy.outputs[crop_set][crop_seq][k]), (shown.name, shown.outputs[crop_set][crop_seq][k]), ("OIDN high", oidns["high"].outputs[crop_set][crop_seq][k])]
     crop_sheet(crop_cols, refs[crop_set][crop_seq][k], figures / "crops.png", f"{crop_set}/{crop_seq} frame {k}: {command}\n{host}")
     # At a disocclusion: the frame of a sequence with motion where the most pixels fail the
-    # history test, rae with and without motion beside OIDN.
+    # history test, rae with motion (accumulated and not) and without beside OIDN.
     uncovered = None
     if moving:
         uncovered = max(
@@ -393,9 +408,10 @@ def main(argv: list[str] | None = None) -> int:
             key=lambda t: t[0],
         )
         _, d_set, d_seq, d_k = uncovered
-        still = stills[a.models[0]]
+        still, raw = stills[a.models[0]], unblended[a.models[0]]
         d_ref = refs[d_set][d_seq.name][d_k]
-        d_cols = [(n, meth.outputs[d_set][d_seq.name][d_k]) for n, meth in (("noisy input", noisy), (shown.name, shown), (still.name, still), ("OIDN high", oidns["high"]))]
+        shown_cols = (("noisy input", noisy), (shown.name, shown), (raw.name, raw), (still.name, still), ("OIDN high", oidns["high"]))
+        d_cols = [(n, meth.outputs[d_set][d_seq.name][d_k]) for n, meth in shown_cols]
         d_err = np.abs(tonemap(shown.outputs[d_set][d_seq.name][d_k]) - tonemap(d_ref)).mean(-1)
         spots = [("most disoccluded", disocclusion(d_seq, d_k)), ("largest rae error", d_err)]
         crop_sheet(d_cols, d_ref, figures / "crops-disocclusion.png", f"{d_set}/{d_seq.name} frame {d_k}: {command}\n{host}", spots=spots)
@@ -423,14 +439,14 @@ def main(argv: list[str] | None = None) -> int:
             L.append(f"| {m.name} | {t} | {r['relmse']:.4f} | {r['psnr']:.2f} | {r['ssim']:.4f} | {r['flip']:.4f} | {r['temporal']:.4f} |")
         L.append("")
         if stills:
-            shown_still = stills[a.models[0]]
-            L += [f"Per sequence, `{shown.name}` with the sequence's motion and without it, beside OIDN high (temporal: lower is better; the last column is rae's with motion over OIDN's):", ""]
-            L += ["| sequence | motion | PSNR with | PSNR without | PSNR OIDN | temporal with | temporal without | temporal OIDN | with / OIDN |", "|---|---|---:|---:|---:|---:|---:|---:|---:|"]
+            shown_still, shown_raw = stills[a.models[0]], unblended[a.models[0]]
+            L += [f"Per sequence, `{shown.name}` with the sequence's motion (the hidden state reprojected, the output accumulated along it), with it but the output not accumulated (`--no-accumulate`) and without motion, beside OIDN high (temporal: lower is better; the last column is rae's with motion over OIDN's):", ""]
+            L += ["| sequence | motion | PSNR with | PSNR not accumulated | PSNR without | PSNR OIDN | temporal with | temporal not accumulated | temporal without | temporal OIDN | with / OIDN |", "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
             for name in seqs:
-                w, wo, o = (x.per_seq[label][name] for x in (shown, shown_still, oidns["high"]))
+                w, raw, wo, o = (x.per_seq[label][name] for x in (shown, shown_raw, shown_still, oidns["high"]))
                 has = "yes" if any(q.name == name and "motion" in q.buffers for q in loaded[label]) else "no"
                 L.append(
-                    f"| {name} | {has} | {w['psnr']:.2f} | {wo['psnr']:.2f} | {o['psnr']:.2f} | {w['temporal']:.4f} | {wo['temporal']:.4f} | {o['temporal']:.4f} | {w['temporal'] / o['temporal']:.2f} |"
+                    f"| {name} | {has} | {w['psnr']:.2f} | {raw['psnr']:.2f} | {wo['psnr']:.2f} | {o['psnr']:.2f} | {w['temporal']:.4f} | {raw['temporal']:.4f} | {wo['temporal']:.4f} | {o['temporal']:.4f} | {w['temporal'] / o['temporal']:.2f} |"
                 )
             L.append("")
     L += ["## rae (wgpu) against PyTorch, same weights and frames", "", "Absolute difference of the output radiance over all frames of all sets; the last column divides each frame's largest difference by the frame's largest PyTorch value.", ""]
@@ -443,7 +459,7 @@ def main(argv: list[str] | None = None) -> int:
     L += ["## Crops", "", f"Set `{crop_set}`, sequence `{crop_seq}`, frame {k}: where rae's error is largest and where the reference has the most detail.", "", f"![crops]({rel(figures / 'crops.png', a.out.parent)})", "", f"Made by {stamp}.", ""]
     if uncovered is not None:
         _, d_set, d_seq, d_k = uncovered
-        L += ["## Crops at a disocclusion", "", f"Set `{d_set}`, sequence `{d_seq.name}`, frame {d_k}, the frame of the sequences with motion where the most pixels fail the history test (normal and depth against the previous frame's at x + motion, `rae_weights.warp.history`): where the most do, and where rae's error is largest. rae with the sequence's motion (reprojected, history dropped where the test fails) and without it, beside OIDN high.", "", f"![crops at a disocclusion]({rel(figures / 'crops-disocclusion.png', a.out.parent)})", "", f"Made by {stamp}.", ""]
+        L += ["## Crops at a disocclusion", "", f"Set `{d_set}`, sequence `{d_seq.name}`, frame {d_k}, the frame of the sequences with motion where the most pixels fail the history test (normal and depth against the previous frame's at x + motion, `rae_weights.warp.history`): where the most do, and where rae's error is largest. rae with the sequence's motion (reprojected, history dropped where the test fails, the output accumulated along the motion), with it but not accumulated, and without it, beside OIDN high.", "", f"![crops at a disocclusion]({rel(figures / 'crops-disocclusion.png', a.out.parent)})", "", f"Made by {stamp}.", ""]
     if bench:
         bcmd, btext = bench
         rows = bench_rows(btext)

@@ -84,6 +84,11 @@ pub enum Command {
         /// multi-layer EXR's motion layer or Blender Vector pass), for comparison.
         #[arg(long)]
         no_motion: bool,
+        /// Do not blend each output frame with the previous one along the motion (temporal
+        /// accumulation, rae_core::accumulate), for comparison; it runs wherever the hidden
+        /// state is reprojected.
+        #[arg(long)]
+        no_accumulate: bool,
         /// What the motion files mean: `rae` (where the pixel's surface point was in the
         /// previous frame minus where it is now, in pixels, x right, y down) or `optix` (current
         /// minus previous, OptiX's flow). Blender's Vector pass is converted whatever this says.
@@ -184,8 +189,9 @@ pub enum Command {
         /// drifts over seconds (a shared host) cannot tilt towards one combination.
         #[arg(long)]
         interleave: bool,
-        /// Frames with or without motion: `off`, `on` (a smooth pan, so every recurrent block's
-        /// state is reprojected: the cost of the warp), or both.
+        /// Frames with or without motion: `off`; `warp` (a smooth pan, so every recurrent block's
+        /// state is reprojected: the cost of the warp); `on` (the pan, reprojected and the output
+        /// accumulated along it, as `denoise` runs a sequence with motion); or several.
         #[arg(long, value_delimiter = ',', default_value = "off")]
         motion: Vec<String>,
         /// Caps in MiB on the denoiser's GPU memory, or `none`: sizes whose whole plan exceeds
@@ -249,12 +255,14 @@ pub fn parse_cap(s: &str) -> Result<Option<u64>> {
     }
 }
 
-/// `bench --motion` values: `off` and `on`.
-pub fn parse_motion(s: &str) -> Result<bool> {
+/// `bench --motion` values, as (reproject the hidden state, accumulate the output): `off`,
+/// `warp` and `on`.
+pub fn parse_motion(s: &str) -> Result<(bool, bool)> {
     match s {
-        "off" => Ok(false),
-        "on" => Ok(true),
-        _ => bail!("motion `{s}`: off or on"),
+        "off" => Ok((false, false)),
+        "warp" => Ok((true, false)),
+        "on" => Ok((true, true)),
+        _ => bail!("motion `{s}`: off, warp or on"),
     }
 }
 

@@ -46,6 +46,9 @@ pub struct Options {
     /// Reproject the hidden state with the sequence's motion, read in this convention (`None`:
     /// `--no-motion`).
     pub motion: Option<MotionConvention>,
+    /// Blend each output with the previous one along the motion where the hidden state is
+    /// reprojected ([`rae_core::Options::accumulate`]; `--no-accumulate` turns it off).
+    pub accumulate: bool,
 }
 
 /// What a sequence's motion files mean.
@@ -228,7 +231,15 @@ pub fn run(o: &Options) -> Result<()> {
     let motion = o.motion.filter(|_| motion_source.is_some() && plan.tiles.is_none());
     // Blender's Vector pass is converted as it is read; other motion is negated for OptiX's.
     let negate = motion == Some(MotionConvention::Optix) && motion_source != Some(io::MotionSource::BlenderVector);
-    let options = rae_core::Options { precision, tiles: o.tiles, motion: motion.is_some(), max_memory: o.max_memory, ..Default::default() };
+    let accumulate = motion.is_some() && o.accumulate;
+    let options = rae_core::Options {
+        precision,
+        tiles: o.tiles,
+        motion: motion.is_some(),
+        accumulate,
+        max_memory: o.max_memory,
+        ..Default::default()
+    };
     let mut d = Denoiser::with_options(&gpu.device, &gpu.queue, &weights, seq.width, seq.height, options)?;
     let used: Vec<&str> = weights.arch.required_buffers().iter().map(|b| b.name()).collect();
     println!(
@@ -268,6 +279,12 @@ pub fn run(o: &Options) -> Result<()> {
         (Some(source @ io::MotionSource::BlenderVector), Some(_)) => println!("motion:  {source}"),
         (Some(source), Some(MotionConvention::Rae)) => println!("motion:  {source}, rae convention"),
         (Some(source), Some(MotionConvention::Optix)) => println!("motion:  {source}, OptiX convention (negated)"),
+    }
+    if motion.is_some() {
+        println!(
+            "blend:   {}",
+            if accumulate { "the output accumulated along the motion (--no-accumulate turns it off)" } else { "none (--no-accumulate)" }
+        );
     }
     println!("device:  {}", gpu.describe());
     println!(

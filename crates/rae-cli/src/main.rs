@@ -71,20 +71,20 @@ fn bench(path: &Path, sizes: &[(u32, u32)], frames: usize, warmup: usize, layers
         let (wave, one, pan) = bench_buffers(w, h);
         // The frames every combination's error is taken against: as many, in f32, with the
         // reference tile, with motion where the combination has it.
-        let mut references: Vec<(bool, Vec<f32>)> = Vec::new();
-        for &motion in &sweep.motions {
-            let options = Options { tiles: TileChoice::Fixed(reference_tile(&gpu.device)), motion, ..Default::default() };
+        let mut references: Vec<((bool, bool), Vec<f32>)> = Vec::new();
+        for &(motion, accumulate) in &sweep.motions {
+            let options = Options { tiles: TileChoice::Fixed(reference_tile(&gpu.device)), motion, accumulate, ..Default::default() };
             let mut d = Denoiser::with_options(&gpu.device, &gpu.queue, &weights, w, h, options)
                 .with_context(|| format!("building the reference denoiser at {s}"))?;
             let mut out = vec![0.0; 3 * n];
             for _ in 0..warmup + frames.max(1) {
                 d.denoise_into(&bench_frame(&wave, &one, &pan, motion), &mut out)?;
             }
-            references.push((motion, out));
+            references.push(((motion, accumulate), out));
         }
         for options in sweep.combinations() {
             let frame = bench_frame(&wave, &one, &pan, options.motion);
-            let reference = &references.iter().find(|(m, _)| *m == options.motion).expect("one per motion").1;
+            let reference = &references.iter().find(|(m, _)| *m == (options.motion, options.accumulate)).expect("one per motion").1;
             let (precision, tiles) = (options.precision, options.tiles);
             let built = Instant::now();
             let mut d = match Denoiser::with_options(&gpu.device, &gpu.queue, &weights, w, h, options) {
@@ -97,7 +97,7 @@ fn bench(path: &Path, sizes: &[(u32, u32)], frames: usize, warmup: usize, layers
                         tiles.to_string(),
                         options.weights.map_or("auto", |m| m.name()),
                         options.sources.map_or("auto", |m| m.name()),
-                        if options.motion { "on" } else { "off" }
+                        motion_name(&options)
                     );
                     continue;
                 }
@@ -145,7 +145,7 @@ fn bench(path: &Path, sizes: &[(u32, u32)], frames: usize, warmup: usize, layers
                 tiles.to_string(),
                 d.weights_name(),
                 d.sources_name(),
-                if options.motion { "on" } else { "off" },
+                motion_name(&options),
                 tiles_name(&d),
                 median(&mut total),
                 median(&mut up),
@@ -179,7 +179,8 @@ struct Sweep {
     memories: Vec<Option<WeightMemory>>,
     sources: Vec<Option<SourceAccess>>,
     tiles: Vec<TileChoice>,
-    motions: Vec<bool>,
+    /// (reproject, accumulate) per `--motion` value.
+    motions: Vec<(bool, bool)>,
     /// `--max-memory` caps in bytes (`None`: the whole frame where the device takes it).
     caps: Vec<Option<u64>>,
 }
@@ -187,7 +188,7 @@ struct Sweep {
 impl Sweep {
     /// The denoiser options of every combination, in the table's order.
     fn combinations(&self) -> impl Iterator<Item = Options> + '_ {
-        self.motions.iter().flat_map(move |&motion| {
+        self.motions.iter().flat_map(move |&(motion, accumulate)| {
             self.precisions.iter().flat_map(move |&p| {
                 self.memories.iter().flat_map(move |&weights| {
                     self.sources.iter().flat_map(move |&sources| {
@@ -198,6 +199,7 @@ impl Sweep {
                                 weights,
                                 sources,
                                 motion,
+                                accumulate,
                                 max_memory,
                                 ..Default::default()
                             })
@@ -206,6 +208,15 @@ impl Sweep {
                 })
             })
         })
+    }
+}
+
+/// The motion column of `bench`: `off`, `warp` (reprojected) or `on` (and accumulated).
+fn motion_name(o: &Options) -> &'static str {
+    match (o.motion, o.accumulate) {
+        (false, _) => "off",
+        (true, false) => "warp",
+        (true, true) => "on",
     }
 }
 
@@ -270,17 +281,17 @@ fn bench_interleaved(path: &Path, sizes: &[(u32, u32)], rounds: usize, warmup: u
             for _ in 0..warmup {
                 d.denoise_into(&bench_frame(&wave, &one, &pan, options.motion), &mut out)?;
             }
-            runs.push((precision, tiles, options.motion, d, Vec::with_capacity(rounds)));
+            runs.push((precision, tiles, options, d, Vec::with_capacity(rounds)));
         }
         for _ in 0..rounds {
-            for (_, _, motion, d, ms) in runs.iter_mut() {
+            for (_, _, options, d, ms) in runs.iter_mut() {
                 let t = Instant::now();
-                d.denoise_into(&bench_frame(&wave, &one, &pan, *motion), &mut out)?;
+                d.denoise_into(&bench_frame(&wave, &one, &pan, options.motion), &mut out)?;
                 ms.push(t.elapsed().as_secs_f64() * 1e3);
             }
         }
         let first = runs[0].4.clone();
-        for (precision, tiles, motion, d, ms) in runs.iter_mut() {
+        for (precision, tiles, options, d, ms) in runs.iter_mut() {
             let mut ratio: Vec<f64> = ms.iter().zip(&first).map(|(a, b)| a / b).collect();
             let fastest = ms.iter().copied().fold(f64::INFINITY, f64::min);
             println!(
@@ -289,7 +300,7 @@ fn bench_interleaved(path: &Path, sizes: &[(u32, u32)], rounds: usize, warmup: u
                 tiles.to_string(),
                 d.weights_name(),
                 d.sources_name(),
-                if *motion { "on" } else { "off" },
+                motion_name(options),
                 tiles_name(d),
                 d.gpu_bytes() as f64 / (1 << 20) as f64,
                 median(ms),
@@ -452,6 +463,10 @@ fn info(path: &Path, sizes: &[(u32, u32)], max_memory: Option<u64>) -> Result<()
             rae_core::denoiser::motion_bytes(pw, ph, a.levels(), guided) as f64 / (1u64 << 20) as f64,
             second_state as f64 / (1u64 << 20) as f64
         );
+        println!(
+            "accumulate {s}:  the output's accumulation along the motion {:.1} MiB more (the network's radiance and two frames of history, RGB f32; Options::accumulate)",
+            rae_core::denoiser::accumulate_bytes(w, h) as f64 / (1u64 << 20) as f64
+        );
         if let Some(cap) = max_memory {
             for p in [Precision::F32, Precision::F16] {
                 println!("plan {s} {} under {} MiB:  {}", p.name(), cap >> 20, plan_text(a, w, h, p, cap));
@@ -574,6 +589,7 @@ fn main() -> Result<()> {
             tile,
             no_compile_helper,
             no_motion,
+            no_accumulate,
             motion_convention,
         } => {
             let frames = frames.as_deref().map(denoise::parse_range).transpose()?;
@@ -594,6 +610,7 @@ fn main() -> Result<()> {
                 tiles,
                 no_helper: no_compile_helper,
                 motion: (!no_motion).then_some(motion_convention),
+                accumulate: !no_accumulate,
             })
         }
         Command::Info { file, size, max_memory } => info(&file, &size, max_memory.map(|m| m.saturating_mul(1 << 20))),

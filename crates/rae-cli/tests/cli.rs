@@ -186,13 +186,19 @@ fn motion_files_reproject_the_hidden_state_and_say_so() {
     };
     let (text, with) = run("with", &[]);
     assert!(text.contains("motion:  motion_NNNN.exr, rae convention"), "{text}");
+    assert!(text.contains("blend:   the output accumulated along the motion"), "{text}");
     assert!(text.contains("misses:  told by depth and normal"), "{text}");
     let (text, without) = run("without", &["--no-motion"]);
-    assert!(text.contains("motion:  not used (--no-motion)"), "{text}");
+    assert!(text.contains("motion:  not used (--no-motion)") && !text.contains("blend:"), "{text}");
     let (text, optix) = run("optix", &["--motion-convention", "optix"]);
     assert!(text.contains("OptiX convention (negated)"), "{text}");
+    let (text, unblended) = run("unblended", &["--no-accumulate"]);
+    assert!(text.contains("blend:   none (--no-accumulate)"), "{text}");
     assert_eq!(with[0], without[0], "frame 0 has no history to reproject");
+    assert_eq!(with[0], unblended[0], "nor any output to accumulate");
     assert_ne!(with[2], without[2], "reprojected history changes later frames");
+    assert_ne!(with[2], unblended[2], "accumulation changes later frames");
+    assert_ne!(unblended[2], without[2], "reprojection without accumulation changes them too");
     assert_ne!(with[2], optix[2], "the other convention is the other field");
     // Motion in some frames only.
     std::fs::remove_file(seq.join("motion_0001.exr")).unwrap();
@@ -795,11 +801,12 @@ fn bench_reports_each_combinations_error_and_skips_what_it_cannot_run() {
 
 #[test]
 fn bench_times_frames_with_and_without_motion() {
-    // `--motion off,on`: the second row's frames carry a pan, so every block's state is
-    // reprojected; its error is against reference frames with the same motion.
-    let text = bench_32x32("1", &["--tile", REFERENCE_TILE, "--motion", "off,on"]);
+    // `--motion off,warp,on`: the second and third rows' frames carry a pan, so every block's
+    // state is reprojected (and the third's output accumulated); each row's error is against
+    // reference frames with the same motion.
+    let text = bench_32x32("1", &["--tile", REFERENCE_TILE, "--motion", "off,warp,on"]);
     let rows = bench_rows(&text, "32x32");
-    assert_eq!(rows.iter().map(|r| r["motion"].as_str()).collect::<Vec<_>>(), ["off", "on"], "{text}");
+    assert_eq!(rows.iter().map(|r| r["motion"].as_str()).collect::<Vec<_>>(), ["off", "warp", "on"], "{text}");
     for r in &rows {
         assert!(r["err"].parse::<f64>().unwrap() < 1e-6, "the reference tile against its own frames: {text}");
     }

@@ -5,6 +5,7 @@
 //! or inside a renderer's own command encoder on its own buffers ([`Denoiser::record`]). The
 //! hidden state stays on the GPU between frames; [`Denoiser::reset`] starts a new sequence.
 
+pub mod accumulate;
 pub mod cpu;
 pub mod denoiser;
 pub mod error;

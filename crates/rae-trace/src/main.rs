@@ -248,8 +248,9 @@ fn live(choice: &SceneChoice, weights: &Path, frames: u32, size: (u32, u32), mot
     let weights = rae_core::Weights::load(weights)?;
     let gpu = rae_core::Gpu::new()?;
     let (w, h) = size;
-    // With motion, the denoiser reprojects its hidden state with the tracer's motion vectors.
-    let options = rae_core::Options { motion, ..Default::default() };
+    // With motion, the denoiser reprojects its hidden state with the tracer's motion vectors and
+    // accumulates its output along them.
+    let options = rae_core::Options { motion, accumulate: motion, ..Default::default() };
     let mut denoiser = rae_core::Denoiser::with_options(&gpu.device, &gpu.queue, &weights, w, h, options)?;
     println!("{name} at {w}x{h}, denoising on {}", gpu.describe());
     println!("{:>5} {:>10} {:>12}", "frame", "trace ms", "denoise ms");

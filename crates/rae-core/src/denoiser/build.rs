@@ -372,7 +372,7 @@ impl Denoiser {
     }
 
     fn build(device: &wgpu::Device, queue: &wgpu::Queue, weights: &Weights, width: u32, height: u32, options: Options) -> Result<Self> {
-        let Options { precision, tiles, weights: chosen_memory, sources, staging, motion, max_memory, frame_tiles } = options;
+        let Options { precision, tiles, weights: chosen_memory, sources, staging, motion, accumulate, max_memory, frame_tiles } = options;
         let device_type = device.adapter_info().device_type;
         let arch = weights.arch.clone();
         let limits = device.limits();
@@ -414,6 +414,7 @@ impl Denoiser {
         let layout = prep_layout(&arch, &graph);
         let guide = Guide::of(&layout);
         let motion = motion.then(|| Motion::new(device, &mut kernels, &graph, &acts, &convs, guide, (width, height, pwidth, pheight)));
+        let accumulation = (accumulate && motion.is_some()).then(|| Accumulation::new(device, width, height));
         let conv_outputs: [Vec<(wgpu::Texture, Vec<wgpu::Origin3d>)>; 2] =
             std::array::from_fn(|parity| graph.nodes.iter().map(|n| acts.written(n.out, parity, blocks(n.cout))).collect());
         let output_view = acts.view(graph.output, 0).clone();
@@ -433,7 +434,11 @@ impl Denoiser {
             output_params: create_init(device, "output params", bytemuck::bytes_of(&output_params), wgpu::BufferUsages::UNIFORM),
             dummy: create_init(device, "absent buffer", &[0u8; 16], wgpu::BufferUsages::STORAGE),
             stats: create_init(device, "frame stats", &[0u8; 16], stats_usage),
-            bytes: acts.bytes + convs.bytes() + motion.as_ref().map_or(0, |m| m.bytes) + tiles.as_ref().map_or(0, |t| t.bytes),
+            bytes: acts.bytes
+                + convs.bytes()
+                + motion.as_ref().map_or(0, |m| m.bytes)
+                + accumulation.as_ref().map_or(0, |a| a.bytes)
+                + tiles.as_ref().map_or(0, |t| t.bytes),
             tiles,
             motion,
             input_view: acts.view(Value::Input, 0).clone(),
@@ -455,6 +460,7 @@ impl Denoiser {
             tuning: choices.tuning,
             parity: 0,
             reset_pending: true,
+            accumulation,
         })
     }
 }

@@ -116,7 +116,7 @@ impl Denoiser {
                 break;
             }
             let (prep, output) = &host.tile_groups[i];
-            self.record_passes(&mut encoder, prep, output, t.interior, None, None, 0, reset);
+            self.record_passes(&mut encoder, prep, (output, None), t.interior, None, None, 0, reset);
             tiles.record_write_back(&mut encoder, &self.graph, &t, &new, !reset);
             let bytes = t.interior.0 as u64 * t.interior.1 as u64 * 12;
             encoder.copy_buffer_to_buffer(&host.output, 0, &host.readback, 0, bytes);
@@ -344,7 +344,7 @@ impl Denoiser {
             Some(t) => {
                 let groups: Vec<_> = t.prep_params.iter().zip(&t.output_params).map(|(p, o)| self.io_groups(&io, p, o)).collect();
                 let (prep, output) = groups[0].clone();
-                (IoBinding { owner: self.id, prep, output, motion: None }, groups)
+                (IoBinding { owner: self.id, prep, output, motion: None, accumulate: None }, groups)
             }
         };
         Ok(HostIo {

@@ -46,6 +46,7 @@
 //! `2^levels` (the prep kernel replicates edge pixels into the padding) and the output kernel
 //! crops back.
 
+mod accumulate;
 mod build;
 mod host;
 mod motion;
@@ -66,6 +67,8 @@ use crate::kernels::{
 use crate::model::{Arch, InputBuffer, Transfer};
 use crate::weights::Weights;
 
+pub use accumulate::accumulate_bytes;
+use accumulate::{AccumulateIo, Accumulation};
 pub use build::*;
 pub use host::*;
 use motion::Motion;
@@ -103,6 +106,11 @@ pub struct Options {
     /// resolution and a third more below; [`Denoiser::gpu_bytes`] counts it). A frame without
     /// motion runs as without this.
     pub motion: bool,
+    /// Whether frames with motion blend their output with the previous frame's accumulated
+    /// output along the motion ([`crate::accumulate`], shaders/accumulate.wgsl; three RGB f32
+    /// frames more, [`Denoiser::gpu_bytes`] counts them). Only with [`Self::motion`]: frames
+    /// carry motion only then.
+    pub accumulate: bool,
     /// A cap on the bytes the denoiser holds ([`Denoiser::gpu_bytes`], the host path's
     /// transfer buffers included). A frame whose whole plan exceeds it runs in tiles, the
     /// largest that fit ([`MemoryPlan`]); a cap below the smallest tiles' cost is
@@ -160,6 +168,8 @@ pub struct Denoiser {
     tuning: Vec<Vec<Finalist>>,
     parity: usize,
     reset_pending: bool,
+    /// The output's temporal accumulation ([`Options::accumulate`]).
+    accumulation: Option<Accumulation>,
 }
 
 impl Denoiser {

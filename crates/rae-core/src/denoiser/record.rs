@@ -63,6 +63,8 @@ pub struct IoBinding {
     pub(super) output: wgpu::BindGroup,
     /// motion.wgsl's `motion_in` over the caller's motion buffer, if it has one.
     pub(super) motion: Option<wgpu::BindGroup>,
+    /// The output's accumulation over the caller's buffers ([`Options::accumulate`]).
+    pub(super) accumulate: Option<AccumulateIo>,
 }
 
 impl Denoiser {
@@ -111,7 +113,11 @@ impl Denoiser {
                 }))
             }
         };
-        Ok(IoBinding { owner: self.id, prep, output, motion })
+        let accumulate = self.accumulation.as_ref().map(|a| {
+            let (_, output) = self.io_groups(&GpuFrameIo { output: &a.current, ..*io }, &self.prep_params, &self.output_params);
+            AccumulateIo { output, groups: a.groups(&self.device, io.motion.unwrap_or(&self.dummy), io.output) }
+        });
+        Ok(IoBinding { owner: self.id, prep, output, motion, accumulate })
     }
 
     /// The prep and output bind groups over `io`'s buffers with these uniforms.
@@ -186,21 +192,28 @@ impl Denoiser {
             (Some(m), Some(g)) if warp && !reset => Some((m, g)),
             _ => None,
         };
+        // With accumulation the output pass writes the network's radiance for the accumulation
+        // pass, which has history where the hidden state is reprojected.
+        let (output, accumulate) = match (&self.accumulation, &io.accumulate) {
+            (Some(a), Some(g)) => (&g.output, Some((a, &g.groups[motion.is_some() as usize][parity]))),
+            _ => (&io.output, None),
+        };
         encoder.clear_buffer(&self.stats, 0, None);
-        self.record_passes(encoder, &io.prep, &io.output, (self.width, self.height), queries, motion, parity, reset);
+        self.record_passes(encoder, &io.prep, (output, accumulate), (self.width, self.height), queries, motion, parity, reset);
         self.parity ^= 1;
         self.reset_pending = false;
         Ok(())
     }
 
-    /// The frame's passes (prep, reprojection, convs and pools, output) with these bind groups,
-    /// the output kernel over `out_size`, on hidden-state parity `parity`; changes no state.
+    /// The frame's passes (prep, reprojection, convs and pools, output, the output's
+    /// accumulation where given) with these bind groups, the output kernel over `out_size`, on
+    /// hidden-state parity `parity`; changes no state.
     #[allow(clippy::too_many_arguments)]
     pub(super) fn record_passes(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         prep: &wgpu::BindGroup,
-        output: &wgpu::BindGroup,
+        (output, accumulate): (&wgpu::BindGroup, Option<(&Accumulation, &wgpu::BindGroup)>),
         out_size: (u32, u32),
         queries: Option<&wgpu::QuerySet>,
         motion: Option<(&Motion, &wgpu::BindGroup)>,
@@ -276,6 +289,9 @@ impl Denoiser {
             pass.set_pipeline(&self.kernels.output);
             pass.set_bind_group(0, output, &[]);
             pass.dispatch_workgroups(out_size.0.div_ceil(WORKGROUP), out_size.1.div_ceil(WORKGROUP), 1);
+            if let Some((a, group)) = accumulate {
+                a.record(&mut pass, group);
+            }
             stamp(&mut pass, 2 + self.graph.nodes.len() as u32);
             break;
         }
@@ -293,6 +309,9 @@ impl Denoiser {
         let mut encoder = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("rae compile") });
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("rae compile"), timestamp_writes: None });
+            if let (Some(a), Some(g)) = (&self.accumulation, &host.binding.accumulate) {
+                a.record_one(&mut pass, &g.groups[0][parity]);
+            }
             pass.set_pipeline(&self.kernels.output);
             pass.set_bind_group(0, &host.binding.output, &[]);
             pass.dispatch_workgroups(1, 1, 1);

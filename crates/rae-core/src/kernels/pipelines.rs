@@ -187,6 +187,45 @@ pub struct MotionKernels {
     pub guide_store: wgpu::ComputePipeline,
 }
 
+/// accumulate.wgsl's pipeline: the output's temporal accumulation (made once per
+/// [`crate::Denoiser`] built with [`crate::Options::accumulate`]).
+pub struct AccumulateKernel {
+    /// Layout of its group 0: parameters, the network's radiance, the previous accumulated
+    /// output, the frame's motion, the caller's output, the next history.
+    pub layout: wgpu::BindGroupLayout,
+    /// The pipeline.
+    pub pipeline: wgpu::ComputePipeline,
+}
+
+impl AccumulateKernel {
+    /// Compile accumulate.wgsl on `device`.
+    pub fn new(device: &wgpu::Device) -> Self {
+        let entries = [
+            uniform_entry(0),
+            storage_entry(1, true),
+            storage_entry(2, true),
+            storage_entry(3, true),
+            storage_entry(4, false),
+            storage_entry(5, false),
+        ];
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some("accumulate"), entries: &entries });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: None,
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("accumulate"),
+            layout: Some(&pipeline_layout),
+            module: &shader_module(device, "accumulate", shader_source("accumulate").to_string()),
+            entry_point: Some("main"),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+        AccumulateKernel { layout, pipeline }
+    }
+}
+
 /// Where a model's guide of the history test is in its packed input (motion.wgsl's overrides):
 /// the first channel of normal and of depth, `None` where it reads none.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]

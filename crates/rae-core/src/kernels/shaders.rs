@@ -22,6 +22,7 @@ pub const SHADERS: &[(&str, &str)] = &[
     ("pool", include_str!("../../../../shaders/pool.wgsl")),
     ("motion", include_str!("../../../../shaders/motion.wgsl")),
     ("carve", include_str!("../../../../shaders/carve.wgsl")),
+    ("accumulate", include_str!("../../../../shaders/accumulate.wgsl")),
 ];
 
 /// The weight declaration of conv3x3.wgsl (uniform chunks).

@@ -154,7 +154,8 @@ pub struct MemoryPlan {
     pub convs: u64,
     /// The host path's transfer buffers (inputs, staging, output, readback) of a frame or tile.
     pub io: u64,
-    /// The reprojection's buffers (frames with motion; untiled only).
+    /// The reprojection's buffers and the output's accumulation (frames with motion; untiled
+    /// only): a bound, the accumulation counted whether or not it is asked for.
     pub motion: u64,
 }
 
@@ -249,7 +250,7 @@ impl MemoryPlan {
             host_state: 0,
             convs: conv_bytes_bound(arch, pw, ph),
             io: io_bytes(arch, width as u64 * height as u64, width as u64 * height as u64),
-            motion: if motion { motion_bytes(pw, ph, arch.levels(), true) } else { 0 },
+            motion: if motion { motion_bytes(pw, ph, arch.levels(), true) + accumulate_bytes(width, height) } else { 0 },
         }
     }
 

@@ -1,0 +1,100 @@
+// Temporal accumulation of the denoised output along the motion: rae-core's accumulate.rs (the
+// CPU reference) and weights-tool's rae_weights/accumulate.py are the same computation, and the
+// tests hold the three to each other.
+//
+// After the output pass (which writes the network's radiance into `current`), per pixel, on
+// tonemapped values T(x) = x / (1 + x):
+// 1. The history is the previous accumulated output at x + motion, tonemapped, bilinear between
+//    pixel centres; used only where the motion is valid (finite, at most `params.limit`) and
+//    the point lies inside the frame, and on frames with history (`params.history`); elsewhere
+//    the output is `current`.
+// 2. The history is clipped, per channel, to mean +- GAMMA standard deviations of T over the
+//    current output's 3x3 neighbourhood inside the frame (no ghosting at disocclusions).
+// 3. The output is T^-1(ALPHA T(current) + (1 - ALPHA) T(history)), at most RADIANCE_MAX.
+// It writes the result into the caller's output and into `next`, the next frame's history.
+
+const ALPHA: f32 = 0.5;
+const GAMMA: f32 = 0.5;
+const RADIANCE_MAX: f32 = 1e8;
+
+struct Params {
+    width: u32,
+    height: u32,
+    limit: f32,     // the largest valid |motion| component (4 x the frame's larger side)
+    history: u32,   // 0: no history this frame (first frame, reset, no motion): pass through
+}
+
+@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(1) var<storage, read> current: array<f32>;
+@group(0) @binding(2) var<storage, read> previous: array<f32>;
+@group(0) @binding(3) var<storage, read> motion: array<f32>;
+@group(0) @binding(4) var<storage, read_write> radiance: array<f32>;
+@group(0) @binding(5) var<storage, read_write> next: array<f32>;
+
+fn tonemapped(buffer_is_current: bool, x: u32, y: u32) -> vec3<f32> {
+    let i = 3u * (y * params.width + x);
+    var v: vec3<f32>;
+    if buffer_is_current {
+        v = vec3<f32>(current[i], current[i + 1u], current[i + 2u]);
+    } else {
+        v = vec3<f32>(previous[i], previous[i + 1u], previous[i + 2u]);
+    }
+    return v / (vec3<f32>(1.0) + v);
+}
+
+fn store(i: u32, v: vec3<f32>) {
+    radiance[3u * i] = v.x;
+    radiance[3u * i + 1u] = v.y;
+    radiance[3u * i + 2u] = v.z;
+    next[3u * i] = v.x;
+    next[3u * i + 1u] = v.y;
+    next[3u * i + 2u] = v.z;
+}
+
+@compute @workgroup_size(8, 8, 1)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if gid.x >= params.width || gid.y >= params.height {
+        return;
+    }
+    let i = gid.y * params.width + gid.x;
+    let here = vec3<f32>(current[3u * i], current[3u * i + 1u], current[3u * i + 2u]);
+    if params.history == 0u {
+        store(i, here);
+        return;
+    }
+    let m = vec2<f32>(motion[2u * i], motion[2u * i + 1u]);
+    let s = vec2<f32>(gid.xy) + m;
+    let last = vec2<f32>(f32(params.width - 1u), f32(params.height - 1u));
+    // NaN fails every comparison, and an infinity exceeds the limit.
+    if !(all(abs(m) <= vec2<f32>(params.limit)) && all(s >= vec2<f32>(0.0)) && all(s <= last)) {
+        store(i, here);
+        return;
+    }
+    let lo = vec2<u32>(select(gid.x - 1u, 0u, gid.x == 0u), select(gid.y - 1u, 0u, gid.y == 0u));
+    let hi = min(gid.xy + vec2<u32>(1u), vec2<u32>(params.width - 1u, params.height - 1u));
+    let count = f32((hi.x - lo.x + 1u) * (hi.y - lo.y + 1u));
+    var sum = vec3<f32>(0.0);
+    for (var y = lo.y; y <= hi.y; y++) {
+        for (var x = lo.x; x <= hi.x; x++) {
+            sum += tonemapped(true, x, y);
+        }
+    }
+    let mean = sum / count;
+    var dev = vec3<f32>(0.0);
+    for (var y = lo.y; y <= hi.y; y++) {
+        for (var x = lo.x; x <= hi.x; x++) {
+            let d = tonemapped(true, x, y) - mean;
+            dev += d * d;
+        }
+    }
+    let deviation = sqrt(dev / count);
+    let s0 = floor(s);
+    let f = s - s0;
+    let p = vec2<u32>(s0);
+    let q = min(p + vec2<u32>(1u), vec2<u32>(params.width - 1u, params.height - 1u));
+    let top = tonemapped(false, p.x, p.y) * (1.0 - f.x) + tonemapped(false, q.x, p.y) * f.x;
+    let bottom = tonemapped(false, p.x, q.y) * (1.0 - f.x) + tonemapped(false, q.x, q.y) * f.x;
+    let history = min(max(top * (1.0 - f.y) + bottom * f.y, mean - GAMMA * deviation), mean + GAMMA * deviation);
+    let b = ALPHA * (here / (vec3<f32>(1.0) + here)) + (1.0 - ALPHA) * history;
+    store(i, min(b / max(vec3<f32>(1.0) - b, vec3<f32>(1e-30)), vec3<f32>(RADIANCE_MAX)));
+}
