@@ -9,7 +9,8 @@
 //    the point lies inside the frame, and on frames with history (`params.history`); elsewhere
 //    the output is `current`.
 // 2. The history is clipped, per channel, to mean +- GAMMA standard deviations of T over the
-//    current output's 3x3 neighbourhood inside the frame (no ghosting at disocclusions).
+//    current output's 3x3 neighbourhood inside the frame (no ghosting at disocclusions), and
+//    to the neighbourhood's minimum and maximum (the output stays within its range).
 // 3. The output is T^-1(ALPHA T(current) + (1 - ALPHA) T(history)), at most RADIANCE_MAX.
 // It writes the result into the caller's output and into `next`, the next frame's history.
 
@@ -74,9 +75,14 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let hi = min(gid.xy + vec2<u32>(1u), vec2<u32>(params.width - 1u, params.height - 1u));
     let count = f32((hi.x - lo.x + 1u) * (hi.y - lo.y + 1u));
     var sum = vec3<f32>(0.0);
+    var lowest = vec3<f32>(1.0);
+    var highest = vec3<f32>(0.0);
     for (var y = lo.y; y <= hi.y; y++) {
         for (var x = lo.x; x <= hi.x; x++) {
-            sum += tonemapped(true, x, y);
+            let v = tonemapped(true, x, y);
+            sum += v;
+            lowest = min(lowest, v);
+            highest = max(highest, v);
         }
     }
     let mean = sum / count;
@@ -94,7 +100,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let q = min(p + vec2<u32>(1u), vec2<u32>(params.width - 1u, params.height - 1u));
     let top = tonemapped(false, p.x, p.y) * (1.0 - f.x) + tonemapped(false, q.x, p.y) * f.x;
     let bottom = tonemapped(false, p.x, q.y) * (1.0 - f.x) + tonemapped(false, q.x, q.y) * f.x;
-    let history = min(max(top * (1.0 - f.y) + bottom * f.y, mean - GAMMA * deviation), mean + GAMMA * deviation);
+    let history = min(max(top * (1.0 - f.y) + bottom * f.y, max(mean - GAMMA * deviation, lowest)), min(mean + GAMMA * deviation, highest));
     let b = ALPHA * (here / (vec3<f32>(1.0) + here)) + (1.0 - ALPHA) * history;
     store(i, min(b / max(vec3<f32>(1.0) - b, vec3<f32>(1e-30)), vec3<f32>(RADIANCE_MAX)));
 }

@@ -15,9 +15,11 @@ statistics or the blend):
    frame's larger side) and the point lies inside the frame (every tap with weight inside);
    elsewhere the output is the network's.
 2. The history is clipped, per channel, to ``mean +- GAMMA * std`` of ``T`` over the current
-   output's 3x3 neighbourhood (the pixels inside the frame): history that disagrees with what
-   the network sees now (a disocclusion, a moving shadow, a light switched on) is pulled to it,
-   so there is no ghosting, without a test on depth or normals.
+   output's 3x3 neighbourhood (the pixels inside the frame), and to that neighbourhood's
+   minimum and maximum: history that disagrees with what the network sees now (a disocclusion,
+   a moving shadow, a light switched on) is pulled to it, so there is no ghosting, without a
+   test on depth or normals; and the output stays within its neighbourhood's range, so every
+   bound of the output stage holds for it too.
 3. The result is ``T^-1(ALPHA * T(current) + (1 - ALPHA) * T(history))``, at most
    ``RADIANCE_MAX``.
 
@@ -87,6 +89,15 @@ def neighbourhood(t: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
     return mean, var.sqrt()
 
 
+def history_box(t: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+    """(lowest, highest) tonemapped history each pixel keeps: ``mean +- GAMMA * std`` of its 3x3
+    neighbourhood in ``t``, within the neighbourhood's minimum and maximum."""
+    mean, std = neighbourhood(t)
+    lowest = -F.max_pool2d(-t, 3, 1, 1)
+    highest = F.max_pool2d(t, 3, 1, 1)
+    return torch.maximum(mean - GAMMA * std, lowest), torch.minimum(mean + GAMMA * std, highest)
+
+
 def accumulate(current: torch.Tensor, previous: torch.Tensor | None, motion: torch.Tensor | None) -> torch.Tensor:
     """This frame's accumulated output from the network's ``current`` output, the previous
     frame's accumulated output and this frame's motion; ``current`` itself without either."""
@@ -94,9 +105,8 @@ def accumulate(current: torch.Tensor, previous: torch.Tensor | None, motion: tor
         return current
     sx, sy, usable = history_point(motion.to(current.dtype))
     t = tonemap(current)
-    mean, std = neighbourhood(t)
-    h = bilinear(tonemap(previous), sx, sy)
-    h = torch.minimum(torch.maximum(h, mean - GAMMA * std), mean + GAMMA * std)
+    lowest, highest = history_box(t)
+    h = torch.minimum(torch.maximum(bilinear(tonemap(previous), sx, sy), lowest), highest)
     b = ALPHA * t + (1.0 - ALPHA) * h
     out = (b / (1.0 - b).clamp_min(1e-30)).clamp(max=RADIANCE_MAX)
     return torch.where(usable, out, current)

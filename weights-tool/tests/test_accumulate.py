@@ -46,6 +46,8 @@ def test_history_is_clipped_to_the_neighbourhood() -> None:
     mean, std = accumulate.neighbourhood(t)
     bound = accumulate.ALPHA * t + (1 - accumulate.ALPHA) * (mean + accumulate.GAMMA * std)
     assert torch.all(accumulate.tonemap(out) <= bound + 1e-6)
+    # Nor past the neighbourhood's largest value: the output stage's bounds hold.
+    assert torch.all(out <= torch.nn.functional.max_pool2d(cur, 3, 1, 1) * (1 + 1e-5))
     assert torch.any(out > cur + 1e-3)  # moved towards the history where it is allowed to
 
 

@@ -13,9 +13,11 @@
 //!    [`crate::frame::MOTION_ABSURD`] times the frame's larger side) and the point lies inside
 //!    the frame; elsewhere the output is the network's.
 //! 2. The history is clipped, per channel, to `mean ± GAMMA * std` of `T` over the current
-//!    output's 3x3 neighbourhood (the pixels inside the frame): history that disagrees with
-//!    what the network sees now (a disocclusion, a moving shadow) is pulled to it, so there is
-//!    no ghosting, without a test on depth or normals.
+//!    output's 3x3 neighbourhood (the pixels inside the frame), and to that neighbourhood's
+//!    minimum and maximum: history that disagrees with what the network sees now (a
+//!    disocclusion, a moving shadow) is pulled to it, so there is no ghosting, without a test
+//!    on depth or normals; and the output stays within its neighbourhood's range, so every
+//!    bound of the output stage holds for it too.
 //! 3. The result is `T⁻¹(ALPHA * T(current) + (1 - ALPHA) * T(history))`, at most
 //!    [`crate::cpu::limits::RADIANCE_MAX`].
 //!
@@ -63,10 +65,13 @@ pub fn accumulate(current: &[f32], previous: &[f32], motion: &[f32], width: usiz
             let count = ((yhi - ylo + 1) * (xhi - xlo + 1)) as f32;
             for c in 0..3 {
                 let t = |j: usize| tonemap(current[3 * j + c]);
-                let mut sum = 0.0;
+                let (mut sum, mut lowest, mut highest) = (0.0, f32::INFINITY, f32::NEG_INFINITY);
                 for q in ylo..=yhi {
                     for p in xlo..=xhi {
-                        sum += t(q * width + p);
+                        let v = t(q * width + p);
+                        sum += v;
+                        lowest = lowest.min(v);
+                        highest = highest.max(v);
                     }
                 }
                 let mean = sum / count;
@@ -81,7 +86,8 @@ pub fn accumulate(current: &[f32], previous: &[f32], motion: &[f32], width: usiz
                 let h = |px: usize, py: usize| tonemap(previous[3 * (py * width + px) + c]);
                 let top = h(x0, y0) * (1.0 - fx) + h(x1, y0) * fx;
                 let bottom = h(x0, y1) * (1.0 - fx) + h(x1, y1) * fx;
-                let history = (top * (1.0 - fy) + bottom * fy).max(mean - GAMMA * std).min(mean + GAMMA * std);
+                let (lo, hi) = ((mean - GAMMA * std).max(lowest), (mean + GAMMA * std).min(highest));
+                let history = (top * (1.0 - fy) + bottom * fy).max(lo).min(hi);
                 let b = ALPHA * t(i) + (1.0 - ALPHA) * history;
                 out[3 * i + c] = (b / (1.0 - b).max(1e-30)).min(RADIANCE_MAX);
             }

@@ -259,7 +259,7 @@ impl Session {
     }
 
     /// Denoise `frame` with the hidden state of the frames before it (motion, where the frame
-    /// has it, reprojects that state), resolving to a [`Denoised`] once the GPU is done. Await
+    /// has it, reprojects that state and accumulates the output along it), resolving to a [`Denoised`] once the GPU is done. Await
     /// each frame before the next: a frame in flight refuses another.
     pub fn denoise(&self, frame: &Frame) -> js_sys::Promise {
         let started = self.submit_frame(frame);
@@ -285,7 +285,8 @@ impl Session {
         };
         wasm_bindgen_futures::future_to_promise(async move {
             let (weights, golden) = prepared?;
-            let key = RunKey { width: golden.width, height: golden.height, motion: golden.frames[0].contains_key("motion") };
+            let motion = golden.frames[0].contains_key("motion");
+            let key = RunKey { width: golden.width, height: golden.height, motion, accumulate: false };
             let (mut run, built) = Run::build(&device, &queue, &weights, key, tile).map_err(js_err)?;
             built.check(&errors, &format!("{}: building the denoiser", golden.weights)).await?;
             let (mut worst, mut max_abs) = (0f32, 0f32);
@@ -316,7 +317,8 @@ impl Session {
         let inputs = frame.inputs().map_err(js_err)?;
         let inner = &mut *inner;
         let weights = inner.weights.as_ref().ok_or_else(|| js_err("no model loaded"))?;
-        let key = RunKey { width: frame.width(), height: frame.height(), motion: inputs.motion.is_some() };
+        let motion = inputs.motion.is_some();
+        let key = RunKey { width: frame.width(), height: frame.height(), motion, accumulate: motion };
         let mut built = None;
         if inner.run.as_ref().is_none_or(|r| r.key != key) {
             inner.run = None;

@@ -17,6 +17,9 @@ pub(crate) struct RunKey {
     pub width: u32,
     pub height: u32,
     pub motion: bool,
+    /// Whether frames with motion have their output accumulated along it (the page's frames,
+    /// as `rae-cli denoise`); the golden frames hold the network alone.
+    pub accumulate: bool,
 }
 
 /// A denoiser and the buffers bound to it: one per input the model reads, motion, the output
@@ -49,7 +52,7 @@ impl Run {
 
     fn make(device: &wgpu::Device, queue: &wgpu::Queue, weights: &Weights, key: RunKey, tile: Option<Tile>) -> rae_core::Result<Run> {
         let tiles = tile.map_or(TileChoice::Auto, TileChoice::Fixed);
-        let options = Options { motion: key.motion, tiles, ..Default::default() };
+        let options = Options { motion: key.motion, accumulate: key.accumulate, tiles, ..Default::default() };
         let denoiser = Denoiser::with_options(device, queue, weights, key.width, key.height, options)?;
         let pixels = key.width as u64 * key.height as u64;
         let buffer = |label: &str, channels: u64, usage| {
