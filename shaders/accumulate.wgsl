@@ -71,27 +71,34 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         store(i, here);
         return;
     }
-    let lo = vec2<u32>(select(gid.x - 1u, 0u, gid.x == 0u), select(gid.y - 1u, 0u, gid.y == 0u));
-    let hi = min(gid.xy + vec2<u32>(1u), vec2<u32>(params.width - 1u, params.height - 1u));
-    let count = f32((hi.x - lo.x + 1u) * (hi.y - lo.y + 1u));
+    // The 3x3 neighbourhood, loaded once (a tap outside the frame loads its nearest pixel and
+    // counts for nothing): its count, sum, range, then the deviation from the mean.
+    var taps: array<vec3<f32>, 9>;
+    var inside: array<f32, 9>;
+    var count = 0.0;
     var sum = vec3<f32>(0.0);
     var lowest = vec3<f32>(1.0);
     var highest = vec3<f32>(0.0);
-    for (var y = lo.y; y <= hi.y; y++) {
-        for (var x = lo.x; x <= hi.x; x++) {
-            let v = tonemapped(true, x, y);
-            sum += v;
+    let size = vec2<i32>(i32(params.width), i32(params.height));
+    for (var k = 0; k < 9; k++) {
+        let q = vec2<i32>(gid.xy) + vec2<i32>(k % 3 - 1, k / 3 - 1);
+        let c = clamp(q, vec2<i32>(0), size - vec2<i32>(1));
+        let v = tonemapped(true, u32(c.x), u32(c.y));
+        let w = select(0.0, 1.0, all(q == c));
+        taps[k] = v;
+        inside[k] = w;
+        count += w;
+        sum += v * w;
+        if w > 0.0 {
             lowest = min(lowest, v);
             highest = max(highest, v);
         }
     }
     let mean = sum / count;
     var dev = vec3<f32>(0.0);
-    for (var y = lo.y; y <= hi.y; y++) {
-        for (var x = lo.x; x <= hi.x; x++) {
-            let d = tonemapped(true, x, y) - mean;
-            dev += d * d;
-        }
+    for (var k = 0; k < 9; k++) {
+        let d = taps[k] - mean;
+        dev += d * d * inside[k];
     }
     let deviation = sqrt(dev / count);
     let s0 = floor(s);
