@@ -7,7 +7,7 @@ use rae_core::accumulate::{Accumulator, accumulate};
 use rae_core::{Denoiser, FrameInputs, Options, Weights};
 use safetensors::SafeTensors;
 
-use crate::{fixture, gpu};
+use crate::{fixture, gpu, vector_cases};
 
 fn values(st: &SafeTensors, name: &str) -> (Vec<f32>, Vec<usize>) {
     let t = st.tensor(name).unwrap_or_else(|e| panic!("{name}: {e}"));
@@ -19,9 +19,7 @@ fn values(st: &SafeTensors, name: &str) -> (Vec<f32>, Vec<usize>) {
 fn accumulation_gives_the_shared_vectors_values() {
     let bytes = std::fs::read(fixture("accumulate_vectors.safetensors")).unwrap();
     let st = SafeTensors::deserialize(&bytes).unwrap();
-    let mut cases: Vec<String> = st.names().iter().map(|n| n.split('.').next().unwrap().to_string()).collect();
-    cases.sort();
-    cases.dedup();
+    let cases = vector_cases(&st);
     assert!(cases.len() >= 4, "{cases:?}");
     for case in cases {
         let (current, shape) = values(&st, &format!("{case}.current"));

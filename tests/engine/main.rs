@@ -31,6 +31,14 @@ pub fn fixture(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../tests/fixtures").join(name)
 }
 
+/// The cases of a shared-vectors fixture (tensors named `caseK.what`), sorted, each once.
+pub fn vector_cases(st: &safetensors::SafeTensors) -> Vec<String> {
+    let mut cases: Vec<String> = st.names().iter().map(|n| n.split('.').next().unwrap().to_string()).collect();
+    cases.sort();
+    cases.dedup();
+    cases
+}
+
 /// Devices no running test holds.
 static IDLE: Mutex<Vec<&'static Gpu>> = Mutex::new(Vec::new());
 

@@ -4,7 +4,7 @@
 use rae_core::metrics;
 use safetensors::SafeTensors;
 
-use crate::fixture;
+use crate::{fixture, vector_cases};
 
 /// Tensor `name` of `st` as f32 or f64 values, widened to f64.
 fn values(st: &SafeTensors, name: &str) -> Vec<f64> {
@@ -20,9 +20,7 @@ fn values(st: &SafeTensors, name: &str) -> Vec<f64> {
 fn metrics_give_the_shared_vectors_values() {
     let bytes = std::fs::read(fixture("metrics_vectors.safetensors")).unwrap();
     let st = SafeTensors::deserialize(&bytes).unwrap();
-    let mut cases: Vec<String> = st.names().iter().map(|n| n.split('.').next().unwrap().to_string()).collect();
-    cases.sort();
-    cases.dedup();
+    let cases = vector_cases(&st);
     assert!(cases.len() >= 4, "{cases:?}");
     for case in cases {
         let image = |k: &str| values(&st, &format!("{case}.{k}")).into_iter().map(|v| v as f32).collect::<Vec<f32>>();

@@ -11,7 +11,7 @@ Per pixel, on tonemapped values ``T(x) = x / (1 + x)`` (so one bright sample can
 statistics or the blend):
 
 1. The history is the previous accumulated output at ``x + motion``, tonemapped, then bilinear between pixel
-   centres. It is used only where the motion is valid (finite, at most ``ABSURD`` times the
+   centres. It is used only where the motion is valid (finite, at most ``warp.ABSURD`` times the
    frame's larger side) and the point lies inside the frame (every tap with weight inside);
    elsewhere the output is the network's.
 2. The history is clipped, per channel, to ``mean +- GAMMA * std`` of ``T`` over the current
@@ -32,7 +32,7 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 
-from .warp import ABSURD
+from . import warp
 
 #: The current output's share of the blend.
 ALPHA = 0.5
@@ -47,34 +47,16 @@ def tonemap(x: torch.Tensor) -> torch.Tensor:
     return x / (1.0 + x)
 
 
-def history_point(motion: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
-    """(x + motion's x, y + motion's y, usable) per pixel: usable where the motion is valid and
-    the point lies inside the frame (N x 1 x H x W bool)."""
+def usable(motion: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+    """(motion with invalid pixels zeroed, usable) per pixel: usable (N x 1 x H x W bool) where
+    the motion is valid (``warp.sanitize_motion``) and ``x + motion`` lies inside the frame."""
     h, w = motion.shape[-2:]
+    m, ok = warp.sanitize_motion(motion)
     ys = torch.arange(h, dtype=motion.dtype, device=motion.device).view(1, 1, h, 1)
     xs = torch.arange(w, dtype=motion.dtype, device=motion.device).view(1, 1, 1, w)
-    limit = ABSURD * max(h, w)
-    ok = (torch.isfinite(motion) & (motion.abs() <= limit)).all(dim=1, keepdim=True)
-    m = torch.where(ok, motion, torch.zeros_like(motion))
     sx, sy = xs + m[:, :1], ys + m[:, 1:]
     inside = (sx >= 0) & (sx <= w - 1) & (sy >= 0) & (sy <= h - 1)
-    return sx, sy, ok & inside
-
-
-def bilinear(img: torch.Tensor, sx: torch.Tensor, sy: torch.Tensor) -> torch.Tensor:
-    """``img`` at (sx, sy), bilinear between pixel centres, taps clamped to the frame."""
-    n, c, h, w = img.shape
-    x0, y0 = torch.floor(sx), torch.floor(sy)
-    fx, fy = sx - x0, sy - y0
-    flat = img.reshape(n, c, h * w)
-    out = torch.zeros_like(img)
-    for dy, wy in ((0, 1 - fy), (1, fy)):
-        for dx, wx in ((0, 1 - fx), (1, fx)):
-            xi = (x0 + dx).clamp(0, w - 1)
-            yi = (y0 + dy).clamp(0, h - 1)
-            idx = (yi * w + xi).long().view(n, 1, h * w).expand(n, c, h * w)
-            out = out + torch.gather(flat, 2, idx).view(n, c, h, w) * (wx * wy)
-    return out
+    return m, (ok > 0) & inside
 
 
 def neighbourhood(t: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
@@ -103,13 +85,15 @@ def accumulate(current: torch.Tensor, previous: torch.Tensor | None, motion: tor
     frame's accumulated output and this frame's motion; ``current`` itself without either."""
     if previous is None or motion is None or previous.shape != current.shape:
         return current
-    sx, sy, usable = history_point(motion.to(current.dtype))
+    m, keep = usable(motion.to(current.dtype))
     t = tonemap(current)
     lowest, highest = history_box(t)
-    h = torch.minimum(torch.maximum(bilinear(tonemap(previous), sx, sy), lowest), highest)
+    # Every tap with weight lies inside where the history is used: edge taps clamped as the
+    # history test's fetch does.
+    h = torch.minimum(torch.maximum(warp.bilinear(tonemap(previous), m, zero_outside=False), lowest), highest)
     b = ALPHA * t + (1.0 - ALPHA) * h
     out = (b / (1.0 - b).clamp_min(1e-30)).clamp(max=RADIANCE_MAX)
-    return torch.where(usable, out, current)
+    return torch.where(keep, out, current)
 
 
 #: Shared test vectors (tests/fixtures/accumulate_vectors.safetensors): rae-core's

@@ -64,7 +64,7 @@ def _ramp(s: torch.Tensor) -> torch.Tensor:
 def history(now: torch.Tensor, previous: torch.Tensor, motion: torch.Tensor) -> torch.Tensor:
     """The history test (N x 1 in [0, 1]) of guide ``now`` against the previous frame's guide
     fetched at ``x + motion`` (motion as ``sanitize_motion`` leaves it)."""
-    p = _bilinear(previous, motion, zero_outside=False)
+    p = bilinear(previous, motion, zero_outside=False)
     dz = (p[:, 3:] - now[:, 3:]).abs()
     dn = torch.sqrt(((p[:, :3] - now[:, :3]) ** 2).sum(dim=1, keepdim=True))
     return _ramp(dz / DEPTH_TOLERANCE) * _ramp(dn / NORMAL_TOLERANCE)
@@ -86,7 +86,7 @@ def pyramid(
     return out
 
 
-def _bilinear(state: torch.Tensor, motion: torch.Tensor, zero_outside: bool) -> torch.Tensor:
+def bilinear(state: torch.Tensor, motion: torch.Tensor, zero_outside: bool) -> torch.Tensor:
     """``state`` fetched at ``x + motion``, bilinear between pixel centres; taps outside weigh
     zero (``zero_outside``) or load the nearest edge pixel."""
     n, c, h, w = state.shape
@@ -112,4 +112,4 @@ def _bilinear(state: torch.Tensor, motion: torch.Tensor, zero_outside: bool) -> 
 def warp(state: torch.Tensor, motion: torch.Tensor, valid: torch.Tensor) -> torch.Tensor:
     """``state`` (N x C x H x W, the previous frame's) fetched at ``x + motion``: bilinear, zero
     outside, scaled by ``valid``. ``motion`` and ``valid`` are at the state's resolution."""
-    return _bilinear(state, motion, zero_outside=True) * valid
+    return bilinear(state, motion, zero_outside=True) * valid
