@@ -6,6 +6,7 @@ reads the folders as they are; `weights-tool` loads them like rae-trace's (`rae_
     python3 -m pip install bpy==4.5.15      # Blender as a Python module (Python 3.11)
     python3 scripts/render-blender.py OUT --seeds 2001-2004 [--frames 8] [--size 128x128] [--spp 1] [--ref-spp 256]
     python3 scripts/render-blender.py OUT4 --seeds 2001-2004 --spp 4 --reference-from OUT
+    python3 scripts/render-blender.py OUT --seeds 2005,2011-2012,2038   # a list of seeds and ranges
 
 Each seed is a scene built from primitives and procedural textures: a textured floor, three to six
 objects of plastic, metal, glass or light-emitting material, a sun and zero to two area lights, a
@@ -195,16 +196,19 @@ def write(path: Path, channels: dict[str, np.ndarray]) -> None:
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("out", type=Path)
-    p.add_argument("--seeds", default="2001-2004", help="first-last scene seeds")
+    p.add_argument("--seeds", default="2001-2004", help="scene seeds: first-last, or a comma-separated list of seeds and ranges")
     p.add_argument("--frames", type=int, default=8)
     p.add_argument("--size", default="128x128")
     p.add_argument("--spp", type=int, default=1)
     p.add_argument("--ref-spp", type=int, default=256)
     p.add_argument("--reference-from", type=Path, help="copy the reference layer from this folder's sequences instead of rendering it")
     a = p.parse_args(sys.argv[sys.argv.index("--") + 1 :] if "--" in sys.argv else sys.argv[1:])
-    first, last = (int(v) for v in a.seeds.split("-"))
+    seeds = []
+    for part in a.seeds.split(","):
+        first, _, last = part.partition("-")
+        seeds += range(int(first), int(last or first) + 1)
     size = tuple(int(v) for v in a.size.split("x"))
-    for seed in range(first, last + 1):
+    for seed in seeds:
         name = f"b{seed}"
         done = a.out / name
         if done.exists():

@@ -80,17 +80,25 @@ def run_oidn(seq: Sequence, quality: str, times: list[float] | None = None) -> l
 
 
 def evaluate(
-    models: list[Path], sets: dict[str, Path], oidn: bool = True, motion: str = "both", accumulate: str = "on"
+    models: list[Path],
+    sets: dict[str, Path],
+    oidn: bool = True,
+    motion: str = "both",
+    accumulate: str = "on",
+    per_sequence: bool = False,
 ) -> list[dict[str, object]]:
-    """Rows of (set, method, metrics...) averaged over each set's sequences. Where a sequence has
-    motion, each model runs with it (its hidden state reprojected), without it, or both
-    (`motion`: on, off, both), as separate rows; with motion, its output accumulated along it,
-    not, or both (`accumulate`)."""
+    """Rows of (set, sequence, method, metrics...): each set's means over its sequences (sequence
+    ``"all"``), then with `per_sequence` each sequence's own rows. Where a sequence has motion,
+    each model runs with it (its hidden state reprojected), without it, or both (`motion`: on,
+    off, both), as separate rows; with motion, its output accumulated along it, not, or both
+    (`accumulate`)."""
     rows: list[dict[str, object]] = []
     for label, folder in sets.items():
         seqs = load_sequences(folder)
         methods: dict[str, list[dict[str, float]]] = {}
+        names: list[str] = []
         for s in seqs:
+            names.append(s.name)
             refs = [hwc(s.buffers["reference"][i]) for i in range(s.frames)]
             noisy = [hwc(s.buffers["color"][i]) for i in range(s.frames)]
             methods.setdefault("noisy input", []).append(sequence_metrics(noisy, refs))
@@ -105,17 +113,23 @@ def evaluate(
             if oidn:
                 methods.setdefault("OIDN 2.5 high (c+a+n)", []).append(sequence_metrics(run_oidn(s, "high"), refs))
         for name, ms in methods.items():
-            row: dict[str, object] = {"set": label, "method": name, "sequences": len(ms)}
+            row: dict[str, object] = {"set": label, "sequence": "all", "method": name, "sequences": len(ms)}
             row.update({k: float(np.mean([m[k] for m in ms])) for k in ms[0]})
             rows.append(row)
+        if per_sequence:
+            for k, seq_name in enumerate(names):
+                rows += [{"set": label, "sequence": seq_name, "method": name, "sequences": 1, **ms[k]} for name, ms in methods.items()]
     return rows
 
 
 def markdown(rows: list[dict[str, object]]) -> str:
-    """The rows as a Markdown table."""
-    out = ["| held-out set | method | relMSE | PSNR (dB) | SSIM | temporal error |", "|---|---|---:|---:|---:|---:|"]
+    """The rows as a Markdown table; a sequence column where some row is one sequence's."""
+    seq = any(r.get("sequence", "all") != "all" for r in rows)
+    out = [f"| held-out set |{' sequence |' if seq else ''} method | relMSE | PSNR (dB) | SSIM | temporal error |"]
+    out.append(f"|---|{'---|' if seq else ''}---|---:|---:|---:|---:|")
     for r in rows:
-        out.append(f"| {r['set']} | {r['method']} | {r['relmse']:.4f} | {r['psnr']:.2f} | {r['ssim']:.4f} | {r['temporal']:.4f} |")
+        s = f" {r.get('sequence', 'all')} |" if seq else ""
+        out.append(f"| {r['set']} |{s} {r['method']} | {r['relmse']:.4f} | {r['psnr']:.2f} | {r['ssim']:.4f} | {r['temporal']:.4f} |")
     return "\n".join(out)
 
 
@@ -128,6 +142,7 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument(
         "--accumulate", choices=["on", "off", "both"], default="on", help="with motion, accumulate the output along it, not, or both"
     )
+    p.add_argument("--per-sequence", action="store_true", help="each sequence's rows too, after the sets' means")
     p.add_argument("--threads", type=int, default=2)
     a = p.parse_args(argv)
     torch.set_num_threads(a.threads)
@@ -137,5 +152,5 @@ def main(argv: list[str] | None = None) -> int:
         if not folder:
             p.error(f"--data {d}: expected LABEL=FOLDER")
         sets[label] = Path(folder)
-    print(markdown(evaluate(a.models, sets, oidn=not a.no_oidn, motion=a.motion, accumulate=a.accumulate)))
+    print(markdown(evaluate(a.models, sets, oidn=not a.no_oidn, motion=a.motion, accumulate=a.accumulate, per_sequence=a.per_sequence)))
     return 0

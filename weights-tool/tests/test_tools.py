@@ -41,3 +41,12 @@ def test_evaluation_rows_for_input_and_each_model(tmp_path: Path) -> None:
     assert [r["method"] for r in rows] == ["noisy input", "rae m"]
     assert all(np.isfinite(r["relmse"]) and -1 <= r["ssim"] <= 1 and np.isfinite(r["temporal"]) for r in rows)
     assert markdown(rows).count("\n") == 3
+    write_sequence(tmp_path / "data" / "t", 3, 16, seed=3)
+    rows = evaluate([weights], {"1spp": tmp_path / "data"}, oidn=False, per_sequence=True)
+    assert [(r["sequence"], r["method"]) for r in rows] == [
+        ("all", "noisy input"), ("all", "rae m"), ("s", "noisy input"), ("s", "rae m"), ("t", "noisy input"), ("t", "rae m")
+    ]
+    # The sets' means are the means of their sequences' rows.
+    for k in ("relmse", "psnr", "ssim", "temporal"):
+        assert np.isclose(rows[1][k], (rows[3][k] + rows[5][k]) / 2)
+    assert markdown(rows).splitlines()[0].startswith("| held-out set | sequence | method |")
