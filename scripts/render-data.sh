@@ -12,7 +12,10 @@
 #              samples`); the color is the same, bit for bit;
 #   DIR/blender-val, DIR/blender-val4: four held-out Blender Cycles scenes (seeds 2001-2004, 8
 #              frames of 128x128 as multi-layer EXRs, 1 and 4 spp, references at 256 spp;
-#              scripts/render-blender.py), where bpy is installed (pip install bpy==4.5.15).
+#              scripts/render-blender.py), where bpy is installed (pip install bpy==4.5.15);
+#   DIR/blender-glass, DIR/blender-glass4: four more held-out Blender scenes, those of seeds
+#              2005-2040 with the most glass (seeds 2005, 2011, 2012, 2038; docs/MODELS.md,
+#              "Glass at 1 spp"), the same way.
 # A folder already there is kept, so an interrupted run continues. About 15 minutes on 2 cores.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -64,6 +67,8 @@ if python3 -c "import bpy" 2>/dev/null; then
     # Blender prints a line per tile; only the script's progress lines are shown.
     python3 scripts/render-blender.py "$out/blender-val" --seeds 2001-2004 | { grep '^b2' || true; }
     python3 scripts/render-blender.py "$out/blender-val4" --seeds 2001-2004 --spp 4 --reference-from "$out/blender-val" | { grep '^b2' || true; }
+    python3 scripts/render-blender.py "$out/blender-glass" --seeds 2005,2011-2012,2038 | { grep '^b2' || true; }
+    python3 scripts/render-blender.py "$out/blender-glass4" --seeds 2005,2011-2012,2038 --spp 4 --reference-from "$out/blender-glass" | { grep '^b2' || true; }
 else
     echo "no bpy: the Blender held-out sets are skipped (pip install bpy==4.5.15)"
 fi

@@ -13,6 +13,7 @@ frames of each sequence, then over sequences. Prints a Markdown table.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import time
 from pathlib import Path
 
@@ -79,6 +80,30 @@ def run_oidn(seq: Sequence, quality: str, times: list[float] | None = None) -> l
     return outs
 
 
+#: The buffers ``with_aux_from`` takes from the other render.
+AUX_BUFFERS = ("albedo", "normal", "depth", "roughness")
+
+
+def with_aux_from(seqs: list[Sequence], other: list[Sequence]) -> list[Sequence]:
+    """The sequences with the auxiliary buffers (``AUX_BUFFERS``) of the same-named sequences of
+    another render of the same frames (e.g. the 4 spp render of a 1 spp set): how much the
+    noise of a renderer's auxiliary buffers costs, color and reference unchanged."""
+    by_name = {o.name: o for o in other}
+    out = []
+    for s in seqs:
+        o = by_name.get(s.name)
+        if o is None:
+            raise ValueError(f"{s.folder}: no sequence {s.name!r} in the render to take auxiliary buffers from")
+        buffers = dict(s.buffers)
+        for k in AUX_BUFFERS:
+            if k in buffers:
+                if k not in o.buffers or o.buffers[k].shape != buffers[k].shape:
+                    raise ValueError(f"{o.folder}: {k} missing or of another size than {s.folder}'s")
+                buffers[k] = o.buffers[k]
+        out.append(dataclasses.replace(s, buffers=buffers))
+    return out
+
+
 def evaluate(
     models: list[Path],
     sets: dict[str, Path],
@@ -86,15 +111,19 @@ def evaluate(
     motion: str = "both",
     accumulate: str = "on",
     per_sequence: bool = False,
+    aux_from: dict[str, Path] | None = None,
 ) -> list[dict[str, object]]:
     """Rows of (set, sequence, method, metrics...): each set's means over its sequences (sequence
     ``"all"``), then with `per_sequence` each sequence's own rows. Where a sequence has motion,
     each model runs with it (its hidden state reprojected), without it, or both (`motion`: on,
     off, both), as separate rows; with motion, its output accumulated along it, not, or both
-    (`accumulate`)."""
+    (`accumulate`). `aux_from` maps a set's label to another render of the same frames whose
+    auxiliary buffers every method reads instead of the set's own (``with_aux_from``)."""
     rows: list[dict[str, object]] = []
     for label, folder in sets.items():
         seqs = load_sequences(folder)
+        if aux_from and label in aux_from:
+            seqs = with_aux_from(seqs, load_sequences(aux_from[label]))
         methods: dict[str, list[dict[str, float]]] = {}
         names: list[str] = []
         for s in seqs:
@@ -143,6 +172,9 @@ def main(argv: list[str] | None = None) -> int:
         "--accumulate", choices=["on", "off", "both"], default="on", help="with motion, accumulate the output along it, not, or both"
     )
     p.add_argument("--per-sequence", action="store_true", help="each sequence's rows too, after the sets' means")
+    p.add_argument(
+        "--aux-from", nargs="+", default=[], metavar="LABEL=FOLDER", help="every method reads set LABEL's auxiliary buffers from another render of the same frames"
+    )
     p.add_argument("--threads", type=int, default=2)
     a = p.parse_args(argv)
     torch.set_num_threads(a.threads)
@@ -152,5 +184,12 @@ def main(argv: list[str] | None = None) -> int:
         if not folder:
             p.error(f"--data {d}: expected LABEL=FOLDER")
         sets[label] = Path(folder)
-    print(markdown(evaluate(a.models, sets, oidn=not a.no_oidn, motion=a.motion, accumulate=a.accumulate, per_sequence=a.per_sequence)))
+    aux_from = {}
+    for d in a.aux_from:
+        label, _, folder = d.partition("=")
+        if not folder or label not in sets:
+            p.error(f"--aux-from {d}: expected LABEL=FOLDER with LABEL one of --data's")
+        aux_from[label] = Path(folder)
+    rows = evaluate(a.models, sets, oidn=not a.no_oidn, motion=a.motion, accumulate=a.accumulate, per_sequence=a.per_sequence, aux_from=aux_from)
+    print(markdown(rows))
     return 0

@@ -200,7 +200,9 @@ def disocclusion(seq: Sequence, frame: int) -> np.ndarray:
     """HW: 1 - the history test of `frame` of a sequence with motion (``warp.history`` on its
     normal and log1p depth, as a model that reads both prepares them): 1 where the previous frame
     did not see the surface. Pixels whose history lies off screen count 0 (the warp zeroes them
-    whatever the test says; they are not a disocclusion)."""
+    whatever the test says; they are not a disocclusion). Each pixel keeps the smallest value of
+    its 3x3 neighbourhood: a disocclusion is a region, while a renderer's speckled buffers (at
+    1 spp over glass) fail the test pixel by pixel."""
     def guide(i: int) -> torch.Tensor:
         b = sanitize_buffers({k: seq.buffers[k][i : i + 1] for k in ("normal", "depth")})
         return torch.cat([b["normal"], torch.log1p(b["depth"])], 1)
@@ -210,7 +212,8 @@ def disocclusion(seq: Sequence, frame: int) -> np.ndarray:
     sx = torch.arange(w, dtype=m.dtype).view(1, 1, w) + m[:, 0]
     sy = torch.arange(h, dtype=m.dtype).view(1, h, 1) + m[:, 1]
     on_screen = ((sx >= 0) & (sx <= w - 1) & (sy >= 0) & (sy <= h - 1)).to(m.dtype).unsqueeze(1)
-    return (on_screen * (1.0 - ok * warp.history(guide(frame), guide(frame - 1), m)))[0, 0].numpy()
+    failed = on_screen * (1.0 - ok * warp.history(guide(frame), guide(frame - 1), m))
+    return (-torch.nn.functional.max_pool2d(-failed, 3, 1, 1))[0, 0].numpy()
 
 
 def window(v: np.ndarray, c: int, avoid: list[tuple[int, int]] = []) -> tuple[int, int]:  # noqa: B006
@@ -459,7 +462,7 @@ def main(argv: list[str] | None = None) -> int:
     L += ["## Crops", "", f"Set `{crop_set}`, sequence `{crop_seq}`, frame {k}: where rae's error is largest and where the reference has the most detail.", "", f"![crops]({rel(figures / 'crops.png', a.out.parent)})", "", f"Made by {stamp}.", ""]
     if uncovered is not None:
         _, d_set, d_seq, d_k = uncovered
-        L += ["## Crops at a disocclusion", "", f"Set `{d_set}`, sequence `{d_seq.name}`, frame {d_k}, the frame of the sequences with motion where the most pixels fail the history test (normal and depth against the previous frame's at x + motion, `rae_weights.warp.history`): where the most do, and where rae's error is largest. rae with the sequence's motion (reprojected, history dropped where the test fails, the output accumulated along the motion), with it but not accumulated, and without it, beside OIDN high.", "", f"![crops at a disocclusion]({rel(figures / 'crops-disocclusion.png', a.out.parent)})", "", f"Made by {stamp}.", ""]
+        L += ["## Crops at a disocclusion", "", f"Set `{d_set}`, sequence `{d_seq.name}`, frame {d_k}, the frame of the sequences with motion where the most pixels fail the history test (normal and depth against the previous frame's at x + motion, `rae_weights.warp.history`) with their whole 3x3 neighbourhood (a region the previous frame did not see, not speckled buffers): where the most do, and where rae's error is largest. rae with the sequence's motion (reprojected, history dropped where the test fails, the output accumulated along the motion), with it but not accumulated, and without it, beside OIDN high.", "", f"![crops at a disocclusion]({rel(figures / 'crops-disocclusion.png', a.out.parent)})", "", f"Made by {stamp}.", ""]
     if bench:
         bcmd, btext = bench
         rows = bench_rows(btext)

@@ -8,7 +8,7 @@ import torch
 from rae_weights import Arch, RecurrentAE
 from rae_weights.bench import macs_per_pixel, time_frames
 from rae_weights.data import load_sequences
-from rae_weights.evaluate import evaluate, markdown
+from rae_weights.evaluate import AUX_BUFFERS, evaluate, markdown, with_aux_from
 from rae_weights.export import write_weights
 from rae_weights.ranges import activation_ranges
 from sequences import write_sequence
@@ -50,3 +50,31 @@ def test_evaluation_rows_for_input_and_each_model(tmp_path: Path) -> None:
     for k in ("relmse", "psnr", "ssim", "temporal"):
         assert np.isclose(rows[1][k], (rows[3][k] + rows[5][k]) / 2)
     assert markdown(rows).splitlines()[0].startswith("| held-out set | sequence | method |")
+
+
+def test_auxiliary_buffers_from_another_render(tmp_path: Path) -> None:
+    """with_aux_from swaps albedo, normal, depth and roughness for another render's (same
+    sequence names), keeps color and reference, and names the file when they do not match."""
+    import pytest
+
+    write_sequence(tmp_path / "a" / "s", 2, 16, seed=2)
+    write_sequence(tmp_path / "b" / "s", 2, 16, seed=3)
+    write_sequence(tmp_path / "c" / "other", 2, 16, seed=4)
+    write_sequence(tmp_path / "d" / "s", 2, 8, seed=5)
+    (a,), (b,) = load_sequences(tmp_path / "a"), load_sequences(tmp_path / "b")
+    (swapped,) = with_aux_from([a], [b])
+    for k in a.buffers:
+        expected = b.buffers[k] if k in AUX_BUFFERS else a.buffers[k]
+        assert torch.equal(swapped.buffers[k], expected), k
+    assert not torch.equal(a.buffers["albedo"], b.buffers["albedo"])
+    with pytest.raises(ValueError, match="no sequence 's'"):
+        with_aux_from([a], load_sequences(tmp_path / "c"))
+    with pytest.raises(ValueError, match="another size"):
+        with_aux_from([a], load_sequences(tmp_path / "d"))
+    arch = Arch(encoder=[8, 8], bottleneck=8)
+    weights = tmp_path / "m.safetensors"
+    write_weights(weights, arch, RecurrentAE(arch).state_dict())
+    own = evaluate([weights], {"x": tmp_path / "a"}, oidn=False)
+    other = evaluate([weights], {"x": tmp_path / "a"}, oidn=False, aux_from={"x": tmp_path / "b"})
+    assert own[0]["psnr"] == other[0]["psnr"]  # the noisy input: color is the set's own
+    assert own[1]["psnr"] != other[1]["psnr"]  # the model reads the other render's buffers

@@ -414,8 +414,8 @@ impl Packing {
             .fold(wgpu::BufferUsages::empty(), |a, b| a | b);
         // A buffer past the device's limits would be created invalid, and filling it panics.
         let limits = device.limits();
-        let (bytes, max_bytes) = (self.weights.len() as u64, u64::from(limits.max_buffer_size));
-        let (binding, max_binding) = (weight_binding[1], u64::from(limits.max_storage_buffer_binding_size));
+        let (bytes, max_bytes) = (self.weights.len() as u64, limits.max_buffer_size);
+        let (binding, max_binding) = (weight_binding[1], limits.max_storage_buffer_binding_size);
         if bytes > max_bytes || (weight_usage.contains(wgpu::BufferUsages::STORAGE) && binding > max_binding) {
             return Err(crate::Error::GpuBuffer {
                 buffer: "conv weights",
