@@ -124,30 +124,30 @@ def evaluate(
         seqs = load_sequences(folder)
         if aux_from and label in aux_from:
             seqs = with_aux_from(seqs, load_sequences(aux_from[label]))
-        methods: dict[str, list[dict[str, float]]] = {}
-        names: list[str] = []
-        for s in seqs:
-            names.append(s.name)
+        # method -> sequence index -> metrics (a set may mix sequences with and without motion)
+        methods: dict[str, dict[int, dict[str, float]]] = {}
+        for j, s in enumerate(seqs):
             refs = [hwc(s.buffers["reference"][i]) for i in range(s.frames)]
             noisy = [hwc(s.buffers["color"][i]) for i in range(s.frames)]
-            methods.setdefault("noisy input", []).append(sequence_metrics(noisy, refs))
+            methods.setdefault("noisy input", {})[j] = sequence_metrics(noisy, refs)
             for m in models:
                 if "motion" not in s.buffers:
-                    methods.setdefault(f"rae {m.stem}", []).append(sequence_metrics(run_rae(m, s), refs))
+                    methods.setdefault(f"rae {m.stem}", {})[j] = sequence_metrics(run_rae(m, s), refs)
                     continue
                 for on in {"on": [True], "off": [False], "both": [True, False]}[motion]:
                     for acc in {"on": [True], "off": [False], "both": [True, False]}[accumulate] if on else [False]:
                         name = f"rae {m.stem} ({'motion' if on else 'no motion'}{'' if acc or not on else ', no accumulation'})"
-                        methods.setdefault(name, []).append(sequence_metrics(run_rae(m, s, motion=on, accumulate=acc), refs))
+                        methods.setdefault(name, {})[j] = sequence_metrics(run_rae(m, s, motion=on, accumulate=acc), refs)
             if oidn:
-                methods.setdefault("OIDN 2.5 high (c+a+n)", []).append(sequence_metrics(run_oidn(s, "high"), refs))
-        for name, ms in methods.items():
+                methods.setdefault("OIDN 2.5 high (c+a+n)", {})[j] = sequence_metrics(run_oidn(s, "high"), refs)
+        for name, per in methods.items():
+            ms = list(per.values())
             row: dict[str, object] = {"set": label, "sequence": "all", "method": name, "sequences": len(ms)}
             row.update({k: float(np.mean([m[k] for m in ms])) for k in ms[0]})
             rows.append(row)
         if per_sequence:
-            for k, seq_name in enumerate(names):
-                rows += [{"set": label, "sequence": seq_name, "method": name, "sequences": 1, **ms[k]} for name, ms in methods.items()]
+            for j, s in enumerate(seqs):
+                rows += [{"set": label, "sequence": s.name, "method": name, "sequences": 1, **per[j]} for name, per in methods.items() if j in per]
     return rows
 
 

@@ -78,3 +78,16 @@ def test_auxiliary_buffers_from_another_render(tmp_path: Path) -> None:
     other = evaluate([weights], {"x": tmp_path / "a"}, oidn=False, aux_from={"x": tmp_path / "b"})
     assert own[0]["psnr"] == other[0]["psnr"]  # the noisy input: color is the set's own
     assert own[1]["psnr"] != other[1]["psnr"]  # the model reads the other render's buffers
+
+
+def test_per_sequence_rows_of_a_set_mixing_sequences_with_and_without_motion(tmp_path: Path) -> None:
+    write_sequence(tmp_path / "data" / "still", 3, 16, seed=2)
+    write_sequence(tmp_path / "data" / "moving", 3, 16, seed=3, motion=True)
+    arch = Arch(encoder=[8, 8], bottleneck=8)
+    weights = tmp_path / "m.safetensors"
+    write_weights(weights, arch, RecurrentAE(arch).state_dict())
+    rows = evaluate([weights], {"x": tmp_path / "data"}, oidn=False, motion="on", per_sequence=True)
+    per = [(r["sequence"], r["method"]) for r in rows if r["sequence"] != "all"]
+    assert sorted(per) == sorted([("still", "noisy input"), ("still", "rae m"), ("moving", "noisy input"), ("moving", "rae m (motion)")])
+    means = {r["method"]: r["sequences"] for r in rows if r["sequence"] == "all"}
+    assert means == {"noisy input": 2, "rae m": 1, "rae m (motion)": 1}
