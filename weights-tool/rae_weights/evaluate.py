@@ -162,6 +162,17 @@ def markdown(rows: list[dict[str, object]]) -> str:
     return "\n".join(out)
 
 
+def labelled_folders(p: argparse.ArgumentParser, option: str, values: list[str]) -> dict[str, Path]:
+    """``LABEL=FOLDER`` arguments of `option` as {label: folder}; a usage error otherwise."""
+    out = {}
+    for d in values:
+        label, _, folder = d.partition("=")
+        if not label or not folder:
+            p.error(f"{option} {d}: expected LABEL=FOLDER")
+        out[label] = Path(folder)
+    return out
+
+
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(prog="rae-weights evaluate", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("models", nargs="+", type=Path, help="rae weights files")
@@ -178,18 +189,10 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--threads", type=int, default=2)
     a = p.parse_args(argv)
     torch.set_num_threads(a.threads)
-    sets = {}
-    for d in a.data:
-        label, _, folder = d.partition("=")
-        if not folder:
-            p.error(f"--data {d}: expected LABEL=FOLDER")
-        sets[label] = Path(folder)
-    aux_from = {}
-    for d in a.aux_from:
-        label, _, folder = d.partition("=")
-        if not folder or label not in sets:
-            p.error(f"--aux-from {d}: expected LABEL=FOLDER with LABEL one of --data's")
-        aux_from[label] = Path(folder)
+    sets = labelled_folders(p, "--data", a.data)
+    aux_from = labelled_folders(p, "--aux-from", a.aux_from)
+    for label in aux_from.keys() - sets.keys():
+        p.error(f"--aux-from {label}=...: no --data set {label!r}")
     rows = evaluate(a.models, sets, oidn=not a.no_oidn, motion=a.motion, accumulate=a.accumulate, per_sequence=a.per_sequence, aux_from=aux_from)
     print(markdown(rows))
     return 0

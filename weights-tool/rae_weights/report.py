@@ -31,10 +31,11 @@ from pathlib import Path
 
 import numpy as np
 import torch
+import torch.nn.functional as F
 
 from . import warp
 from .data import Sequence, load_sequences, read_exr
-from .evaluate import hwc, run_oidn, run_rae
+from .evaluate import hwc, labelled_folders, run_oidn, run_rae
 from .export import read_weights
 from .metrics import sequence_metrics, tonemap
 from .model import RecurrentAE, sanitize_buffers
@@ -213,7 +214,7 @@ def disocclusion(seq: Sequence, frame: int) -> np.ndarray:
     sy = torch.arange(h, dtype=m.dtype).view(1, h, 1) + m[:, 1]
     on_screen = ((sx >= 0) & (sx <= w - 1) & (sy >= 0) & (sy <= h - 1)).to(m.dtype).unsqueeze(1)
     failed = on_screen * (1.0 - ok * warp.history(guide(frame), guide(frame - 1), m))
-    return (-torch.nn.functional.max_pool2d(-failed, 3, 1, 1))[0, 0].numpy()
+    return (-F.max_pool2d(-failed, 3, 1, 1))[0, 0].numpy()
 
 
 def window(v: np.ndarray, c: int, avoid: list[tuple[int, int]] = []) -> tuple[int, int]:  # noqa: B006
@@ -345,12 +346,7 @@ def main(argv: list[str] | None = None) -> int:
     for m in a.models:
         if not m.exists():
             p.error(f"{m}: no such weights file")
-    sets: dict[str, Path] = {}
-    for d in a.data:
-        label, _, folder = d.partition("=")
-        if not folder:
-            p.error(f"--data {d}: expected LABEL=FOLDER")
-        sets[label] = Path(folder)
+    sets = labelled_folders(p, "--data", a.data)
     torch.set_num_threads(a.threads)
     precisions = [x for x in a.precisions.split(",") if x]
 

@@ -78,6 +78,11 @@ def test_auxiliary_buffers_from_another_render(tmp_path: Path) -> None:
     other = evaluate([weights], {"x": tmp_path / "a"}, oidn=False, aux_from={"x": tmp_path / "b"})
     assert own[0]["psnr"] == other[0]["psnr"]  # the noisy input: color is the set's own
     assert own[1]["psnr"] != other[1]["psnr"]  # the model reads the other render's buffers
+    from rae_weights.evaluate import main
+
+    for bad in (["--aux-from", f"y={tmp_path / 'b'}"], ["--aux-from", "x"]):
+        with pytest.raises(SystemExit):
+            main([str(weights), "--data", f"x={tmp_path / 'a'}", "--no-oidn", *bad])
 
 
 def test_per_sequence_rows_of_a_set_mixing_sequences_with_and_without_motion(tmp_path: Path) -> None:
