@@ -26,6 +26,7 @@ import numpy as np
 import torch
 import torch.nn.functional as F
 
+from . import accumulate as temporal
 from . import transfer, warp
 from .arch import INPUT_CHANNELS, Arch
 from .data import Sequence, load_sequences, sample
@@ -99,6 +100,23 @@ def run_clip(model: RecurrentAE, arch: Arch, clip: dict[str, torch.Tensor]) -> l
         motion = clip["motion"][i] if "motion" in clip else None
         outs.append(pass_misses(arch, model(x, motion), frame))
     return outs
+
+
+def accumulated(arch: Arch, ys: list[torch.Tensor], clip: dict[str, torch.Tensor]) -> list[torch.Tensor]:
+    """The outputs ``ys`` (``run_clip``) as rae-core delivers them for a sequence with motion:
+    in radiance (``finish_output``), accumulated along the clip's motion
+    (``accumulate.accumulate``), then back in the network's output space with misses passed
+    through, so the loss can be measured on what the user sees. Without motion, ``ys``."""
+    if "motion" not in clip:
+        return ys
+    out: list[torch.Tensor] = []
+    previous = None
+    for i, y in enumerate(ys):
+        frame = {k: v[i] for k, v in clip.items() if k not in ("reference", "motion")}
+        previous = temporal.accumulate(finish_output(arch, y, frame), previous, clip["motion"][i])
+        r = previous / demodulation_albedo(arch, frame) if arch.demodulate else previous
+        out.append(pass_misses(arch, transfer.encode(arch.transfer, r), frame))
+    return out
 
 
 def batch(clips: list[dict[str, torch.Tensor]], device: torch.device) -> dict[str, torch.Tensor]:
@@ -214,6 +232,12 @@ def main(argv: list[str] | None = None) -> int:
         default="0.8,0.1,0.1",
         help="spatial,gradient,temporal weights of the loss (the paper's 0.8,0.1,0.1); a fine-tune may weigh temporal more",
     )
+    p.add_argument(
+        "--accumulated-loss",
+        type=float,
+        default=0.0,
+        help="share of the loss measured on the output accumulated along the motion, as rae-core delivers a sequence with motion (accumulated); the rest on the network's own output",
+    )
     p.add_argument("--val-every", type=int, default=500)
     p.add_argument("--ckpt-every", type=int, default=250)
     p.add_argument("--seed", type=int, default=0)
@@ -244,6 +268,8 @@ def main(argv: list[str] | None = None) -> int:
     terms = tuple(float(v) for v in a.loss_weights.split(","))
     if len(terms) != 3 or min(terms) < 0 or sum(terms) <= 0:
         p.error(f"--loss-weights {a.loss_weights}: expected three non-negative numbers, not all zero")
+    if not 0.0 <= a.accumulated_loss <= 1.0:
+        p.error(f"--accumulated-loss {a.accumulated_loss}: a share between 0 and 1")
     torch.set_num_threads(a.threads)
     device = torch.device(a.device)
     if device.type == "cuda":
@@ -307,11 +333,15 @@ def main(argv: list[str] | None = None) -> int:
         ys = run_clip(model, arch, clip)
         ts = [target_space(arch, {k: v[i] for k, v in clip.items()}) for i in range(a.frames)]
         motions = [clip["motion"][i] for i in range(a.frames)] if "motion" in clip else None
-        loss = loss_fn(ys, ts, weights, log, terms, motions)  # type: ignore[arg-type]
+        share = a.accumulated_loss
+        loss = (1.0 - share) * loss_fn(ys, ts, weights, log, terms, motions) if share < 1.0 else ys[0].new_zeros(())  # type: ignore[arg-type]
+        if share > 0.0:
+            loss = loss + share * loss_fn(accumulated(arch, ys, clip), ts, weights, log, terms, motions)  # type: ignore[arg-type]
         opt.zero_grad(set_to_none=True)
         loss.backward()
-        torch.nn.utils.clip_grad_norm_(model.parameters(), 1.0)
-        opt.step()
+        # A step whose gradient is not finite (one extreme pixel) is skipped, not taken.
+        if torch.isfinite(torch.nn.utils.clip_grad_norm_(model.parameters(), 1.0)):
+            opt.step()
         sched.step()
         step += 1
         running.append(loss.item())

@@ -252,3 +252,38 @@ def test_reload_takes_up_a_folder_a_renderer_has_not_written_to_yet(tmp_path: Pa
     assert main(["--data", str(first), str(tmp_path / "missing"), "--reload-every", "60", *base]) == 0
     with pytest.raises(ValueError, match="no sequences"):
         main(["--data", str(first), str(tmp_path / "empty-too"), *base, "--out", str(tmp_path / "run2")])
+
+
+def test_the_accumulated_loss_sees_the_output_rae_core_delivers(tmp_path: Path) -> None:
+    # accumulated() is the engine's path for a sequence with motion (finish_output, then
+    # accumulate.accumulate along the motion) back in the network's output space: decoded, it
+    # equals that path; its first frame is the network's own; it differs where history blends in;
+    # gradients reach the network through it; a run with --accumulated-loss trains and exports.
+    from rae_weights import accumulate
+    from rae_weights.data import load_sequences, sample
+    from rae_weights.model import RecurrentAE
+    from rae_weights.train import accumulated, batch, run_clip
+
+    write_sequence(tmp_path / "data" / "m", 8, 32, motion=True)
+    (seq,) = load_sequences(tmp_path / "data")
+    clip = batch([sample([seq], 4, 32, np.random.default_rng(1), vary=True)], torch.device("cpu"))
+    arch = Arch(skip="prepool")
+    torch.manual_seed(0)
+    model = RecurrentAE(arch)
+    ys = run_clip(model, arch, clip)
+    acc = accumulated(arch, ys, clip)
+    frames = [{k: v[i] for k, v in clip.items() if k not in ("reference", "motion")} for i in range(4)]
+    previous = None
+    for i, (y, a) in enumerate(zip(ys, acc)):
+        previous = accumulate.accumulate(finish_output(arch, y, frames[i]), previous, clip["motion"][i])
+        assert torch.allclose(finish_output(arch, a, frames[i]), previous, rtol=1e-4, atol=1e-5), i
+    assert torch.allclose(acc[0], ys[0].clamp(min=0.0), atol=1e-5)
+    assert (acc[3] - ys[3]).abs().max().item() > 1e-3, "history blended into later frames"
+    acc[3].sum().backward()
+    assert any(p.grad is not None and p.grad.abs().sum() > 0 for p in model.parameters())
+    assert accumulated(arch, ys, {k: v for k, v in clip.items() if k != "motion"}) is ys
+    common = ["--data", str(tmp_path / "data"), "--steps", "2", "--crop", "32", "--threads", "1", "--skip", "prepool"]
+    assert main([*common, "--out", str(tmp_path / "run"), "--accumulated-loss", "0.5"]) == 0
+    assert (tmp_path / "run" / "model.safetensors").exists()
+    with pytest.raises(SystemExit):
+        main([*common, "--out", str(tmp_path / "bad"), "--accumulated-loss", "1.5"])
