@@ -88,6 +88,12 @@ def loss_fn(
     return total / sum(weights)
 
 
+def clip_frame(clip: dict[str, torch.Tensor], i: int) -> dict[str, torch.Tensor]:
+    """Frame ``i``'s renderer buffers of a batch of clips (``batch``): what the input and output
+    stages read, without the reference and the motion."""
+    return {k: v[i] for k, v in clip.items() if k not in ("reference", "motion")}
+
+
 def run_clip(model: RecurrentAE, arch: Arch, clip: dict[str, torch.Tensor]) -> list[torch.Tensor]:
     """Network outputs (N x C x H x W) for each frame of a batch of clips ([T, N, C, H, W]
     buffers, ``batch``), hidden state carried and reprojected with the clips' motion where they
@@ -95,7 +101,7 @@ def run_clip(model: RecurrentAE, arch: Arch, clip: dict[str, torch.Tensor]) -> l
     model.reset()
     outs = []
     for i in range(clip["color"].shape[0]):
-        frame = {k: v[i] for k, v in clip.items() if k not in ("reference", "motion")}
+        frame = clip_frame(clip, i)
         x = prepare_input(arch, frame).contiguous(memory_format=torch.channels_last)
         motion = clip["motion"][i] if "motion" in clip else None
         outs.append(pass_misses(arch, model(x, motion), frame))
@@ -112,7 +118,7 @@ def accumulated(arch: Arch, ys: list[torch.Tensor], clip: dict[str, torch.Tensor
     out: list[torch.Tensor] = []
     previous = None
     for i, y in enumerate(ys):
-        frame = {k: v[i] for k, v in clip.items() if k not in ("reference", "motion")}
+        frame = clip_frame(clip, i)
         previous = temporal.accumulate(finish_output(arch, y, frame), previous, clip["motion"][i])
         r = previous / demodulation_albedo(arch, frame) if arch.demodulate else previous
         out.append(pass_misses(arch, transfer.encode(arch.transfer, r), frame))
@@ -334,9 +340,8 @@ def main(argv: list[str] | None = None) -> int:
         ts = [target_space(arch, {k: v[i] for k, v in clip.items()}) for i in range(a.frames)]
         motions = [clip["motion"][i] for i in range(a.frames)] if "motion" in clip else None
         share = a.accumulated_loss
-        loss = (1.0 - share) * loss_fn(ys, ts, weights, log, terms, motions) if share < 1.0 else ys[0].new_zeros(())  # type: ignore[arg-type]
-        if share > 0.0:
-            loss = loss + share * loss_fn(accumulated(arch, ys, clip), ts, weights, log, terms, motions)  # type: ignore[arg-type]
+        parts = [(1.0 - share, ys)] + ([(share, accumulated(arch, ys, clip))] if share > 0.0 else [])
+        loss = sum(w * loss_fn(out, ts, weights, log, terms, motions) for w, out in parts if w > 0.0)  # type: ignore[arg-type]
         opt.zero_grad(set_to_none=True)
         loss.backward()
         # A step whose gradient is not finite (one extreme pixel) is skipped, not taken.

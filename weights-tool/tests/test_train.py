@@ -262,7 +262,7 @@ def test_the_accumulated_loss_sees_the_output_rae_core_delivers(tmp_path: Path) 
     from rae_weights import accumulate
     from rae_weights.data import load_sequences, sample
     from rae_weights.model import RecurrentAE
-    from rae_weights.train import accumulated, batch, run_clip
+    from rae_weights.train import accumulated, batch, clip_frame, run_clip
 
     write_sequence(tmp_path / "data" / "m", 8, 32, motion=True)
     (seq,) = load_sequences(tmp_path / "data")
@@ -272,7 +272,7 @@ def test_the_accumulated_loss_sees_the_output_rae_core_delivers(tmp_path: Path) 
     model = RecurrentAE(arch)
     ys = run_clip(model, arch, clip)
     acc = accumulated(arch, ys, clip)
-    frames = [{k: v[i] for k, v in clip.items() if k not in ("reference", "motion")} for i in range(4)]
+    frames = [clip_frame(clip, i) for i in range(4)]
     previous = None
     for i, (y, a) in enumerate(zip(ys, acc)):
         previous = accumulate.accumulate(finish_output(arch, y, frames[i]), previous, clip["motion"][i])
